@@ -1,0 +1,28 @@
+"""numba policy for every geomkit kernel, set in one place.
+
+* ``cache=True``: compiled code is stored on disk next to the sources, so only the
+  first import on a machine pays the compile time.
+* ``nogil=True``: kernels release the GIL and can run in threads.
+* fastmath allows only contraction (fused multiply-add) and signed-zero freedom: no
+  ``nnan``/``ninf`` (NaN checks must keep working) and no reassociation (results stay
+  reproducible and as accurate as the reference algorithms).
+* ``parallel=True`` / ``prange`` only on outer batch loops (:data:`pjit`); leaf
+  kernels are serial (:data:`jit`).
+"""
+
+from __future__ import annotations
+
+import numba
+
+FASTMATH = {"contract", "nsz"}
+
+jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH)
+"""Decorator for serial kernels."""
+
+
+def pjit(func):
+    """Decorator for batch kernels parallel over their outer ``prange`` loop."""
+    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, parallel=True)(func)
+
+
+prange = numba.prange

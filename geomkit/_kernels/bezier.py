@@ -1,0 +1,171 @@
+"""Knot insertion, Bézier extraction and curve evaluation kernels.
+
+Control points are homogeneous rows ``(w x_1, ..., w x_k, w)`` of any width, so one
+kernel serves 2-D trim curves, 3-D curves and (row by row) surfaces.
+
+Algorithms: curve knot insertion (The NURBS Book A5.1), decomposition into Bézier
+segments (A5.6), de Casteljau subdivision, curve derivatives (A3.2 + A4.2).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._numba import jit, pjit, prange
+from .basis import ders_basis_funs, find_span
+
+
+@jit
+def count_segments(U, p):
+    """Number of non-empty knot spans of a clamped vector (= Bézier segments)."""
+    m = U.shape[0] - 1
+    count = 0
+    for i in range(p, m - p):
+        if U[i + 1] > U[i]:
+            count += 1
+    return count
+
+
+@jit
+def decompose(Pw, p, U):
+    """Split a clamped NURBS curve into Bézier segments (A5.6).
+
+    Parameters
+    ----------
+    Pw : (n, dim) homogeneous control points.
+    p : degree.
+    U : (n + p + 1,) clamped knot vector.
+
+    Returns
+    -------
+    Q : (nseg, p + 1, dim) homogeneous Bézier control points, one row per segment,
+        consecutive segments sharing end points exactly.
+    breaks : (nseg + 1,) parameter values of the segment ends.
+    """
+    n = Pw.shape[0]
+    dim = Pw.shape[1]
+    m = n + p  # index of the last knot
+    nseg = count_segments(U, p)
+    Q = np.zeros((nseg, p + 1, dim))
+    breaks = np.empty(nseg + 1)
+    alphas = np.empty(max(p, 1))
+    a = p
+    b = p + 1
+    nb = 0
+    breaks[0] = U[p]
+    for i in range(p + 1):
+        Q[0, i, :] = Pw[i, :]
+    while b < m:
+        i = b
+        while b < m and U[b + 1] == U[b]:
+            b += 1
+        mult = b - i + 1
+        if mult < p:
+            numer = U[b] - U[a]
+            for j in range(p, mult, -1):
+                alphas[j - mult - 1] = numer / (U[a + j] - U[a])
+            r = p - mult
+            for j in range(1, r + 1):
+                save = r - j
+                s = mult + j
+                for k in range(p, s - 1, -1):
+                    alpha = alphas[k - s]
+                    Q[nb, k, :] = alpha * Q[nb, k, :] + (1.0 - alpha) * Q[nb, k - 1, :]
+                if b < m and nb + 1 < nseg:
+                    Q[nb + 1, save, :] = Q[nb, p, :]
+        breaks[nb + 1] = U[b]
+        nb += 1
+        if b < m and nb < nseg:
+            for k in range(p - mult, p + 1):
+                Q[nb, k, :] = Pw[b - p + k, :]
+            a = b
+            b += 1
+    return Q, breaks
+
+
+@jit
+def insert_knot(Pw, p, U, u, r):
+    """Insert ``u`` ``r`` times into a clamped curve (A5.1); returns (Qw, UQ).
+
+    The caller guarantees ``r + s <= p`` where ``s`` is the existing multiplicity.
+    """
+    n = Pw.shape[0]
+    dim = Pw.shape[1]
+    k = find_span(n - 1, p, u, U)
+    s = 0
+    for i in range(U.shape[0]):
+        if U[i] == u:
+            s += 1
+    UQ = np.empty(U.shape[0] + r)
+    for i in range(k + 1):
+        UQ[i] = U[i]
+    for i in range(1, r + 1):
+        UQ[k + i] = u
+    for i in range(k + 1, U.shape[0]):
+        UQ[i + r] = U[i]
+    Qw = np.empty((n + r, dim))
+    for i in range(k - p + 1):
+        Qw[i, :] = Pw[i, :]
+    for i in range(k - s, n):
+        Qw[i + r, :] = Pw[i, :]
+    Rw = np.empty((p + 1, dim))
+    for i in range(p - s + 1):
+        Rw[i, :] = Pw[k - p + i, :]
+    L = k - p + 1
+    for j in range(1, r + 1):
+        L = k - p + j
+        for i in range(p - j - s + 1):
+            alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i])
+            Rw[i, :] = alpha * Rw[i + 1, :] + (1.0 - alpha) * Rw[i, :]
+        Qw[L, :] = Rw[0, :]
+        Qw[k + r - j - s, :] = Rw[p - j - s, :]
+    for i in range(L + 1, k - s):
+        Qw[i, :] = Rw[i - L, :]
+    return Qw, UQ
+
+
+@jit
+def de_casteljau_split(Q, t, left, right):
+    """Split the Bézier segment ``Q`` (p+1, dim) at ``t`` into ``left`` and ``right``."""
+    p = Q.shape[0] - 1
+    right[:, :] = Q[:, :]
+    left[0, :] = Q[0, :]
+    for r in range(1, p + 1):
+        for i in range(p - r + 1):
+            right[i, :] = (1.0 - t) * right[i, :] + t * right[i + 1, :]
+        left[r, :] = right[0, :]
+
+
+@jit
+def curve_derivs(Pw, p, U, t, d, dN, out):
+    """Point and derivatives up to order ``d`` of a NURBS curve (A3.2 + A4.2).
+
+    ``Pw`` (n, k+1) homogeneous; fills ``out`` (d+1, k) with C, C', ..., C^(d).
+    ``dN`` is scratch of shape (d+1, p+1).
+    """
+    n = Pw.shape[0]
+    k = Pw.shape[1] - 1
+    du = d if d < p else p
+    span = find_span(n - 1, p, t, U)
+    ders_basis_funs(span, t, p, du, U, dN)
+    Aw = np.zeros((d + 1, k + 1))
+    for j in range(du + 1):
+        for r in range(p + 1):
+            Aw[j, :] += dN[j, r] * Pw[span - p + r, :]
+    for j in range(d + 1):
+        for c in range(k):
+            val = Aw[j, c]
+            binom = 1.0
+            for i in range(1, j + 1):
+                binom = binom * (j - i + 1) / i
+                val -= binom * Aw[i, k] * out[j - i, c]
+            out[j, c] = val / Aw[0, k]
+
+
+@pjit
+def curve_points(Pw, p, U, t, d, out):
+    """Batch curve points and derivatives: ``out`` (m, d+1, k), parallel over ``t``."""
+    m = t.shape[0]
+    for i in prange(m):
+        dN = np.empty((d + 1, p + 1))
+        curve_derivs(Pw, p, U, t[i], d, dN, out[i])

@@ -1,0 +1,240 @@
+"""NURBS surface evaluation kernels.
+
+Control nets are stored homogeneous: ``Pw[i, j] = (w x, w y, w z, w)``, shape
+(nu, nv, 4); a plain B-spline has ``w = 1``.  Knot vectors are clamped.
+
+Algorithms: surface point (The NURBS Book A3.5 / A4.3), B-spline surface derivatives
+(A3.6) applied to ``Pw`` and the rational quotient rule (A4.4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._numba import jit, pjit, prange
+from .basis import basis_funs, ders_basis_funs, find_span
+
+CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
+
+
+@jit
+def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
+    """Write S(u, v) into ``out[0:3]`` (A4.3).  Scratch arrays are caller-provided."""
+    nu = Pw.shape[0]
+    nv = Pw.shape[1]
+    su = find_span(nu - 1, p, u, U)
+    basis_funs(su, u, p, U, Nu, left, right)
+    sv = find_span(nv - 1, q, v, V)
+    basis_funs(sv, v, q, V, Nv, left, right)
+    for c in range(4):
+        tmp[c] = 0.0
+    for k in range(p + 1):
+        row = su - p + k
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+        for l in range(q + 1):
+            col = sv - q + l
+            b = Nv[l]
+            a0 += b * Pw[row, col, 0]
+            a1 += b * Pw[row, col, 1]
+            a2 += b * Pw[row, col, 2]
+            a3 += b * Pw[row, col, 3]
+        a = Nu[k]
+        tmp[0] += a * a0
+        tmp[1] += a * a1
+        tmp[2] += a * a2
+        tmp[3] += a * a3
+    out[0] = tmp[0] / tmp[3]
+    out[1] = tmp[1] / tmp[3]
+    out[2] = tmp[2] / tmp[3]
+
+
+@pjit
+def surface_points(Pw, p, q, U, V, uv, out):
+    """Batch S(u, v) for ``uv`` (n, 2) into ``out`` (n, 3), parallel over points."""
+    n = uv.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    m = max(p, q) + 1
+    for c in prange(nchunks):
+        Nu = np.empty(p + 1)
+        Nv = np.empty(q + 1)
+        left = np.empty(m)
+        right = np.empty(m)
+        tmp = np.empty(4)
+        stop = min(n, (c + 1) * CHUNK)
+        for i in range(c * CHUNK, stop):
+            surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, out[i])
+
+
+@jit
+def _binomial_table(n):
+    b = np.zeros((n + 1, n + 1))
+    for i in range(n + 1):
+        b[i, 0] = 1.0
+        for j in range(1, i + 1):
+            b[i, j] = b[i - 1, j - 1] + b[i - 1, j]
+    return b
+
+
+@jit
+def surface_derivs(Pw, p, q, U, V, u, v, d, bin_, dNu, dNv, Aw, SKL):
+    """All partial derivatives up to order ``d`` in each direction (A3.6 + A4.4).
+
+    Fills ``SKL[k, l, :]`` = d^(k+l) S / du^k dv^l for ``0 <= k, l <= d`` (the full
+    tensor; derivatives beyond the degree are exactly zero for the polynomial part).
+    Scratch: ``dNu`` (d+1, p+1), ``dNv`` (d+1, q+1), ``Aw`` (d+1, d+1, 4), ``bin_``
+    a binomial table of size at least (d+1, d+1).
+    """
+    nu = Pw.shape[0]
+    nv = Pw.shape[1]
+    du = d if d < p else p
+    dv = d if d < q else q
+    su = find_span(nu - 1, p, u, U)
+    ders_basis_funs(su, u, p, du, U, dNu)
+    sv = find_span(nv - 1, q, v, V)
+    ders_basis_funs(sv, v, q, dv, V, dNv)
+    for k in range(d + 1):
+        for l in range(d + 1):
+            for c in range(4):
+                Aw[k, l, c] = 0.0
+    for k in range(du + 1):
+        for r in range(p + 1):
+            a = dNu[k, r]
+            if a == 0.0:
+                continue
+            row = su - p + r
+            for l in range(dv + 1):
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                t3 = 0.0
+                for s in range(q + 1):
+                    b = dNv[l, s]
+                    col = sv - q + s
+                    t0 += b * Pw[row, col, 0]
+                    t1 += b * Pw[row, col, 1]
+                    t2 += b * Pw[row, col, 2]
+                    t3 += b * Pw[row, col, 3]
+                Aw[k, l, 0] += a * t0
+                Aw[k, l, 1] += a * t1
+                Aw[k, l, 2] += a * t2
+                Aw[k, l, 3] += a * t3
+    w0 = Aw[0, 0, 3]
+    for k in range(d + 1):
+        for l in range(d + 1):
+            for c in range(3):
+                val = Aw[k, l, c]
+                for j in range(1, l + 1):
+                    val -= bin_[l, j] * Aw[0, j, 3] * SKL[k, l - j, c]
+                for i in range(1, k + 1):
+                    val -= bin_[k, i] * Aw[i, 0, 3] * SKL[k - i, l, c]
+                    v2 = 0.0
+                    for j in range(1, l + 1):
+                        v2 += bin_[l, j] * Aw[i, j, 3] * SKL[k - i, l - j, c]
+                    val -= bin_[k, i] * v2
+                SKL[k, l, c] = val / w0
+
+
+@pjit
+def surface_derivatives(Pw, p, q, U, V, uv, d, out):
+    """Batch derivatives: ``out`` (n, d+1, d+1, 3), parallel over points."""
+    n = uv.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    bin_ = _binomial_table(d)
+    for c in prange(nchunks):
+        dNu = np.empty((d + 1, p + 1))
+        dNv = np.empty((d + 1, q + 1))
+        Aw = np.empty((d + 1, d + 1, 4))
+        stop = min(n, (c + 1) * CHUNK)
+        for i in range(c * CHUNK, stop):
+            surface_derivs(Pw, p, q, U, V, uv[i, 0], uv[i, 1], d, bin_, dNu, dNv, Aw, out[i])
+
+
+@jit
+def _cross_into(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@jit
+def _norm3(a):
+    return np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+
+
+@jit
+def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
+                   bin_, dNu, dNv, Aw, SKL, out):
+    """Unit normal ``Su x Sv / |Su x Sv|`` at (u, v), written to ``out[0:3]``.
+
+    Where the surface is degenerate (a pole: a collapsed control row makes ``Su`` or
+    ``Sv`` vanish), the normal is the limit taken from inside the domain:
+    ``Su ~ h Suv`` as the parameter distance ``h`` to the collapsed row goes to 0, so
+    ``N ~ sign(h) Suv x Sv`` (and symmetrically for ``Sv``).  If that is degenerate too,
+    the normal is taken at parameters nudged toward the domain centre.  Returns 0 for a
+    regular point, 1 for a limit normal, 2 for a nudged normal, 3 if no normal exists.
+    """
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, dNu, dNv, Aw, SKL)
+    su = SKL[1, 0]
+    sv = SKL[0, 1]
+    _cross_into(su, sv, out)
+    lu = _norm3(su)
+    lv = _norm3(sv)
+    ln = _norm3(out)
+    scale = max(lu, lv)
+    if ln > degen_rel * scale * scale and ln > 0.0:
+        for c in range(3):
+            out[c] /= ln
+        return 0
+    # limit normal at a degenerate point
+    if lu <= lv:
+        # Su vanishes along v = const: N ~ sign(v - v0) * (Suv x Sv)
+        sgn = 1.0 if v <= 0.5 * (vmin + vmax) else -1.0
+        _cross_into(SKL[1, 1], sv, out)
+    else:
+        sgn = 1.0 if u <= 0.5 * (umin + umax) else -1.0
+        _cross_into(su, SKL[1, 1], out)
+    ln = _norm3(out)
+    if ln > degen_rel * max(scale, _norm3(SKL[1, 1])) ** 2 and ln > 0.0:
+        for c in range(3):
+            out[c] *= sgn / ln
+        return 1
+    # nudge toward the centre of the domain
+    cu = 0.5 * (umin + umax)
+    cv = 0.5 * (vmin + vmax)
+    h = 1e-9
+    for _ in range(12):
+        uu = u + h * (cu - u)
+        vv = v + h * (cv - v)
+        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dNu, dNv, Aw, SKL)
+        _cross_into(SKL[1, 0], SKL[0, 1], out)
+        ln = _norm3(out)
+        scale = max(_norm3(SKL[1, 0]), _norm3(SKL[0, 1]))
+        if ln > degen_rel * scale * scale and ln > 0.0:
+            for c in range(3):
+                out[c] /= ln
+            return 2
+        h *= 10.0
+    for c in range(3):
+        out[c] = 0.0
+    return 3
+
+
+@pjit
+def surface_normals(Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel, out, status):
+    """Batch unit normals ``out`` (n, 3) with per-point ``status`` (n,) int8."""
+    n = uv.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    bin_ = _binomial_table(2)
+    for c in prange(nchunks):
+        dNu = np.empty((3, p + 1))
+        dNv = np.empty((3, q + 1))
+        Aw = np.empty((3, 3, 4))
+        SKL = np.empty((3, 3, 3))
+        stop = min(n, (c + 1) * CHUNK)
+        for i in range(c * CHUNK, stop):
+            status[i] = surface_normal(Pw, p, q, U, V, uv[i, 0], uv[i, 1], umin, umax,
+                                       vmin, vmax, degen_rel, bin_, dNu, dNv, Aw, SKL,
+                                       out[i])

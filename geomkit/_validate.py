@@ -1,0 +1,88 @@
+"""Input validation helpers shared by the types and the public functions.
+
+Each helper converts its argument to a C-contiguous float64 (or int) array and raises
+an :class:`~geomkit.errors.InvalidInputError` subclass naming the field when the value
+is unusable.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from .errors import InvalidInputError
+
+
+def as_int(value, field, minimum=None, error=InvalidInputError) -> int:
+    if isinstance(value, bool) or not isinstance(value, (numbers.Integral, np.integer)):
+        if isinstance(value, (float, np.floating)) and float(value).is_integer():
+            value = int(value)
+        else:
+            raise error(f"expected an integer, got {value!r}", field)
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise error(f"must be >= {minimum}, got {value}", field)
+    return value
+
+
+def as_float_array(value, field, shape=None, error=InvalidInputError) -> np.ndarray:
+    """Convert to a finite float64 array; ``shape`` may contain ``None`` wildcards."""
+    try:
+        arr = np.array(value, dtype=np.float64, order="C")
+    except (TypeError, ValueError) as exc:
+        raise error(f"expected numbers, could not convert ({exc})", field) from None
+    if shape is not None:
+        ok = arr.ndim == len(shape) and all(
+            want is None or want == got for want, got in zip(shape, arr.shape)
+        )
+        if not ok:
+            want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+            raise error(f"expected shape {want}, got {arr.shape}", field)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise error(f"non-finite value {arr[idx]!r} at index {idx}", field)
+    return arr
+
+
+def as_points(value, dim, field) -> tuple[np.ndarray, tuple]:
+    """Accept (..., dim) points; return a (n, dim) array and the leading shape."""
+    arr = as_float_array(value, field)
+    if arr.ndim == 0 or arr.shape[-1] != dim:
+        raise InvalidInputError(f"expected an array of shape (..., {dim}), got {arr.shape}", field)
+    lead = arr.shape[:-1]
+    return np.ascontiguousarray(arr.reshape(-1, dim)), lead
+
+
+def check_knots(knots, degree, count, field, error) -> np.ndarray:
+    """Validate a full knot vector for ``count`` control points of ``degree``.
+
+    Checks length (count + degree + 1), finiteness, non-decreasing order, interior
+    multiplicity <= degree and a non-empty domain.  Unclamped ends are allowed here.
+    """
+    U = as_float_array(knots, field, shape=(None,), error=error)
+    need = count + degree + 1
+    if U.shape[0] != need:
+        raise error(
+            f"length {U.shape[0]} but must be n + p + 1 = {count} + {degree} + 1 = {need} "
+            f"({count} control points, degree {degree})",
+            field,
+        )
+    dec = np.nonzero(np.diff(U) < 0)[0]
+    if dec.size:
+        i = int(dec[0])
+        raise error(f"knots must be non-decreasing, but knot[{i + 1}] = {U[i + 1]!r} < "
+                    f"knot[{i}] = {U[i]!r}", field)
+    lo, hi = U[degree], U[count]
+    if not hi > lo:
+        raise error(f"empty parameter domain [{lo!r}, {hi!r}] (knot[p] must be < knot[n])",
+                    field)
+    values, counts = np.unique(U[degree + 1: count], return_counts=True)
+    for val, mult in zip(values, counts):
+        if val > lo and val < hi:
+            total = int(np.count_nonzero(U == val))
+            if total > degree:
+                raise error(f"interior knot {val!r} has multiplicity {total} > degree "
+                            f"{degree} (the surface would be discontinuous)", field)
+    return U

@@ -1,0 +1,43 @@
+"""Bézier extraction of NURBS surfaces (knot insertion, The NURBS Book A5.6).
+
+The patches carry exact homogeneous control nets; with positive weights each patch
+lies in the convex hull of its control points, which gives the conservative bounds
+that later subdivision and distance certification use.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels.bezier import decompose
+from .types import BezierPatches, Surface
+
+__all__ = ["bezier_patches"]
+
+
+def bezier_patches(surface: Surface) -> BezierPatches:
+    """Split ``surface`` into rational Bézier patches, one per non-empty knot cell.
+
+    Returns
+    -------
+    BezierPatches
+        ``homogeneous`` (nsu, nsv, p+1, q+1, 4); patch (i, j) covers
+        ``[u_breaks[i], u_breaks[i+1]] x [v_breaks[j], v_breaks[j+1]]`` and evaluates
+        exactly like the surface there.  Trims are ignored (patches cover the domain).
+    """
+    p, q = surface.degree_u, surface.degree_v
+    Pw = surface.homogeneous
+    nu, nv = Pw.shape[:2]
+    # u direction: each row index i is a control point of a curve in R^(nv*4)
+    Qu, ub = decompose(np.ascontiguousarray(Pw.reshape(nu, nv * 4)), p, surface.knots_u)
+    nsu = Qu.shape[0]
+    rows = Qu.reshape(nsu * (p + 1), nv, 4)
+    # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
+    cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
+    Qv, vb = decompose(cols, q, surface.knots_v)
+    nsv = Qv.shape[0]
+    H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)
+    H = np.ascontiguousarray(H)
+    for a in (H, ub, vb):
+        a.setflags(write=False)
+    return BezierPatches(H, ub, vb)

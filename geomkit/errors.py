@@ -1,0 +1,57 @@
+"""The geomkit error hierarchy.
+
+Every error geomkit raises on bad input is a :class:`GeomkitError`; the message names
+the offending field and states what was expected.  The classes also derive from the
+matching built-in (``ValueError``, ``OSError``, ``ImportError``) so that generic
+``except ValueError`` code keeps working.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "GeomkitError",
+    "InvalidInputError",
+    "InvalidSurfaceError",
+    "InvalidTrimError",
+    "DegenerateGeometryError",
+    "FileFormatError",
+    "MissingDependencyError",
+]
+
+
+class GeomkitError(Exception):
+    """Base class of every error geomkit raises deliberately."""
+
+
+class InvalidInputError(GeomkitError, ValueError):
+    """An argument has the wrong shape, type, range or value.
+
+    Attributes
+    ----------
+    field : str or None
+        Name (or path, e.g. ``"surfaces[0].knots_u"``) of the offending field.
+    """
+
+    def __init__(self, message: str, field: str | None = None):
+        self.field = field
+        super().__init__(f"{field}: {message}" if field else message)
+
+
+class InvalidSurfaceError(InvalidInputError):
+    """A surface definition is inconsistent (knots, degrees, control net, weights)."""
+
+
+class InvalidTrimError(InvalidSurfaceError):
+    """A trim loop is open, degenerate, self-inconsistent or outside the domain."""
+
+
+class DegenerateGeometryError(GeomkitError, ValueError):
+    """The geometry is valid but degenerate where the operation needs it not to be."""
+
+
+class FileFormatError(GeomkitError, ValueError):
+    """A file could not be read: unknown format, malformed content, missing fields."""
+
+
+class MissingDependencyError(GeomkitError, ImportError):
+    """An optional dependency needed for this operation is not installed."""

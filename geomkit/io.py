@@ -1,0 +1,260 @@
+"""Reading and writing surfaces: ``geomkit-case/1`` JSON and geomdl JSON.
+
+``geomkit-case/1``::
+
+    {"format": "geomkit-case/1", "name": ..., "description": ...,
+     "surfaces": [{"degree_u", "degree_v", "knots_u", "knots_v",
+                   "control_points": [nu][nv][3], "weights": [nu][nv] (optional),
+                   "trim": [loop, ...] (optional, outer first)}],
+     "truth": {...}}
+
+geomdl JSON is what ``geomdl.exchange.export_json`` writes (``{"shape": {"type":
+"surface", "data": [...]}}``, control points flattened with v varying fastest).
+
+Files are only read by :func:`load`; :func:`save` writes a temporary file beside the
+target and renames it into place, and refuses to replace an existing file unless
+``overwrite=True``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError
+from .types import Surface
+
+__all__ = ["Case", "load", "load_case", "save", "surface_to_dict", "surface_from_dict",
+           "to_geomdl", "from_geomdl", "CASE_FORMAT"]
+
+CASE_FORMAT = "geomkit-case/1"
+
+
+@dataclass
+class Case:
+    """A loaded case file: its surfaces plus the optional analytic truth."""
+
+    name: str
+    surfaces: list
+    truth: dict = field(default_factory=dict)
+    description: str = ""
+
+
+# --------------------------------------------------------------------- dicts
+def surface_to_dict(s: Surface) -> dict:
+    d = {"degree_u": s.degree_u, "degree_v": s.degree_v,
+         "knots_u": s.knots_u.tolist(), "knots_v": s.knots_v.tolist(),
+         "control_points": s.control_points.tolist()}
+    if s.weights is not None:
+        d["weights"] = s.weights.tolist()
+    if s.trim:
+        d["trim"] = [loop.to_case() for loop in s.trim]
+    if s.name:
+        d["name"] = s.name
+    return d
+
+
+def _prefixed(exc: InvalidInputError, prefix: str) -> InvalidInputError:
+    field_ = f"{prefix}.{exc.field}" if exc.field else prefix
+    msg = str(exc)
+    if exc.field and msg.startswith(exc.field + ": "):
+        msg = msg[len(exc.field) + 2:]
+    return type(exc)(msg, field_)
+
+
+def surface_from_dict(d: dict, where: str = "surface") -> Surface:
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{where}: expected an object, got {type(d).__name__}")
+    missing = [k for k in ("degree_u", "degree_v", "knots_u", "knots_v", "control_points")
+               if k not in d]
+    if missing:
+        raise FileFormatError(f"{where}: missing field(s) {', '.join(missing)}")
+    try:
+        return Surface(d["degree_u"], d["degree_v"], d["knots_u"], d["knots_v"],
+                       d["control_points"], d.get("weights"), d.get("trim"),
+                       name=d.get("name"))
+    except InvalidInputError as exc:
+        raise _prefixed(exc, where) from None
+
+
+# -------------------------------------------------------------------- geomdl
+def to_geomdl(s: Surface):
+    """A geomdl ``BSpline.Surface`` or ``NURBS.Surface`` (trims are not carried)."""
+    from geomdl import BSpline, NURBS
+
+    nu, nv = s.shape
+    g = NURBS.Surface() if s.is_rational else BSpline.Surface()
+    g.degree_u = s.degree_u
+    g.degree_v = s.degree_v
+    g.ctrlpts_size_u = nu
+    g.ctrlpts_size_v = nv
+    g.ctrlpts = s.control_points.reshape(-1, 3).tolist()
+    if s.is_rational:
+        g.weights = s.weights.reshape(-1).tolist()
+    g.knotvector_u = s.knots_u.tolist()
+    g.knotvector_v = s.knots_v.tolist()
+    return g
+
+
+def from_geomdl(g) -> Surface:
+    """Build a :class:`Surface` from a geomdl surface object."""
+    try:
+        nu, nv = g.ctrlpts_size_u, g.ctrlpts_size_v
+        P = np.asarray(g.ctrlpts, dtype=float).reshape(nu, nv, -1)
+        w = getattr(g, "weights", None)
+    except Exception as exc:  # geomdl raises many kinds
+        raise InvalidInputError(f"not a geomdl surface ({exc})", "geomdl") from None
+    if P.shape[2] != 3:
+        raise InvalidInputError(f"expected 3-D control points, got {P.shape[2]}-D", "geomdl")
+    weights = np.asarray(w, float).reshape(nu, nv) if w else None
+    return Surface(g.degree_u, g.degree_v, list(g.knotvector_u), list(g.knotvector_v), P,
+                   weights)
+
+
+def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
+    shape = doc["shape"]
+    if shape.get("type") != "surface":
+        raise FileFormatError(f"{where}: geomdl shape type {shape.get('type')!r}, "
+                              "only 'surface' is supported")
+    out = []
+    for k, d in enumerate(shape.get("data", [])):
+        w = f"{where}: shape.data[{k}]"
+        try:
+            nu, nv = int(d["size_u"]), int(d["size_v"])
+            cp = d["control_points"]
+            P = np.asarray(cp["points"], dtype=float)
+            if P.ndim != 2 or P.shape[0] != nu * nv or P.shape[1] != 3:
+                raise FileFormatError(f"{w}.control_points.points: expected {nu * nv} points "
+                                      f"of 3 coordinates, got shape {P.shape}")
+            weights = cp.get("weights")
+            if weights is not None:
+                weights = np.asarray(weights, dtype=float).reshape(nu, nv)
+            out.append(Surface(d["degree_u"], d["degree_v"], d["knotvector_u"],
+                               d["knotvector_v"], P.reshape(nu, nv, 3), weights,
+                               name=d.get("name")))
+        except KeyError as exc:
+            raise FileFormatError(f"{w}: missing field {exc.args[0]!r}") from None
+        except (TypeError, ValueError) as exc:
+            if isinstance(exc, InvalidInputError):
+                raise _prefixed(exc, w) from None
+            raise FileFormatError(f"{w}: {exc}") from None
+    return out
+
+
+# ---------------------------------------------------------------------- read
+def _read_json(path) -> dict:
+    p = Path(path)
+    if not p.exists():
+        raise FileFormatError(f"{p}: no such file")
+    if p.is_dir():
+        raise FileFormatError(f"{p}: is a directory, expected a JSON file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise FileFormatError(f"{p}: not a text file (expected JSON)") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{p}: invalid JSON at line {exc.lineno}, column {exc.colno}: "
+                              f"{exc.msg}") from None
+
+
+def case_from_doc(doc, where: str = "case") -> Case:
+    """Parse a ``geomkit-case/1`` or geomdl JSON document (already decoded)."""
+    if not isinstance(doc, dict):
+        raise FileFormatError(f"{where}: expected a JSON object at the top level")
+    if "shape" in doc:
+        return Case(doc.get("name", ""), _from_geomdl_json(doc, where))
+    fmt = doc.get("format", CASE_FORMAT)
+    if fmt != CASE_FORMAT:
+        raise FileFormatError(f"{where}: unknown format {fmt!r} (expected {CASE_FORMAT!r} "
+                              "or geomdl JSON)")
+    if "surfaces" not in doc:
+        raise FileFormatError(f"{where}: no 'surfaces' list (not a {CASE_FORMAT} or geomdl "
+                              "JSON file)")
+    surfs = doc["surfaces"]
+    if not isinstance(surfs, list) or not surfs:
+        raise FileFormatError(f"{where}: 'surfaces' must be a non-empty list")
+    out = [surface_from_dict(d, f"{where}: surfaces[{k}]") for k, d in enumerate(surfs)]
+    truth = doc.get("truth") or {}
+    return Case(doc.get("name", ""), out, truth, doc.get("description", ""))
+
+
+def load_case(path) -> Case:
+    """Read a case file with its truth block (:class:`Case`)."""
+    case = case_from_doc(_read_json(path), str(path))
+    if not case.name:
+        case.name = Path(path).stem
+    return case
+
+
+def load(path) -> list[Surface]:
+    """Read surfaces from a ``geomkit-case/1`` or geomdl JSON file.
+
+    Raises
+    ------
+    FileFormatError
+        Missing file, invalid JSON, unknown format or missing fields (the message
+        names the file and the field).
+    InvalidSurfaceError
+        A surface that fails validation (the field path names the surface).
+    """
+    return load_case(path).surfaces
+
+
+# --------------------------------------------------------------------- write
+def save(path, surfaces, truth: dict | None = None, name: str | None = None,
+         format: str = "geomkit-case/1", overwrite: bool = False) -> Path:
+    """Write surfaces as ``geomkit-case/1`` (default) or ``"geomdl"`` JSON.
+
+    The file is written to a temporary name and renamed into place, so a failure
+    never leaves a half-written file; an existing file is kept unless
+    ``overwrite=True``.  geomdl JSON cannot hold trims: trimmed surfaces are refused.
+    """
+    if isinstance(surfaces, Surface):
+        surfaces = [surfaces]
+    surfaces = list(surfaces)
+    if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
+        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces",
+                                "surfaces")
+    p = Path(path)
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    if format == CASE_FORMAT:
+        doc = {"format": CASE_FORMAT, "name": name or p.stem,
+               "surfaces": [surface_to_dict(s) for s in surfaces], "truth": truth or {}}
+    elif format == "geomdl":
+        if any(s.trim for s in surfaces):
+            raise InvalidSurfaceError("geomdl JSON cannot store trim loops; use "
+                                      f"format={CASE_FORMAT!r}", "trim")
+        data = []
+        for s in surfaces:
+            nu, nv = s.shape
+            cp = {"points": s.control_points.reshape(-1, 3).tolist()}
+            if s.is_rational:
+                cp["weights"] = s.weights.reshape(-1).tolist()
+            data.append({"type": "spline", "rational": s.is_rational, "dimension": 3,
+                         "degree_u": s.degree_u, "degree_v": s.degree_v,
+                         "knotvector_u": s.knots_u.tolist(),
+                         "knotvector_v": s.knots_v.tolist(),
+                         "size_u": nu, "size_v": nv, "control_points": cp})
+        doc = {"shape": {"type": "surface", "count": len(data), "data": data}}
+    else:
+        raise InvalidInputError(f"unknown format {format!r}; use {CASE_FORMAT!r} or 'geomdl'",
+                                "format")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(doc, fh, indent=1)
+        os.replace(tmp, p)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p
