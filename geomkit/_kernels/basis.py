@@ -50,16 +50,21 @@ def basis_funs(i, u, p, U, N, left, right):
 
 
 @jit
-def ders_basis_funs(i, u, p, n, U, ders):
+def ders_scratch(p):
+    """Scratch arrays for :func:`ders_basis_funs`: (ndu, left, right, a)."""
+    return (np.empty((p + 1, p + 1)), np.empty(p + 1), np.empty(p + 1),
+            np.empty((2, p + 1)))
+
+
+@jit
+def ders_basis_funs(i, u, p, n, U, ders, ndu, left, right, a):
     """Basis functions and their derivatives up to order ``n`` (A2.3).
 
     Fills ``ders[k, j]`` = k-th derivative of N_{i-p+j, p} at ``u`` for
-    ``k = 0..n`` (rows above ``p`` are zero).  ``ders`` has shape (n+1, p+1).
+    ``k = 0..n`` (rows above ``p`` are zero).  ``ders`` has shape (n+1, p+1);
+    ``ndu`` (p+1, p+1), ``left``/``right`` (p+1,), ``a`` (2, p+1) are scratch
+    (see :func:`ders_scratch`).
     """
-    ndu = np.empty((p + 1, p + 1))
-    left = np.empty(p + 1)
-    right = np.empty(p + 1)
-    a = np.empty((2, p + 1))
     ndu[0, 0] = 1.0
     for j in range(1, p + 1):
         left[j] = u - U[i + 1 - j]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, pjit, prange
-from .basis import ders_basis_funs, find_span
+from .basis import ders_basis_funs, ders_scratch, find_span
 
 
 @jit
@@ -147,7 +147,8 @@ def curve_derivs(Pw, p, U, t, d, dN, out):
     k = Pw.shape[1] - 1
     du = d if d < p else p
     span = find_span(n - 1, p, t, U)
-    ders_basis_funs(span, t, p, du, U, dN)
+    ndu, left, right, a = ders_scratch(p)
+    ders_basis_funs(span, t, p, du, U, dN, ndu, left, right, a)
     Aw = np.zeros((d + 1, k + 1))
     for j in range(du + 1):
         for r in range(p + 1):

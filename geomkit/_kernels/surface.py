@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, pjit, prange
-from .basis import basis_funs, ders_basis_funs, find_span
+from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
 
@@ -79,22 +79,30 @@ def _binomial_table(n):
 
 
 @jit
-def surface_derivs(Pw, p, q, U, V, u, v, d, bin_, dNu, dNv, Aw, SKL):
+def derivs_scratch(p, q, d):
+    """Scratch for :func:`surface_derivs`: (dNu, dNv, Aw, su_scratch, sv_scratch)."""
+    return (np.empty((d + 1, p + 1)), np.empty((d + 1, q + 1)), np.empty((d + 1, d + 1, 4)),
+            ders_scratch(p), ders_scratch(q))
+
+
+@jit
+def surface_derivs(Pw, p, q, U, V, u, v, d, bin_, scr, SKL):
     """All partial derivatives up to order ``d`` in each direction (A3.6 + A4.4).
 
     Fills ``SKL[k, l, :]`` = d^(k+l) S / du^k dv^l for ``0 <= k, l <= d`` (the full
     tensor; derivatives beyond the degree are exactly zero for the polynomial part).
-    Scratch: ``dNu`` (d+1, p+1), ``dNv`` (d+1, q+1), ``Aw`` (d+1, d+1, 4), ``bin_``
+    ``scr`` is scratch from :func:`derivs_scratch` with at least order ``d``; ``bin_``
     a binomial table of size at least (d+1, d+1).
     """
+    dNu, dNv, Aw, sa, sb = scr
     nu = Pw.shape[0]
     nv = Pw.shape[1]
     du = d if d < p else p
     dv = d if d < q else q
     su = find_span(nu - 1, p, u, U)
-    ders_basis_funs(su, u, p, du, U, dNu)
+    ders_basis_funs(su, u, p, du, U, dNu, sa[0], sa[1], sa[2], sa[3])
     sv = find_span(nv - 1, q, v, V)
-    ders_basis_funs(sv, v, q, dv, V, dNv)
+    ders_basis_funs(sv, v, q, dv, V, dNv, sb[0], sb[1], sb[2], sb[3])
     for k in range(d + 1):
         for l in range(d + 1):
             for c in range(4):
@@ -144,12 +152,10 @@ def surface_derivatives(Pw, p, q, U, V, uv, d, out):
     nchunks = (n + CHUNK - 1) // CHUNK
     bin_ = _binomial_table(d)
     for c in prange(nchunks):
-        dNu = np.empty((d + 1, p + 1))
-        dNv = np.empty((d + 1, q + 1))
-        Aw = np.empty((d + 1, d + 1, 4))
+        scr = derivs_scratch(p, q, d)
         stop = min(n, (c + 1) * CHUNK)
         for i in range(c * CHUNK, stop):
-            surface_derivs(Pw, p, q, U, V, uv[i, 0], uv[i, 1], d, bin_, dNu, dNv, Aw, out[i])
+            surface_derivs(Pw, p, q, U, V, uv[i, 0], uv[i, 1], d, bin_, scr, out[i])
 
 
 @jit
@@ -166,7 +172,7 @@ def _norm3(a):
 
 @jit
 def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
-                   bin_, dNu, dNv, Aw, SKL, out):
+                   bin_, scr, SKL, out):
     """Unit normal ``Su x Sv / |Su x Sv|`` at (u, v), written to ``out[0:3]``.
 
     Where the surface is degenerate (a pole: a collapsed control row makes ``Su`` or
@@ -176,7 +182,7 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     the normal is taken at parameters nudged toward the domain centre.  Returns 0 for a
     regular point, 1 for a limit normal, 2 for a nudged normal, 3 if no normal exists.
     """
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, dNu, dNv, Aw, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, 1, bin_, scr, SKL)
     su = SKL[1, 0]
     sv = SKL[0, 1]
     _cross_into(su, sv, out)
@@ -188,7 +194,10 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
         for c in range(3):
             out[c] /= ln
         return 0
-    # limit normal at a degenerate point
+    # limit normal at a degenerate point: needs the mixed derivative
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    su = SKL[1, 0]
+    sv = SKL[0, 1]
     if lu <= lv:
         # Su vanishes along v = const: N ~ sign(v - v0) * (Suv x Sv)
         sgn = 1.0 if v <= 0.5 * (vmin + vmax) else -1.0
@@ -208,7 +217,7 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     for _ in range(12):
         uu = u + h * (cu - u)
         vv = v + h * (cv - v)
-        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dNu, dNv, Aw, SKL)
+        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
         _cross_into(SKL[1, 0], SKL[0, 1], out)
         ln = _norm3(out)
         scale = max(_norm3(SKL[1, 0]), _norm3(SKL[0, 1]))
@@ -229,12 +238,9 @@ def surface_normals(Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel, out, 
     nchunks = (n + CHUNK - 1) // CHUNK
     bin_ = _binomial_table(2)
     for c in prange(nchunks):
-        dNu = np.empty((3, p + 1))
-        dNv = np.empty((3, q + 1))
-        Aw = np.empty((3, 3, 4))
+        scr = derivs_scratch(p, q, 2)
         SKL = np.empty((3, 3, 3))
         stop = min(n, (c + 1) * CHUNK)
         for i in range(c * CHUNK, stop):
             status[i] = surface_normal(Pw, p, q, U, V, uv[i, 0], uv[i, 1], umin, umax,
-                                       vmin, vmax, degen_rel, bin_, dNu, dNv, Aw, SKL,
-                                       out[i])
+                                       vmin, vmax, degen_rel, bin_, scr, SKL, out[i])
