@@ -51,7 +51,14 @@ __all__ = [
 
 #: True when the ``OCP`` package (cadquery-ocp) can be imported. Computed with
 #: :func:`importlib.util.find_spec`, so it does not load Open CASCADE.
-HAVE_OCP: bool = importlib.util.find_spec("OCP") is not None
+def _find_ocp() -> bool:
+    try:
+        return importlib.util.find_spec("OCP") is not None
+    except (ImportError, ValueError):  # e.g. sys.modules["OCP"] without a spec
+        return False
+
+
+HAVE_OCP: bool = _find_ocp()
 
 # Knots closer than this fraction of the knot span are treated as one knot
 # (Open CASCADE rejects distinct knots closer than Epsilon(|k|)).
@@ -89,6 +96,38 @@ def _require_ocp(feature: str = "geomkit.oracles.occ"):
 # ---------------------------------------------------------------------------
 # plain array -> Open CASCADE conversion helpers
 # ---------------------------------------------------------------------------
+
+
+# cadquery-ocp 8.x (OCCT 8) exposes NCollection arrays as
+# ``OCP.collections.Array1_double`` etc. and the TopoDS casts as ``TopoDS.Face``;
+# 7.x wheels used ``TColStd_Array1OfReal`` ... and ``TopoDS.Face_s``. These two
+# helpers hide the difference (only the 8.x path is exercised in CI here).
+_OLD_ARRAY_NAMES = {
+    "Array1_double": ("OCP.TColStd", "TColStd_Array1OfReal"),
+    "Array1_int": ("OCP.TColStd", "TColStd_Array1OfInteger"),
+    "Array2_double": ("OCP.TColStd", "TColStd_Array2OfReal"),
+    "Array2_gp_Pnt": ("OCP.TColgp", "TColgp_Array2OfPnt"),
+    "Array1_gp_Pnt2d": ("OCP.TColgp", "TColgp_Array1OfPnt2d"),
+}
+
+
+def _ocp_array(name: str):
+    """Open CASCADE array class by its OCP 8.x name (falls back to the TCol* name)."""
+    try:
+        import OCP.collections as coll
+
+        return getattr(coll, name)
+    except (ImportError, AttributeError):  # pragma: no cover - older OCP
+        mod, old = _OLD_ARRAY_NAMES[name]
+        return getattr(importlib.import_module(mod), old)
+
+
+def _cast(kind: str, shape):
+    """Down-cast a TopoDS_Shape: ``kind`` in {"Face", "Wire", "Edge", "Vertex"}."""
+    from OCP.TopoDS import TopoDS
+
+    fn = getattr(TopoDS, kind, None) or getattr(TopoDS, kind + "_s")
+    return fn(shape)
 
 
 def _knots_to_occ(knots, degree: int, n_ctrl: int, name: str):
@@ -152,8 +191,7 @@ def _knots_to_occ(knots, degree: int, n_ctrl: int, name: str):
 
 
 def _array1_double(values):
-    from OCP.collections import Array1_double
-
+    Array1_double = _ocp_array("Array1_double")
     values = np.asarray(values, dtype=np.float64).ravel()
     arr = Array1_double(1, int(values.size))
     for i, v in enumerate(values, start=1):
@@ -162,8 +200,7 @@ def _array1_double(values):
 
 
 def _array1_int(values):
-    from OCP.collections import Array1_int
-
+    Array1_int = _ocp_array("Array1_int")
     values = np.asarray(values).ravel()
     arr = Array1_int(1, int(values.size))
     for i, v in enumerate(values, start=1):
@@ -220,7 +257,7 @@ def make_surface(degree_u, degree_v, knots_u, knots_v, control_points, weights=N
         If cadquery-ocp is not installed.
     """
     _require_ocp("make_surface")
-    from OCP.collections import Array2_double, Array2_gp_Pnt
+    Array2_double, Array2_gp_Pnt = _ocp_array("Array2_double"), _ocp_array("Array2_gp_Pnt")
     from OCP.Geom import Geom_BSplineSurface
     from OCP.gp import gp_Pnt
 
@@ -256,7 +293,7 @@ def make_surface(degree_u, degree_v, knots_u, knots_v, control_points, weights=N
 
 def _make_pcurve(piece):
     """2-D NURBS piece dict -> (Geom2d_BSplineCurve, C0 break parameters)."""
-    from OCP.collections import Array1_gp_Pnt2d
+    Array1_gp_Pnt2d = _ocp_array("Array1_gp_Pnt2d")
     from OCP.Geom2d import Geom2d_BSplineCurve
     from OCP.gp import gp_Pnt2d
 
@@ -345,7 +382,9 @@ def _make_wire(surf, curves, tol: float):
             )
         mw.Add(me.Edge())
         if not mw.IsDone():
-            raise RuntimeError(f"BRepBuilderAPI_MakeWire failed at segment {j} (error {mw.Error()})")
+            raise RuntimeError(
+                f"BRepBuilderAPI_MakeWire failed at segment {j} (error {mw.Error()})"
+            )
     return mw.Wire()
 
 
@@ -368,13 +407,12 @@ def is_valid(shape) -> bool:
 
 def _fix_face(face, tol: float):
     from OCP.ShapeFix import ShapeFix_Face
-    from OCP.TopoDS import TopoDS
 
     sff = ShapeFix_Face(face)
     sff.SetPrecision(tol)
     sff.SetMaxTolerance(max(1e3 * tol, 1e-4))
     sff.Perform()
-    return TopoDS.Face(sff.Face())
+    return _cast("Face", sff.Face())
 
 
 def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
@@ -416,7 +454,6 @@ def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.BRepLib import BRepLib
     from OCP.GeomAbs import GeomAbs_C1
-    from OCP.TopoDS import TopoDS
 
     if trim is None or len(trim) == 0:
         mf = BRepBuilderAPI_MakeFace(surf, float(tol))
@@ -443,7 +480,7 @@ def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
             w = _make_wire(surf, curves, tol)
             want_ccw = True if li == 0 else flip_holes  # holes: CW unless flipped
             if (signed > 0) != want_ccw:
-                w = TopoDS.Wire(w.Reversed())  # Reversed() returns a TopoDS_Shape
+                w = _cast("Wire", w.Reversed())  # Reversed() returns a TopoDS_Shape
             wires.append(w)
         mf = BRepBuilderAPI_MakeFace(surf, wires[0], True)
         if not mf.IsDone():
@@ -512,9 +549,8 @@ def face_surface(face):
     """
     _require_ocp("face_surface")
     from OCP.BRep import BRep_Tool
-    from OCP.TopoDS import TopoDS
 
-    return BRep_Tool.Surface_s(TopoDS.Face(face))
+    return BRep_Tool.Surface_s(_cast("Face", face))
 
 
 # ---------------------------------------------------------------------------
@@ -588,15 +624,20 @@ def derivatives1(surf, uv) -> np.ndarray:
 def _faces_of(shape):
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
 
     exp = TopExp_Explorer(shape, TopAbs_FACE)
     while exp.More():
-        yield TopoDS.Face(exp.Current())
+        yield _cast("Face", exp.Current())
         exp.Next()
 
 
-def mesh(face, deflection: float, angle: float = 0.5, relative: bool = False, parallel: bool = False):
+def mesh(
+    face,
+    deflection: float,
+    angle: float = 0.5,
+    relative: bool = False,
+    parallel: bool = False,
+):
     """Triangulate a face (or any shape) with ``BRepMesh_IncrementalMesh``.
 
     Parameters
@@ -621,7 +662,10 @@ def mesh(face, deflection: float, angle: float = 0.5, relative: bool = False, pa
         Node positions with the face location applied.
     faces : (m, 3) ndarray of int64
         0-based vertex indices, wound so that the normal follows the face
-        orientation (swapped for REVERSED faces).
+        orientation (swapped for REVERSED faces). Returned as Open CASCADE
+        made them: at a collapsed pole there can be zero-area triangles (two
+        nodes with different uv at the same 3-D point); nodes are not shared
+        between faces.
     uv : (n, 2) ndarray of float
         Surface parameters of each node (NaN if Open CASCADE stored none).
     seconds : float
@@ -638,7 +682,9 @@ def mesh(face, deflection: float, angle: float = 0.5, relative: bool = False, pa
         raise ValueError(f"deflection must be > 0, got {deflection}")
     BRepTools.Clean_s(face)
     t0 = time.perf_counter()
-    mesher = BRepMesh_IncrementalMesh(face, float(deflection), bool(relative), float(angle), bool(parallel))
+    mesher = BRepMesh_IncrementalMesh(
+        face, float(deflection), bool(relative), float(angle), bool(parallel)
+    )
     seconds = time.perf_counter() - t0
     if not mesher.IsDone():
         raise RuntimeError("BRepMesh_IncrementalMesh failed")
@@ -689,7 +735,7 @@ def _is_geom_surface(obj) -> bool:
     return isinstance(obj, Geom_Surface)
 
 
-def _project_one(target, point, include_boundary: bool, tol: float):
+def _project_one(target, point, include_boundary: bool, tol: float, cache: dict):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape, BRepExtrema_SupportType
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
@@ -705,11 +751,15 @@ def _project_one(target, point, include_boundary: bool, tol: float):
                     tuple(map(float, proj.LowerDistanceParameters())))
         if not include_boundary and np.isfinite(best[0]):
             return best
-        face = face_from_surface(target, tol=tol, check=False)
+        if "face" not in cache:  # natural face, built once per call
+            cache["face"] = face_from_surface(target, tol=tol, check=False)
+        face = cache["face"]
         surf = target
     else:
         face = target
-        surf = face_surface(face)
+        if "surf" not in cache:
+            cache["surf"] = face_surface(face)
+        surf = cache["surf"]
     # BRepExtrema covers face interior, edges and vertices (the boundary).
     v = BRepBuilderAPI_MakeVertex(P).Vertex()
     dss = BRepExtrema_DistShapeShape(v, face)
@@ -762,7 +812,8 @@ def project_point(surf_or_face, point, include_boundary: bool = True, tol: float
     pts = pts.reshape(-1, 3) if pts.size % 3 == 0 else None
     if pts is None:
         raise ValueError(f"point must have shape (3,) or (n, 3), got {np.shape(point)}")
-    res = [_project_one(surf_or_face, p, include_boundary, tol) for p in pts]
+    cache: dict = {}
+    res = [_project_one(surf_or_face, p, include_boundary, tol, cache) for p in pts]
     if single:
         return res[0]
     return (
@@ -895,7 +946,6 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     from OCP.gp import gp_Pln
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_VERTEX
     from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
 
     abcd = np.asarray(plane_abcd, dtype=np.float64).ravel()
     if abcd.shape != (4,) or not np.linalg.norm(abcd[:3]) > 0:
@@ -915,7 +965,7 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     pieces = []
     exp = TopExp_Explorer(result, TopAbs_EDGE)
     while exp.More():
-        edge = TopoDS.Edge(exp.Current())
+        edge = _cast("Edge", exp.Current())
         exp.Next()
         if BRep_Tool.Degenerated_s(edge):
             continue
@@ -933,7 +983,7 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     vtol = 1e-7
     vexp = TopExp_Explorer(result, TopAbs_VERTEX)
     while vexp.More():
-        vtol = max(vtol, BRep_Tool.Tolerance_s(TopoDS.Vertex(vexp.Current())))
+        vtol = max(vtol, BRep_Tool.Tolerance_s(_cast("Vertex", vexp.Current())))
         vexp.Next()
     return _chain(pieces, 2.0 * vtol + 1e-9), seconds
 
