@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.tess import cell_errors
+from ._kernels.tess import cell_errors, fill_rings
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -57,24 +57,47 @@ class Lattice:
                          self.v(cells[:, 2]), self.v(cells[:, 3])], axis=1)
 
 
-def split(cells: np.ndarray, su: np.ndarray, sv: np.ndarray) -> np.ndarray:
-    """Split cells in halves along u where ``su``, along v where ``sv`` (both: 4 kids)."""
-    keep = cells[~(su | sv)]
-    out = [keep]
-    both = cells[su & sv]
-    only_u = cells[su & ~sv]
-    only_v = cells[sv & ~su]
-    for c, du, dv in ((both, True, True), (only_u, True, False), (only_v, False, True)):
-        if not len(c):
+def split(cells: np.ndarray, nu: np.ndarray, nv: np.ndarray) -> np.ndarray:
+    """Split each cell into ``nu x nv`` children on integer boundaries (1 x 1 keeps it)."""
+    out = [cells[(nu == 1) & (nv == 1)]]
+    pairs = np.unique(np.stack([nu, nv], axis=1), axis=0)
+    for a, b in pairs:
+        if a == 1 and b == 1:
             continue
-        us = [(c[:, 0], (c[:, 0] + c[:, 1]) // 2), ((c[:, 0] + c[:, 1]) // 2, c[:, 1])] if du \
-            else [(c[:, 0], c[:, 1])]
-        vs = [(c[:, 2], (c[:, 2] + c[:, 3]) // 2), ((c[:, 2] + c[:, 3]) // 2, c[:, 3])] if dv \
-            else [(c[:, 2], c[:, 3])]
-        for a0, a1 in us:
-            for b0, b1 in vs:
-                out.append(np.stack([a0, a1, b0, b1], axis=1))
+        c = cells[(nu == a) & (nv == b)]
+        wu = c[:, 1] - c[:, 0]
+        wv = c[:, 3] - c[:, 2]
+        for i in range(a):
+            u0 = c[:, 0] + (wu * i) // a
+            u1 = c[:, 0] + (wu * (i + 1)) // a
+            for j in range(b):
+                v0 = c[:, 2] + (wv * j) // b
+                v1 = c[:, 2] + (wv * (j + 1)) // b
+                out.append(np.stack([u0, u1, v0, v1], axis=1))
     return np.concatenate(out)
+
+
+def split_counts(e, eu, ev, target, max_parts=8):
+    """Children per direction so that the predicted error meets ``target``.
+
+    Chord errors fall with the square of the cell size, and a cell's triangle error
+    is about ``eu + ev`` (plus twist), so ``nu x nv`` is chosen to minimise the child
+    count subject to ``eu / nu**2 + ev / nv**2 <= target`` (both halves of the budget
+    when both directions matter); pure twist (neither direction's chords explain the
+    error) splits both ways.
+    """
+    T = target
+    twist = np.maximum(eu, ev) < 0.25 * e
+    fu = np.sqrt(2.0 * eu / T)
+    fv = np.sqrt(2.0 * ev / T)
+    fu = np.where(fv < 1.0, np.sqrt(eu / np.maximum(T - ev, 0.5 * T)), fu)
+    fv = np.where(fu < 1.0, np.sqrt(ev / np.maximum(T - eu, 0.5 * T)), fv)
+    ft = np.sqrt(e / T)
+    fu = np.where(twist, np.maximum(fu, ft), fu)
+    fv = np.where(twist, np.maximum(fv, ft), fv)
+    nu = np.clip(np.ceil(fu), 1, max_parts).astype(np.int64)
+    nv = np.clip(np.ceil(fv), 1, max_parts).astype(np.int64)
+    return nu, nv
 
 
 def estimate(surface, lat: Lattice, cells: np.ndarray, m: int) -> np.ndarray:
@@ -103,42 +126,51 @@ def corner_angle(surface, lat: Lattice, cells: np.ndarray) -> np.ndarray:
 
 def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int,
            max_edge=None, max_angle=None, active=None, force=None, max_rounds: int = 60):
-    """Split cells until each cell's best two-triangle split deviates <= ``target``.
+    """Split cells until each cell's best two-triangle split is estimated <= ``target``.
 
     ``active(cells) -> bool mask`` restricts refinement (e.g. to cells not trimmed
-    away); ``force`` is a mask of cells to split once regardless of their estimate.
-    The split direction follows the estimates: a direction is split when its chord
-    error is at least a quarter of the larger one (halving cuts a chord error by 4),
-    both when the error is twist (neither direction's chords explain it).
-    Returns ``(cells, E)`` with the final estimates.
+    away); ``force`` is a mask of cells to halve once in both directions regardless of
+    their estimate.  Split counts come from :func:`split_counts`; estimates of cells
+    that were not split are kept from the previous round.  Returns ``(cells, E)``.
     """
+    E = estimate(surface, lat, cells, m)
     for _ in range(max_rounds):
-        E = estimate(surface, lat, cells, m)
         e = np.minimum(E[:, 0], E[:, 1])
         need = e > target
+        nu, nv = split_counts(e, E[:, 2], E[:, 3], target)
         if max_edge is not None:
-            need |= E[:, 4] > max_edge
+            long_ = E[:, 4] > max_edge
+            need |= long_
+            k = np.ceil(E[:, 4] / max_edge).astype(np.int64)
+            nu = np.where(long_, np.maximum(nu, np.minimum(k, 8)), nu)
+            nv = np.where(long_, np.maximum(nv, np.minimum(k, 8)), nv)
         if max_angle is not None:
-            need |= corner_angle(surface, lat, cells) > max_angle
+            bent = corner_angle(surface, lat, cells) > max_angle
+            need |= bent
+            nu = np.where(bent, np.maximum(nu, 2), nu)
+            nv = np.where(bent, np.maximum(nv, 2), nv)
         if force is not None:
             need |= force
+            nu = np.where(force, np.maximum(nu, 2), nu)
+            nv = np.where(force, np.maximum(nv, 2), nv)
             force = None
         if active is not None and need.any():
             need &= active(cells)
-        can_u = (cells[:, 1] - cells[:, 0]) > 1
-        can_v = (cells[:, 3] - cells[:, 2]) > 1
-        eu, ev = E[:, 2], E[:, 3]
-        big = np.maximum(eu, ev)
-        twist = big < 0.25 * e
-        su = need & can_u & ((eu >= 0.25 * big) | twist)
-        sv = need & can_v & ((ev >= 0.25 * big) | twist)
-        # a cell that must split but whose preferred direction is exhausted uses the other
-        su |= need & ~sv & can_u
-        sv |= need & ~su & can_v
-        if not (su | sv).any():
+        wu = cells[:, 1] - cells[:, 0]
+        wv = cells[:, 3] - cells[:, 2]
+        nu = np.where(need, np.minimum(nu, wu), 1)
+        nv = np.where(need, np.minimum(nv, wv), 1)
+        # a cell that must split but is predicted fine in both directions halves
+        stuck = need & (nu == 1) & (nv == 1)
+        nu = np.where(stuck & (wu > 1), 2, nu)
+        nv = np.where(stuck & (wv > 1), 2, nv)
+        moved = (nu > 1) | (nv > 1)
+        if not moved.any():
             return cells, E
-        cells = split(cells, su, sv)
-    return cells, estimate(surface, lat, cells, m)
+        kids = split(cells[moved], nu[moved], nv[moved])
+        cells = np.concatenate([cells[~moved], kids])
+        E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])
+    return cells, E
 
 
 def lattice_points(cells: np.ndarray) -> np.ndarray:
@@ -172,19 +204,15 @@ class EdgeIndex:
         out[:, 3] = b - a
         return out
 
-    def ring(self, c) -> np.ndarray:
-        """(k, 2) lattice points around cell ``c`` counter-clockwise, from (iu0, iv0)."""
-        iu0, iu1, iv0, iv1 = (int(x) for x in c)
-        pts = [(iu0, iv0)]
-        a, b = self._range(self.h, iv0, iu0, iu1)
-        pts += [(int(k % KEY), iv0) for k in self.h[a:b]]
-        pts.append((iu1, iv0))
-        a, b = self._range(self.v, iu1, iv0, iv1)
-        pts += [(iu1, int(k % KEY)) for k in self.v[a:b]]
-        pts.append((iu1, iv1))
-        a, b = self._range(self.h, iv1, iu0, iu1)
-        pts += [(int(k % KEY), iv1) for k in self.h[a:b][::-1]]
-        pts.append((iu0, iv1))
-        a, b = self._range(self.v, iu0, iv0, iv1)
-        pts += [(iu0, int(k % KEY)) for k in self.v[a:b][::-1]]
-        return np.array(pts, dtype=np.int64)
+    def rings(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lattice points around each cell counter-clockwise from (iu0, iv0).
+
+        Returns ``(starts, points)``: cell i's ring is ``points[starts[i]:starts[i+1]]``.
+        """
+        sizes = 4 + self.counts(cells).sum(axis=1)
+        starts = np.zeros(len(cells) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=starts[1:])
+        out = np.empty((starts[-1], 2), dtype=np.int64)
+        if len(cells):
+            fill_rings(self.h, self.v, KEY, np.ascontiguousarray(cells), starts, out)
+        return starts, out

@@ -37,12 +37,13 @@ def as_float_array(value, field, shape=None, error=InvalidInputError) -> np.ndar
             want is None or want == got for want, got in zip(shape, arr.shape)
         )
         if not ok:
-            want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+            want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + \
+                ("," if len(shape) == 1 else "") + ")"
             raise error(f"expected shape {want}, got {arr.shape}", field)
     bad = ~np.isfinite(arr)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise error(f"non-finite value {arr[idx]!r} at index {idx}", field)
+        raise error(f"non-finite value {float(arr[idx])!r} at index {idx}", field)
     return arr
 
 
@@ -72,17 +73,22 @@ def check_knots(knots, degree, count, field, error) -> np.ndarray:
     dec = np.nonzero(np.diff(U) < 0)[0]
     if dec.size:
         i = int(dec[0])
-        raise error(f"knots must be non-decreasing, but knot[{i + 1}] = {U[i + 1]!r} < "
-                    f"knot[{i}] = {U[i]!r}", field)
-    lo, hi = U[degree], U[count]
+        raise error(f"knots must be non-decreasing, but knot[{i + 1}] = {float(U[i + 1])!r} < "
+                    f"knot[{i}] = {float(U[i])!r}", field)
+    lo, hi = float(U[degree]), float(U[count])
     if not hi > lo:
         raise error(f"empty parameter domain [{lo!r}, {hi!r}] (knot[p] must be < knot[n])",
                     field)
+    for end, val in (("first", U[0]), ("last", U[-1])):
+        mult = int(np.count_nonzero(U == val))
+        if mult > degree + 1:
+            raise error(f"the {end} knot {float(val)!r} has multiplicity {mult}; at most "
+                        f"degree + 1 = {degree + 1} (a basis function would vanish)", field)
     values, counts = np.unique(U[degree + 1: count], return_counts=True)
     for val, mult in zip(values, counts):
         if val > lo and val < hi:
             total = int(np.count_nonzero(U == val))
             if total > degree:
-                raise error(f"interior knot {val!r} has multiplicity {total} > degree "
+                raise error(f"interior knot {float(val)!r} has multiplicity {total} > degree "
                             f"{degree} (the surface would be discontinuous)", field)
     return U

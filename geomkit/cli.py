@@ -68,6 +68,16 @@ def _cmd_samples(args) -> int:
     return 0
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be at least 2, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="geomkit",
                                  description="Exact NURBS surface geometry with stated "
@@ -76,7 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the main job on the bundled samples")
-    p.add_argument("--grid", type=int, default=200, help="grid size per surface (default 200)")
+    p.add_argument("--grid", type=_positive_int, default=200, help="grid size per surface (default 200)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_demo)
     p = sub.add_parser("info", help="describe the surfaces of a file")

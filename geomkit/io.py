@@ -118,12 +118,20 @@ def from_geomdl(g) -> Surface:
 
 def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
     shape = doc["shape"]
+    if not isinstance(shape, dict):
+        raise FileFormatError(f"{where}: geomdl 'shape' must be an object, got "
+                              f"{type(shape).__name__}")
     if shape.get("type") != "surface":
         raise FileFormatError(f"{where}: geomdl shape type {shape.get('type')!r}, "
                               "only 'surface' is supported")
+    data = shape.get("data")
+    if not isinstance(data, list) or not data:
+        raise FileFormatError(f"{where}: geomdl 'shape.data' must be a non-empty list")
     out = []
-    for k, d in enumerate(shape.get("data", [])):
+    for k, d in enumerate(data):
         w = f"{where}: shape.data[{k}]"
+        if not isinstance(d, dict):
+            raise FileFormatError(f"{w}: expected an object, got {type(d).__name__}")
         try:
             nu, nv = int(d["size_u"]), int(d["size_v"])
             cp = d["control_points"]
@@ -139,7 +147,7 @@ def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
                                name=d.get("name")))
         except KeyError as exc:
             raise FileFormatError(f"{w}: missing field {exc.args[0]!r}") from None
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, AttributeError) as exc:
             if isinstance(exc, InvalidInputError):
                 raise _prefixed(exc, w) from None
             raise FileFormatError(f"{w}: {exc}") from None
@@ -149,14 +157,16 @@ def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
 # ---------------------------------------------------------------------- read
 def _read_json(path) -> dict:
     p = Path(path)
-    if not p.exists():
-        raise FileFormatError(f"{p}: no such file")
-    if p.is_dir():
-        raise FileFormatError(f"{p}: is a directory, expected a JSON file")
     try:
+        if not p.exists():
+            raise FileFormatError(f"{p}: no such file")
+        if p.is_dir():
+            raise FileFormatError(f"{p}: is a directory, expected a JSON file")
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise FileFormatError(f"{p}: not a text file (expected JSON)") from None
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
@@ -218,6 +228,9 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     """
     if isinstance(surfaces, Surface):
         surfaces = [surfaces]
+    if not isinstance(surfaces, (list, tuple)):
+        raise InvalidInputError(f"expected a Surface or a list of Surfaces, got "
+                                f"{type(surfaces).__name__}", "surfaces")
     surfaces = list(surfaces)
     if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
         raise InvalidInputError("expected a Surface or a non-empty list of Surfaces",

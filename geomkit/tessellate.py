@@ -50,6 +50,9 @@ CELL_TARGET = 0.8
 """Cells are refined until their estimated deviation is below ``CELL_TARGET * tol``."""
 TRIM_TARGET = 0.5
 """Trim polylines are refined until their 3-D chord error is below ``TRIM_TARGET * tol``."""
+EXACT_ABOVE = 0.5
+"""Samples whose parametric gap exceeds ``EXACT_ABOVE * tol`` get the two one-sided
+distances measured instead (see :func:`geomkit._kernels.tess.triangle_deviation`)."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -174,16 +177,18 @@ def _triangulate(s, lat, cells, E, state, trim, closed):
     tris += [t1, t2]
     owner += [plain, plain]
     # cells with hanging nodes: fan around the centre
-    fan_t, fan_o = [], []
-    for ci in inside[hanging]:
-        ring = index.ring(cells[ci])
-        ctr = np.array([(cells[ci, 0] + cells[ci, 1]) // 2, (cells[ci, 2] + cells[ci, 3]) // 2])
-        nxt = np.roll(ring, -1, axis=0)
-        fan_t.append(np.stack([np.broadcast_to(ctr, ring.shape), ring, nxt], axis=1))
-        fan_o.append(np.full(len(ring), ci))
-    if fan_t:
-        tris.append(np.concatenate(fan_t))
-        owner.append(np.concatenate(fan_o))
+    fan = inside[hanging]
+    if len(fan):
+        starts, ring = index.rings(cells[fan])
+        sizes = np.diff(starts)
+        cell_of = np.repeat(np.arange(len(fan)), sizes)
+        nxt = np.arange(len(ring)) + 1
+        ends = starts[1:] - 1
+        nxt[ends] = starts[:-1]  # wrap each ring
+        c = cells[fan]
+        ctr = np.stack([(c[:, 0] + c[:, 1]) // 2, (c[:, 2] + c[:, 3]) // 2], axis=1)[cell_of]
+        tris.append(np.stack([ctr, ring, ring[nxt]], axis=1))
+        owner.append(fan[cell_of])
     lat_tris = np.concatenate(tris) if tris else np.empty((0, 3, 2), dtype=np.int64)
     owners = np.concatenate(owner) if owner else np.empty(0, dtype=np.int64)
     uv = np.stack([lat.u(lat_tris[..., 0]), lat.v(lat_tris[..., 1])], axis=-1)
@@ -200,11 +205,10 @@ def _triangulate(s, lat, cells, E, state, trim, closed):
 def _triangulate_cut(lat, cells, cut, index, trim):
     import shapely
 
-    rings = []
-    for ci in cut:
-        r = index.ring(cells[ci])
-        rings.append(np.c_[lat.u(r[:, 0]), lat.v(r[:, 1])])
-    polys = shapely.polygons([np.vstack([r, r[:1]]) for r in rings])
+    starts, ring = index.rings(cells[cut])
+    ruv = np.c_[lat.u(ring[:, 0]), lat.v(ring[:, 1])]
+    polys = shapely.polygons([np.vstack([ruv[a:b], ruv[a:a + 1]])
+                              for a, b in zip(starts[:-1], starts[1:])])
     pieces = shapely.intersection(polys, trim.region)
     tri = shapely.constrained_delaunay_triangles(pieces)
     parts, idx = shapely.get_parts(tri, return_index=True)
@@ -226,6 +230,8 @@ def _triangulate_cut(lat, cells, cut, index, trim):
 def _weld(s: Surface, tri_uv: np.ndarray):
     """Vertices, faces and per-vertex UV; merges equal UVs, then coincident boundary
     vertices in 3-D (poles, seams); drops the triangles that collapse."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
     flat = tri_uv.reshape(-1, 2)
@@ -234,30 +240,22 @@ def _weld(s: Surface, tri_uv: np.ndarray):
     dom = max(u1 - u0, v1 - v0)
     uniq, inv = np.unique(flat, axis=0, return_inverse=True)
     inv = inv.ravel()
-    parent = np.arange(len(uniq))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    def union_pairs(pairs):
-        for i, j in pairs:
-            ri, rj = find(i), find(j)
-            if ri != rj:
-                parent[max(ri, rj)] = min(ri, rj)
-
-    union_pairs(cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray"))
+    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")]
     P = evaluate(s, uniq)
     eps = 1e-12 * dom
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
                      | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
     if len(bnd):
-        pairs = cKDTree(P[bnd]).query_pairs(WELD_REL * s.size, output_type="ndarray")
-        union_pairs(bnd[pairs])
-    roots = np.array([find(i) for i in range(len(uniq))])
-    keep_ids, new_index = np.unique(roots, return_inverse=True)
+        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * s.size, output_type="ndarray")])
+    pairs = np.concatenate(pairs).reshape(-1, 2)
+    n = len(uniq)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    # representative of each component: its first member
+    first = np.full(label.max() + 1, n, dtype=np.int64)
+    np.minimum.at(first, label, np.arange(n))
+    keep_ids = first
+    new_index = label
     F = new_index.ravel()[inv].reshape(-1, 3)
     good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
     return P[keep_ids], F, uniq[keep_ids], good
@@ -283,8 +281,10 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
         tri_xyz = evaluate(s, tri_uv.reshape(-1, 2)).reshape(-1, 3, 3)
         dev = np.empty(len(tri_uv))
         if len(tri_uv):
+            (u0, u1), (v0, v1) = s.domain
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                               np.ascontiguousarray(tri_uv), tri_xyz, k, dev)
+                               np.ascontiguousarray(tri_uv), tri_xyz, k, u0, u1, v0, v1,
+                               EXACT_ABOVE * tol, dev)
         bad = dev > tol
         if not bad.any():
             break

@@ -83,7 +83,7 @@ class TrimCurve:
             w = as_float_array(weights, f"{field}.weights", shape=(n,), error=InvalidTrimError)
             if np.any(w <= 0):
                 i = int(np.argmin(w))
-                raise InvalidTrimError(f"weights must be > 0, weight[{i}] = {w[i]!r}",
+                raise InvalidTrimError(f"weights must be > 0, weight[{i}] = {float(w[i])!r}",
                                        f"{field}.weights")
         Pw = np.empty((n, 3))
         Pw[:, :2] = P * w[:, None]
@@ -185,6 +185,35 @@ def _parse_loop(loop, field) -> TrimLoop:
     return TrimLoop(tuple(pieces))
 
 
+def _first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
+    """A point of ``curve`` outside ``box`` (u0, u1, v0, v1), or None if it stays in.
+
+    Exact up to ``tol``: Bézier pieces whose control points lie in the box are inside
+    (convex hull property); others are split until a piece end point is found
+    outside or the piece is smaller than ``tol``.
+    """
+    from ._kernels.bezier import de_casteljau_split, decompose
+
+    Q, _ = decompose(curve.homogeneous, curve.degree, curve.knots)
+    stack = list(Q)
+    while stack:
+        piece = stack.pop()
+        xy = piece[:, :2] / piece[:, 2:3]
+        if ((xy[:, 0] >= box[0]) & (xy[:, 0] <= box[1]) & (xy[:, 1] >= box[2])
+                & (xy[:, 1] <= box[3])).all():
+            continue
+        for end in (xy[0], xy[-1]):
+            if not (box[0] <= end[0] <= box[1] and box[2] <= end[1] <= box[3]):
+                return end
+        if np.ptp(xy, axis=0).max() <= tol:
+            continue
+        left = np.empty_like(piece)
+        right = np.empty_like(piece)
+        de_casteljau_split(piece, 0.5, left, right)
+        stack += [left, right]
+    return None
+
+
 def _loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
     """Points along a loop (for validation only: area, domain containment)."""
     from ._kernels.bezier import curve_points  # local: keeps import graph one-way
@@ -255,7 +284,7 @@ class Surface:
             w = as_float_array(weights, "weights", shape=(nu, nv), error=E)
             if np.any(w <= 0):
                 i, j = (int(x) for x in np.unravel_index(np.argmin(w), w.shape))
-                raise E(f"weights must be > 0, weight[{i}][{j}] = {w[i, j]!r}", "weights")
+                raise E(f"weights must be > 0, weight[{i}][{j}] = {float(w[i, j])!r}", "weights")
             if np.all(w == 1.0):
                 rational = False
         else:
@@ -273,7 +302,10 @@ class Surface:
         self.degree_v = q
         self.knots_u = _readonly(U)
         self.knots_v = _readonly(V)
-        self.control_points = _readonly(Pw[..., :3] / Pw[..., 3:4])
+        if Pw.shape[:2] == P.shape[:2]:  # not re-clamped: keep the input exactly
+            self.control_points = _readonly(P)
+        else:
+            self.control_points = _readonly(Pw[..., :3] / Pw[..., 3:4])
         self.weights = _readonly(Pw[..., 3]) if rational else None
         self._Pw = _readonly(Pw)
         self._cache = {}
@@ -300,19 +332,22 @@ class Surface:
                 nxt = pcs[(i + 1) % len(pcs)]
                 gap = float(np.hypot(*(c.end - nxt.start)))
                 if gap > close:
-                    what = ("loop is open: its end" if len(pcs) == 1
-                            else f"piece {i} ends but piece {(i + 1) % len(pcs)} starts")
+                    if len(pcs) == 1:
+                        what = (f"loop is open: it ends at {c.end.tolist()}, {gap:.3g} away "
+                                f"from its start {nxt.start.tolist()}")
+                    else:
+                        j = (i + 1) % len(pcs)
+                        what = (f"pieces do not join: piece {i} ends at {c.end.tolist()} but "
+                                f"piece {j} starts at {nxt.start.tolist()}, {gap:.3g} away")
+                    raise InvalidTrimError(f"{what} (closure tolerance {close:.3g})", field)
+            box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
+            for c in loop.pieces:
+                bad = _first_point_outside(c, box, close)
+                if bad is not None:
                     raise InvalidTrimError(
-                        f"{what} {c.end.tolist()} is {gap:.3g} away from the start "
-                        f"{nxt.start.tolist()} (closure tolerance {close:.3g})", field)
+                        f"loop leaves the parameter domain [{u0}, {u1}] x [{v0}, {v1}] at "
+                        f"({bad[0]:.6g}, {bad[1]:.6g})", field)
             pts = _loop_samples(loop)
-            out = ((pts[:, 0] < u0 - close) | (pts[:, 0] > u1 + close)
-                   | (pts[:, 1] < v0 - close) | (pts[:, 1] > v1 + close))
-            if out.any():
-                bad = pts[np.argmax(out)]
-                raise InvalidTrimError(
-                    f"loop leaves the parameter domain [{u0}, {u1}] x [{v0}, {v1}] at "
-                    f"{bad.tolist()}", field)
             x, y = pts[:, 0], pts[:, 1]
             area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
             if abs(area) <= (close * close) or np.unique(np.round(pts / close), axis=0).shape[0] < 3:

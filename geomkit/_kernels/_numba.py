@@ -6,6 +6,9 @@
 * fastmath allows only contraction (fused multiply-add) and signed-zero freedom: no
   ``nnan``/``ninf`` (NaN checks must keep working) and no reassociation (results stay
   reproducible and as accurate as the reference algorithms).
+* ``error_model="numpy"``: a float division by zero gives inf/nan instead of raising
+  inside the kernel (no hidden branch per division); kernels guard their own
+  degenerate cases and the public functions check results.
 * ``parallel=True`` / ``prange`` only on outer batch loops (:data:`pjit`); leaf
   kernels are serial (:data:`jit`).
 """
@@ -16,13 +19,14 @@ import numba
 
 FASTMATH = {"contract", "nsz"}
 
-jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH)
+jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 """Decorator for serial kernels."""
 
 
 def pjit(func):
     """Decorator for batch kernels parallel over their outer ``prange`` loop."""
-    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, parallel=True)(func)
+    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, parallel=True,
+                      error_model="numpy")(func)
 
 
 prange = numba.prange

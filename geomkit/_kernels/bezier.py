@@ -91,7 +91,9 @@ def insert_knot(Pw, p, U, u, r):
     """
     n = Pw.shape[0]
     dim = Pw.shape[1]
-    k = find_span(n - 1, p, u, U)
+    # the span of u in the full vector (U[k] <= u < U[k+1]); unlike find_span this is
+    # right for the ends of an unclamped vector too
+    k = np.searchsorted(U, u, side="right") - 1
     s = 0
     for i in range(U.shape[0]):
         if U[i] == u:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, pjit, prange
-from .surface import surface_point
+from .surface import derivs_scratch, surface_derivs, surface_point
 
 
 @jit
@@ -23,19 +23,62 @@ def _dist3(a0, a1, a2, b0, b1, b2):
     return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
 
 
+@jit
+def _grid_normals(G, Nrm):
+    """Unit normals of a sampled grid G (m, m, 3) from finite differences."""
+    m = G.shape[0]
+    for i in range(m):
+        i0 = max(i - 1, 0)
+        i1 = min(i + 1, m - 1)
+        for j in range(m):
+            j0 = max(j - 1, 0)
+            j1 = min(j + 1, m - 1)
+            a0 = G[i1, j, 0] - G[i0, j, 0]
+            a1 = G[i1, j, 1] - G[i0, j, 1]
+            a2 = G[i1, j, 2] - G[i0, j, 2]
+            b0 = G[i, j1, 0] - G[i, j0, 0]
+            b1 = G[i, j1, 1] - G[i, j0, 1]
+            b2 = G[i, j1, 2] - G[i, j0, 2]
+            n0 = a1 * b2 - a2 * b1
+            n1 = a2 * b0 - a0 * b2
+            n2 = a0 * b1 - a1 * b0
+            ln = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+            if ln > 0.0:
+                Nrm[i, j, 0] = n0 / ln
+                Nrm[i, j, 1] = n1 / ln
+                Nrm[i, j, 2] = n2 / ln
+            else:  # degenerate (pole): fall back to the full gap
+                Nrm[i, j, 0] = np.nan
+
+
+@jit
+def _normal_gap(Nrm, G, i, j, x0, x1, x2):
+    """|n . (G[i,j] - x)|: distance of x to the tangent plane at the grid sample."""
+    d0 = G[i, j, 0] - x0
+    d1 = G[i, j, 1] - x1
+    d2 = G[i, j, 2] - x2
+    if np.isnan(Nrm[i, j, 0]):
+        return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return abs(Nrm[i, j, 0] * d0 + Nrm[i, j, 1] * d1 + Nrm[i, j, 2] * d2)
+
+
 @pjit
 def cell_errors(Pw, p, q, U, V, cells, m, out):
     """Error estimates for axis-aligned UV cells (parallel over cells).
+
+    The surface is sampled on an m x m grid per cell; each error is the largest
+    normal-direction gap ``|n . (S(uv) - X(uv))|`` (the first-order distance between
+    the surface and the approximating point, free of parametric sliding).
 
     Parameters
     ----------
     cells : (N, 4) float, ``u0, u1, v0, v1`` per cell.
     m : samples per side (>= 3).
     out : (N, 5) float, filled with
-        0: max parametric deviation of the two triangles split along (u0,v0)-(u1,v1);
+        0: gap of the two triangles split along (u0,v0)-(u1,v1);
         1: the same for the other diagonal (u1,v0)-(u0,v1);
-        2: max chord deviation of u-lines (v fixed) across the cell (need to split u);
-        3: max chord deviation of v-lines (u fixed) across the cell (need to split v);
+        2: gap of u-line chords (v fixed) across the cell (need to split u);
+        3: gap of v-line chords (u fixed) across the cell (need to split v);
         4: largest 3-D edge length of the cell's corners (for ``max_edge``).
     """
     N = cells.shape[0]
@@ -47,6 +90,7 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         right = np.empty(mm)
         tmp = np.empty(4)
         G = np.empty((m, m, 3))
+        Nrm = np.empty((m, m, 3))
         u0 = cells[c, 0]
         u1 = cells[c, 1]
         v0 = cells[c, 2]
@@ -56,6 +100,7 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
             for j in range(m):
                 v = v0 + (v1 - v0) * j / (m - 1)
                 surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, G[i, j])
+        _grid_normals(G, Nrm)
         e_d0 = 0.0
         e_d1 = 0.0
         e_u = 0.0
@@ -65,41 +110,32 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
             s = i / last
             for j in range(m):
                 t = j / last
-                # diagonal (0,0)-(1,1): triangles below (s >= t) and above
+                # diagonal (0,0)-(1,1): A=(0,0), B=(1,0), C=(1,1), D=(0,1)
                 if s >= t:
-                    l0 = 1.0 - s
-                    l1 = s - t
-                    l2 = t
-                    # corners: A=(0,0), B=(1,0), C=(1,1)
                     for k in range(3):
-                        tmp[k] = (l0 * G[0, 0, k] + l1 * G[last, 0, k] + l2 * G[last, last, k])
+                        tmp[k] = ((1.0 - s) * G[0, 0, k] + (s - t) * G[last, 0, k]
+                                  + t * G[last, last, k])
                 else:
-                    l0 = 1.0 - t
-                    l1 = t - s
-                    l2 = s
-                    # corners: A=(0,0), D=(0,1), C=(1,1)
                     for k in range(3):
-                        tmp[k] = (l0 * G[0, 0, k] + l1 * G[0, last, k] + l2 * G[last, last, k])
-                e_d0 = max(e_d0, _dist3(tmp[0], tmp[1], tmp[2], G[i, j, 0], G[i, j, 1], G[i, j, 2]))
+                        tmp[k] = ((1.0 - t) * G[0, 0, k] + (t - s) * G[0, last, k]
+                                  + s * G[last, last, k])
+                e_d0 = max(e_d0, _normal_gap(Nrm, G, i, j, tmp[0], tmp[1], tmp[2]))
                 # diagonal (1,0)-(0,1)
                 if s + t <= 1.0:
-                    # corners B=(1,0), D=(0,1), A=(0,0): point = A + s(B-A) + t(D-A)
                     for k in range(3):
                         tmp[k] = (G[0, 0, k] + s * (G[last, 0, k] - G[0, 0, k])
                                   + t * (G[0, last, k] - G[0, 0, k]))
                 else:
-                    # corners C=(1,1), B=(1,0), D=(0,1): point = C + (1-s)(D-C) + (1-t)(B-C)
                     for k in range(3):
                         tmp[k] = (G[last, last, k] + (1.0 - s) * (G[0, last, k] - G[last, last, k])
                                   + (1.0 - t) * (G[last, 0, k] - G[last, last, k]))
-                e_d1 = max(e_d1, _dist3(tmp[0], tmp[1], tmp[2], G[i, j, 0], G[i, j, 1], G[i, j, 2]))
-                # u-line chord (row j fixed) and v-line chord (column i fixed)
+                e_d1 = max(e_d1, _normal_gap(Nrm, G, i, j, tmp[0], tmp[1], tmp[2]))
                 for k in range(3):
                     tmp[k] = (1.0 - s) * G[0, j, k] + s * G[last, j, k]
-                e_u = max(e_u, _dist3(tmp[0], tmp[1], tmp[2], G[i, j, 0], G[i, j, 1], G[i, j, 2]))
+                e_u = max(e_u, _normal_gap(Nrm, G, i, j, tmp[0], tmp[1], tmp[2]))
                 for k in range(3):
                     tmp[k] = (1.0 - t) * G[i, 0, k] + t * G[i, last, k]
-                e_v = max(e_v, _dist3(tmp[0], tmp[1], tmp[2], G[i, j, 0], G[i, j, 1], G[i, j, 2]))
+                e_v = max(e_v, _normal_gap(Nrm, G, i, j, tmp[0], tmp[1], tmp[2]))
         edge = 0.0
         edge = max(edge, _dist3(G[0, 0, 0], G[0, 0, 1], G[0, 0, 2], G[last, 0, 0], G[last, 0, 1], G[last, 0, 2]))
         edge = max(edge, _dist3(G[0, last, 0], G[0, last, 1], G[0, last, 2], G[last, last, 0], G[last, last, 1], G[last, last, 2]))
@@ -112,20 +148,85 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         out[c, 4] = edge
 
 
+@jit
+def _seg_dist(px, py, pz, T, a, b):
+    d0 = T[b, 0] - T[a, 0]
+    d1 = T[b, 1] - T[a, 1]
+    d2 = T[b, 2] - T[a, 2]
+    ll = d0 * d0 + d1 * d1 + d2 * d2
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - T[a, 0]) * d0 + (py - T[a, 1]) * d1 + (pz - T[a, 2]) * d2) / ll
+        t = min(1.0, max(0.0, t))
+    return _dist3(px, py, pz, T[a, 0] + t * d0, T[a, 1] + t * d1, T[a, 2] + t * d2)
+
+
+@jit
+def point_triangle_distance(px, py, pz, T):
+    """Euclidean distance from a point to the 3-D triangle T (3, 3) (closest-feature
+    regions, as in Ericson, Real-Time Collision Detection 5.1.5)."""
+    ax, ay, az = T[0, 0], T[0, 1], T[0, 2]
+    abx, aby, abz = T[1, 0] - ax, T[1, 1] - ay, T[1, 2] - az
+    acx, acy, acz = T[2, 0] - ax, T[2, 1] - ay, T[2, 2] - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return _dist3(px, py, pz, ax, ay, az)
+    bpx, bpy, bpz = px - T[1, 0], py - T[1, 1], pz - T[1, 2]
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return _dist3(px, py, pz, T[1, 0], T[1, 1], T[1, 2])
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0 and d1 - d3 > 0.0:
+        w = d1 / (d1 - d3)
+        return _dist3(px, py, pz, ax + w * abx, ay + w * aby, az + w * abz)
+    cpx, cpy, cpz = px - T[2, 0], py - T[2, 1], pz - T[2, 2]
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return _dist3(px, py, pz, T[2, 0], T[2, 1], T[2, 2])
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0 and d2 - d6 > 0.0:
+        w = d2 / (d2 - d6)
+        return _dist3(px, py, pz, ax + w * acx, ay + w * acy, az + w * acz)
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0 and (d4 - d3) + (d5 - d6) > 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        bx, by, bz = T[1, 0], T[1, 1], T[1, 2]
+        return _dist3(px, py, pz, bx + w * (T[2, 0] - bx), by + w * (T[2, 1] - by),
+                      bz + w * (T[2, 2] - bz))
+    den = va + vb + vc
+    if not den > 0.0:  # degenerate (collinear) triangle: nearest of its three edges
+        return min(_seg_dist(px, py, pz, T, 0, 1), _seg_dist(px, py, pz, T, 1, 2),
+                   _seg_dist(px, py, pz, T, 0, 2))
+    v = vb / den
+    w = vc / den
+    return _dist3(px, py, pz, ax + abx * v + acx * w, ay + aby * v + acy * w,
+                  az + abz * v + acz * w)
+
+
 @pjit
-def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, out):
+def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
+                       exact_above, out):
     """Measured deviation of flat triangles from the surface (parallel over triangles).
 
-    Parameters
-    ----------
-    tri_uv : (M, 3, 2) float, UV corners of each triangle.
-    tri_xyz : (M, 3, 3) float, 3-D corners (normally ``S`` at the UV corners).
-    k : int, samples per edge: barycentric points ``(i/k, j/k, 1 - i/k - j/k)``,
-        ``(k+1)(k+2)/2`` per triangle (edges included).
-    out : (M,) float, max over samples of ``|S(uv) - flat triangle point|``.
+    At each barycentric sample ``(i/k, j/k)`` (edges included, ``(k+1)(k+2)/2`` per
+    triangle) with triangle point ``X`` and surface point ``P = S(uv)``:
+
+    * the parametric gap ``|P - X|`` bounds the distance both ways;
+    * where it exceeds ``exact_above``, the two one-sided distances are measured
+      instead: ``dist(P, triangle)`` exactly, and ``dist(X, surface)`` from above by
+      ``|X - S(uv')|`` after two Gauss–Newton steps ``uv -> uv'`` toward the foot of
+      ``X`` (any surface point bounds the distance from above); the sample's value is
+      the larger of the two (and never more than the gap).
+
+    ``out[t]`` is the largest sample value of triangle t.
     """
     M = tri_uv.shape[0]
     mm = max(p, q) + 1
+    bin_ = np.ones((2, 2))
     for t in prange(M):
         Nu = np.empty(p + 1)
         Nv = np.empty(q + 1)
@@ -133,6 +234,10 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, out):
         right = np.empty(mm)
         tmp = np.empty(4)
         P = np.empty(3)
+        Q = np.empty(3)
+        scr = derivs_scratch(p, q, 1)
+        SKL = np.empty((2, 2, 3))
+        T = tri_xyz[t]
         worst = 0.0
         for i in range(k + 1):
             for j in range(k + 1 - i):
@@ -144,10 +249,35 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, out):
                 u = l0 * tri_uv[t, 0, 0] + l1 * tri_uv[t, 1, 0] + l2 * tri_uv[t, 2, 0]
                 v = l0 * tri_uv[t, 0, 1] + l1 * tri_uv[t, 1, 1] + l2 * tri_uv[t, 2, 1]
                 surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
-                x = l0 * tri_xyz[t, 0, 0] + l1 * tri_xyz[t, 1, 0] + l2 * tri_xyz[t, 2, 0]
-                y = l0 * tri_xyz[t, 0, 1] + l1 * tri_xyz[t, 1, 1] + l2 * tri_xyz[t, 2, 1]
-                z = l0 * tri_xyz[t, 0, 2] + l1 * tri_xyz[t, 1, 2] + l2 * tri_xyz[t, 2, 2]
-                worst = max(worst, _dist3(x, y, z, P[0], P[1], P[2]))
+                x = l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0]
+                y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
+                z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
+                gap = _dist3(x, y, z, P[0], P[1], P[2])
+                if gap > exact_above:
+                    d_st = point_triangle_distance(P[0], P[1], P[2], T)
+                    d_ts = gap
+                    uu = u
+                    vv = v
+                    for _ in range(2):
+                        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
+                        r0 = x - SKL[0, 0, 0]
+                        r1 = y - SKL[0, 0, 1]
+                        r2 = z - SKL[0, 0, 2]
+                        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
+                        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
+                        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
+                               + SKL[1, 0, 2] * SKL[0, 1, 2])
+                        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
+                        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
+                        det = a11 * a22 - a12 * a12
+                        if not det > 0.0:
+                            break
+                        uu = min(umax, max(umin, uu + (a22 * b1 - a12 * b2) / det))
+                        vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
+                        surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
+                        d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
+                    gap = max(d_st, d_ts)
+                worst = max(worst, gap)
         out[t] = worst
 
 
@@ -186,3 +316,57 @@ def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
                 t = min(1.0, max(0.0, t))
             worst = max(worst, _dist3(e0, e1, e2, t * d0, t * d1, t * d2))
         out[i] = worst
+
+
+@jit
+def _range(keys, major, lo, hi, key):
+    a = np.searchsorted(keys, major * key + lo, side="right")
+    b = np.searchsorted(keys, major * key + hi, side="left")
+    return a, b
+
+
+@jit
+def fill_rings(hkeys, vkeys, key, cells, starts, out):
+    """Lattice points around each cell, counter-clockwise from (iu0, iv0).
+
+    ``hkeys`` are sorted ``gv * key + gu`` of all lattice points, ``vkeys`` sorted
+    ``gu * key + gv``; ``starts`` (N+1,) are the ring offsets into ``out`` (K, 2).
+    """
+    for c in range(cells.shape[0]):
+        iu0 = cells[c, 0]
+        iu1 = cells[c, 1]
+        iv0 = cells[c, 2]
+        iv1 = cells[c, 3]
+        w = starts[c]
+        out[w, 0] = iu0
+        out[w, 1] = iv0
+        w += 1
+        a, b = _range(hkeys, iv0, iu0, iu1, key)
+        for r in range(a, b):
+            out[w, 0] = hkeys[r] % key
+            out[w, 1] = iv0
+            w += 1
+        out[w, 0] = iu1
+        out[w, 1] = iv0
+        w += 1
+        a, b = _range(vkeys, iu1, iv0, iv1, key)
+        for r in range(a, b):
+            out[w, 0] = iu1
+            out[w, 1] = vkeys[r] % key
+            w += 1
+        out[w, 0] = iu1
+        out[w, 1] = iv1
+        w += 1
+        a, b = _range(hkeys, iv1, iu0, iu1, key)
+        for r in range(b - 1, a - 1, -1):
+            out[w, 0] = hkeys[r] % key
+            out[w, 1] = iv1
+            w += 1
+        out[w, 0] = iu0
+        out[w, 1] = iv1
+        w += 1
+        a, b = _range(vkeys, iu0, iv0, iv1, key)
+        for r in range(b - 1, a - 1, -1):
+            out[w, 0] = iu0
+            out[w, 1] = vkeys[r] % key
+            w += 1
