@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.tess import cell_errors, fill_rings
+from ._kernels.tess import cell_deviation, cell_errors, fill_rings
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -124,26 +124,41 @@ def corner_angle(surface, lat: Lattice, cells: np.ndarray) -> np.ndarray:
     return worst
 
 
-def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int,
-           max_edge=None, max_angle=None, active=None, force=None, max_rounds: int = 60):
-    """Split cells until each cell's best two-triangle split is estimated <= ``target``.
+def measure(surface, lat: Lattice, cells: np.ndarray, k: int, exact_above: float):
+    """(N, 2) measured deviation of each cell's two splits (see ``cell_deviation``)."""
+    M = np.empty((cells.shape[0], 2))
+    if cells.shape[0]:
+        (u0, u1), (v0, v1) = surface.domain
+        cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,
+                       surface.knots_u, surface.knots_v, lat.cells_uv(cells), k,
+                       u0, u1, v0, v1, exact_above, M)
+    return M
 
-    ``active(cells) -> bool mask`` restricts refinement (e.g. to cells not trimmed
-    away); ``force`` is a mask of cells to halve once in both directions regardless of
-    their estimate.  Split counts come from :func:`split_counts`; estimates of cells
-    that were not split are kept from the previous round.  Returns ``(cells, E)``.
+
+def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: int,
+           exact_above: float, max_edge=None, max_angle=None, active=None, force=None,
+           max_rounds: int = 60):
+    """Split cells until each cell's better two-triangle split measures <= ``target``.
+
+    Acceptance uses the measured deviation (:func:`measure`); how many children a
+    failing cell gets comes from the chord estimates (:func:`split_counts`), or from
+    the measured excess when the estimates see no need.  ``active(cells) -> mask``
+    restricts refinement (e.g. to cells not trimmed away); ``force`` marks cells to
+    halve once in both directions.  Values of unsplit cells are kept between rounds.
+    Returns ``(cells, E, M)``: estimates and measurements of the final cells.
     """
     E = estimate(surface, lat, cells, m)
+    M = measure(surface, lat, cells, k, exact_above)
     for _ in range(max_rounds):
-        e = np.minimum(E[:, 0], E[:, 1])
-        need = e > target
-        nu, nv = split_counts(e, E[:, 2], E[:, 3], target)
+        dev = np.minimum(M[:, 0], M[:, 1])
+        need = dev > target
+        nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target)
         if max_edge is not None:
             long_ = E[:, 4] > max_edge
             need |= long_
-            k = np.ceil(E[:, 4] / max_edge).astype(np.int64)
-            nu = np.where(long_, np.maximum(nu, np.minimum(k, 8)), nu)
-            nv = np.where(long_, np.maximum(nv, np.minimum(k, 8)), nv)
+            kk = np.ceil(E[:, 4] / max_edge).astype(np.int64)
+            nu = np.where(long_, np.maximum(nu, np.minimum(kk, 8)), nu)
+            nv = np.where(long_, np.maximum(nv, np.minimum(kk, 8)), nv)
         if max_angle is not None:
             bent = corner_angle(surface, lat, cells) > max_angle
             need |= bent
@@ -158,19 +173,22 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int,
             need &= active(cells)
         wu = cells[:, 1] - cells[:, 0]
         wv = cells[:, 3] - cells[:, 2]
+        # measured excess the estimates did not predict: split by the measured ratio
+        miss = need & (nu == 1) & (nv == 1)
+        r = np.ceil(np.sqrt(np.maximum(dev, target) / target)).astype(np.int64)
+        r = np.clip(r, 2, 8)
+        nu = np.where(miss, r, nu)
+        nv = np.where(miss, r, nv)
         nu = np.where(need, np.minimum(nu, wu), 1)
         nv = np.where(need, np.minimum(nv, wv), 1)
-        # a cell that must split but is predicted fine in both directions halves
-        stuck = need & (nu == 1) & (nv == 1)
-        nu = np.where(stuck & (wu > 1), 2, nu)
-        nv = np.where(stuck & (wv > 1), 2, nv)
         moved = (nu > 1) | (nv > 1)
         if not moved.any():
-            return cells, E
+            return cells, E, M
         kids = split(cells[moved], nu[moved], nv[moved])
         cells = np.concatenate([cells[~moved], kids])
         E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])
-    return cells, E
+        M = np.concatenate([M[~moved], measure(surface, lat, kids, k, exact_above)])
+    return cells, E, M
 
 
 def lattice_points(cells: np.ndarray) -> np.ndarray:

@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
-from ._kernels.tess import chord_deviation, triangle_deviation
+from ._kernels.tess import cell_triangles, chord_deviation, triangle_deviation
 from ._validate import as_int
 from .errors import InvalidInputError
 from .evaluation import evaluate
@@ -44,13 +44,14 @@ from .types import Mesh, Surface
 
 __all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET"]
 
-SAMPLES_PER_EDGE = 8
+SAMPLES_PER_EDGE = 6
 """``k``: barycentric samples per triangle edge in the deviation measurement."""
-CELL_TARGET = 0.8
-"""Cells are refined until their estimated deviation is below ``CELL_TARGET * tol``."""
+CELL_TARGET = 0.9
+"""Cells are refined until their measured two-triangle deviation is below
+``CELL_TARGET * tol`` (the margin covers the fans of cells with hanging nodes)."""
 TRIM_TARGET = 0.5
 """Trim polylines are refined until their 3-D chord error is below ``TRIM_TARGET * tol``."""
-EXACT_ABOVE = 0.5
+EXACT_ABOVE = 1.0
 """Samples whose parametric gap exceeds ``EXACT_ABOVE * tol`` get the two one-sided
 distances measured instead (see :func:`geomkit._kernels.tess.triangle_deviation`)."""
 WELD_REL = 1e-10
@@ -149,7 +150,7 @@ def _closed_directions(s: Surface) -> tuple[bool, bool]:
     return bool(cu <= eps), bool(cv <= eps)
 
 
-def _triangulate(s, lat, cells, E, state, trim, closed):
+def _triangulate(s, lat, cells, M, state, trim, closed):
     """UV triangles (M, 3, 2) and the index of the cell each came from."""
     pts = qt.lattice_points(cells[state > 0])
     cu, cv = closed
@@ -160,46 +161,40 @@ def _triangulate(s, lat, cells, E, state, trim, closed):
         on = pts[(pts[:, 1] == 0) | (pts[:, 1] == lat.gv_max)]
         pts = np.unique(np.concatenate([pts, np.c_[on[:, 0], lat.gv_max - on[:, 1]]]), axis=0)
     index = qt.EdgeIndex(pts)
-    tris = []
-    owner = []
     inside = np.nonzero(state == 1)[0]
-    hanging = index.counts(cells[inside]).sum(axis=1) > 0
-    # plain cells: two triangles on the better diagonal
-    plain = inside[~hanging]
-    c = cells[plain]
-    A = np.c_[c[:, 0], c[:, 2]]
-    B = np.c_[c[:, 1], c[:, 2]]
-    C = np.c_[c[:, 1], c[:, 3]]
-    D = np.c_[c[:, 0], c[:, 3]]
-    d0 = (E[plain, 0] <= E[plain, 1])[:, None, None]
-    t1 = np.where(d0, np.stack([A, B, C], 1), np.stack([A, B, D], 1))
-    t2 = np.where(d0, np.stack([A, C, D], 1), np.stack([B, C, D], 1))
-    tris += [t1, t2]
-    owner += [plain, plain]
-    # cells with hanging nodes: fan around the centre
-    fan = inside[hanging]
-    if len(fan):
-        starts, ring = index.rings(cells[fan])
-        sizes = np.diff(starts)
-        cell_of = np.repeat(np.arange(len(fan)), sizes)
-        nxt = np.arange(len(ring)) + 1
-        ends = starts[1:] - 1
-        nxt[ends] = starts[:-1]  # wrap each ring
-        c = cells[fan]
-        ctr = np.stack([(c[:, 0] + c[:, 1]) // 2, (c[:, 2] + c[:, 3]) // 2], axis=1)[cell_of]
-        tris.append(np.stack([ctr, ring, ring[nxt]], axis=1))
-        owner.append(fan[cell_of])
-    lat_tris = np.concatenate(tris) if tris else np.empty((0, 3, 2), dtype=np.int64)
-    owners = np.concatenate(owner) if owner else np.empty(0, dtype=np.int64)
+    c = cells[inside]
+    counts = index.counts(c)
+    has = counts > 0
+    nh = has.sum(axis=1)
+    # diagonal: the measured better one, unless hanging nodes sit on two adjacent
+    # edges, which only the other diagonal separates; three or four: centre fan
+    diag = (M[inside, 1] < M[inside, 0]).astype(np.int64)
+    adjacent_ac = (has[:, 1] & has[:, 2]) | (has[:, 3] & has[:, 0])  # BC+CD, DA+AB: AC
+    adjacent_bd = (has[:, 0] & has[:, 1]) | (has[:, 2] & has[:, 3])  # AB+BC, CD+DA: BD
+    two = nh == 2
+    diag = np.where(two & adjacent_ac, 0, np.where(two & adjacent_bd, 1, diag))
+    diag = np.where(nh >= 3, 2, diag)
+    sizes = np.where(diag == 2, 4 + counts.sum(axis=1), 2 + counts.sum(axis=1))
+    starts = np.zeros(len(c) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=starts[1:])
+    lat_tris = np.empty((starts[-1], 3, 2), dtype=np.int64)
+    kind = np.empty(starts[-1], dtype=np.int8)
+    if len(c):
+        cell_triangles(index.h, index.v, qt.KEY, np.ascontiguousarray(c), counts, diag,
+                       starts, lat_tris, kind)
+    owners = np.repeat(inside, sizes)
     uv = np.stack([lat.u(lat_tris[..., 0]), lat.v(lat_tris[..., 1])], axis=-1)
     uv = uv.reshape(-1, 3, 2)
+    # a plain half of a cell was measured during refinement
+    known = np.where(kind == 0, M[owners, np.minimum(np.repeat(diag, sizes), 1)], np.nan)
     # cut cells: clip against the trimmed region, constrained Delaunay
     cut = np.nonzero(state == 2)[0]
     if len(cut):
         cuv, cown = _triangulate_cut(lat, cells, cut, index, trim)
         uv = np.concatenate([uv, cuv])
         owners = np.concatenate([owners, cown])
-    return uv, owners
+        known = np.concatenate([known, np.full(len(cown), np.nan)])
+    return uv, owners, known
 
 
 def _triangulate_cut(lat, cells, cut, index, trim):
@@ -274,17 +269,20 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     force = None
     rounds = 0
     for rounds in range(1, 40):
-        cells, E = qt.refine(s, lat, cells, CELL_TARGET * tol, m, max_edge, max_angle,
-                             active, force)
+        cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
+                                CELL_TARGET * EXACT_ABOVE * tol, max_edge, max_angle, active,
+                                force)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
-        tri_uv, owner = _triangulate(s, lat, cells, E, state, trim, closed)
-        tri_xyz = evaluate(s, tri_uv.reshape(-1, 2)).reshape(-1, 3, 3)
-        dev = np.empty(len(tri_uv))
-        if len(tri_uv):
+        tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed)
+        todo = np.nonzero(np.isnan(dev))[0]
+        if len(todo):
+            sub = np.ascontiguousarray(tri_uv[todo])
+            tri_xyz = evaluate(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+            out = np.empty(len(todo))
             (u0, u1), (v0, v1) = s.domain
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                               np.ascontiguousarray(tri_uv), tri_xyz, k, u0, u1, v0, v1,
-                               EXACT_ABOVE * tol, dev)
+                               sub, tri_xyz, k, u0, u1, v0, v1, EXACT_ABOVE * tol, out)
+            dev[todo] = out
         bad = dev > tol
         if not bad.any():
             break

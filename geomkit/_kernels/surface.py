@@ -15,6 +15,10 @@ from ._numba import jit, pjit, prange
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
+POLE_RATIO = 1e-7
+"""A point where ``min(|Su|, |Sv|) <= POLE_RATIO * max(|Su|, |Sv|)`` is treated as next
+to a collapsed row: its normal comes from the mixed derivative (error O(h) instead of
+the cross product's O(eps / h))."""
 
 
 @jit
@@ -190,11 +194,16 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     lv = _norm3(sv)
     ln = _norm3(out)
     scale = max(lu, lv)
-    if ln > degen_rel * scale * scale and ln > 0.0:
+    regular = ln > degen_rel * scale * scale and ln > 0.0
+    if regular and min(lu, lv) > POLE_RATIO * scale:
         for c in range(3):
             out[c] /= ln
         return 0
-    # limit normal at a degenerate point: needs the mixed derivative
+    # at or next to a degenerate point (pole): the limit normal from the mixed
+    # derivative is accurate to O(h), where the cross product has lost digits
+    r0 = out[0]
+    r1 = out[1]
+    r2 = out[2]
     surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
     su = SKL[1, 0]
     sv = SKL[0, 1]
@@ -205,16 +214,23 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     else:
         sgn = 1.0 if u <= 0.5 * (umin + umax) else -1.0
         _cross_into(su, SKL[1, 1], out)
-    ln = _norm3(out)
-    if ln > degen_rel * max(scale, _norm3(SKL[1, 1])) ** 2 and ln > 0.0:
+    lm = _norm3(out)
+    if lm > degen_rel * max(scale, _norm3(SKL[1, 1])) ** 2 and lm > 0.0:
+        if regular:  # near (not at) the pole: the side is the regular normal's
+            sgn = 1.0 if out[0] * r0 + out[1] * r1 + out[2] * r2 >= 0.0 else -1.0
         for c in range(3):
-            out[c] *= sgn / ln
+            out[c] *= sgn / lm
         return 1
+    if regular:
+        out[0] = r0 / ln
+        out[1] = r1 / ln
+        out[2] = r2 / ln
+        return 0
     # nudge toward the centre of the domain
     cu = 0.5 * (umin + umax)
     cv = 0.5 * (vmin + vmax)
     h = 1e-9
-    for _ in range(12):
+    for _ in range(10):  # h up to 1: never leave the domain
         uu = u + h * (cu - u)
         vv = v + h * (cv - v)
         surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)

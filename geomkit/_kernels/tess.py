@@ -207,6 +207,64 @@ def point_triangle_distance(px, py, pz, T):
                   az + abz * v + acz * w)
 
 
+@jit
+def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
+             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_):
+    """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
+
+    See :func:`triangle_deviation` for the measure.
+    """
+    worst = 0.0
+    for i in range(k + 1):
+        for j in range(k + 1 - i):
+            l1 = i / k
+            l2 = j / k
+            l0 = 1.0 - l1 - l2
+            if (i == 0 and j == 0) or i == k or j == k:
+                continue  # the corners are exact
+            u = l0 * A[0] + l1 * B[0] + l2 * C[0]
+            v = l0 * A[1] + l1 * B[1] + l2 * C[1]
+            surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
+            x = l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0]
+            y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
+            z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
+            gap = _dist3(x, y, z, P[0], P[1], P[2])
+            if gap > exact_above:
+                d_st = point_triangle_distance(P[0], P[1], P[2], T)
+                d_ts = gap
+                uu = u
+                vv = v
+                for _ in range(2):
+                    surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
+                    r0 = x - SKL[0, 0, 0]
+                    r1 = y - SKL[0, 0, 1]
+                    r2 = z - SKL[0, 0, 2]
+                    a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
+                    a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
+                    a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
+                           + SKL[1, 0, 2] * SKL[0, 1, 2])
+                    b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
+                    b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
+                    det = a11 * a22 - a12 * a12
+                    if not det > 0.0:
+                        break
+                    uu = min(umax, max(umin, uu + (a22 * b1 - a12 * b2) / det))
+                    vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
+                    surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
+                    d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
+                gap = max(d_st, d_ts)
+            worst = max(worst, gap)
+    return worst
+
+
+@jit
+def _dev_scratch(p, q):
+    mm = max(p, q) + 1
+    return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
+            np.empty(3), np.empty(3), derivs_scratch(p, q, 1), np.empty((2, 2, 3)),
+            np.ones((2, 2)))
+
+
 @pjit
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
                        exact_above, out):
@@ -222,63 +280,55 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
       ``X`` (any surface point bounds the distance from above); the sample's value is
       the larger of the two (and never more than the gap).
 
-    ``out[t]`` is the largest sample value of triangle t.
+    ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
+    value of triangle t.
     """
     M = tri_uv.shape[0]
-    mm = max(p, q) + 1
-    bin_ = np.ones((2, 2))
     for t in prange(M):
-        Nu = np.empty(p + 1)
-        Nv = np.empty(q + 1)
-        left = np.empty(mm)
-        right = np.empty(mm)
-        tmp = np.empty(4)
-        P = np.empty(3)
-        Q = np.empty(3)
-        scr = derivs_scratch(p, q, 1)
-        SKL = np.empty((2, 2, 3))
-        T = tri_xyz[t]
-        worst = 0.0
-        for i in range(k + 1):
-            for j in range(k + 1 - i):
-                l1 = i / k
-                l2 = j / k
-                l0 = 1.0 - l1 - l2
-                if (i == 0 and j == 0) or i == k or j == k:
-                    continue  # the corners are exact
-                u = l0 * tri_uv[t, 0, 0] + l1 * tri_uv[t, 1, 0] + l2 * tri_uv[t, 2, 0]
-                v = l0 * tri_uv[t, 0, 1] + l1 * tri_uv[t, 1, 1] + l2 * tri_uv[t, 2, 1]
-                surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
-                x = l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0]
-                y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
-                z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
-                gap = _dist3(x, y, z, P[0], P[1], P[2])
-                if gap > exact_above:
-                    d_st = point_triangle_distance(P[0], P[1], P[2], T)
-                    d_ts = gap
-                    uu = u
-                    vv = v
-                    for _ in range(2):
-                        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
-                        r0 = x - SKL[0, 0, 0]
-                        r1 = y - SKL[0, 0, 1]
-                        r2 = z - SKL[0, 0, 2]
-                        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
-                        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
-                        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
-                               + SKL[1, 0, 2] * SKL[0, 1, 2])
-                        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
-                        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
-                        det = a11 * a22 - a12 * a12
-                        if not det > 0.0:
-                            break
-                        uu = min(umax, max(umin, uu + (a22 * b1 - a12 * b2) / det))
-                        vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
-                        surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
-                        d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
-                    gap = max(d_st, d_ts)
-                worst = max(worst, gap)
-        out[t] = worst
+        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+        out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
+                          tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
+                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_)
+
+
+@pjit
+def cell_deviation(Pw, p, q, U, V, cells, k, umin, umax, vmin, vmax, exact_above, out):
+    """Measured deviation of both two-triangle splits of UV cells (parallel).
+
+    ``cells`` (N, 4) ``u0, u1, v0, v1``; ``out`` (N, 2): column 0 for the diagonal
+    (u0,v0)-(u1,v1), column 1 for (u1,v0)-(u0,v1), each the larger of its two
+    triangles' :func:`triangle_deviation`.
+    """
+    N = cells.shape[0]
+    for c in prange(N):
+        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+        UVc = np.empty((4, 2))
+        X = np.empty((4, 3))
+        UVc[0, 0] = cells[c, 0]
+        UVc[0, 1] = cells[c, 2]
+        UVc[1, 0] = cells[c, 1]
+        UVc[1, 1] = cells[c, 2]
+        UVc[2, 0] = cells[c, 1]
+        UVc[2, 1] = cells[c, 3]
+        UVc[3, 0] = cells[c, 0]
+        UVc[3, 1] = cells[c, 3]
+        for r in range(4):
+            surface_point(Pw, p, q, U, V, UVc[r, 0], UVc[r, 1], Nu, Nv, left, right, tmp, X[r])
+        T = np.empty((3, 3))
+        for diag in range(2):
+            worst = 0.0
+            for half in range(2):
+                if diag == 0:
+                    a, b, cc = (0, 1, 2) if half == 0 else (0, 2, 3)
+                else:
+                    a, b, cc = (0, 1, 3) if half == 0 else (1, 2, 3)
+                T[0] = X[a]
+                T[1] = X[b]
+                T[2] = X[cc]
+                worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
+                                            umin, umax, vmin, vmax, exact_above, Nu, Nv,
+                                            left, right, tmp, P, Q, scr, SKL, bin_))
+            out[c, diag] = worst
 
 
 @pjit
@@ -370,3 +420,130 @@ def fill_rings(hkeys, vkeys, key, cells, starts, out):
             out[w, 0] = iu0
             out[w, 1] = vkeys[r] % key
             w += 1
+
+
+@jit
+def _edge_nodes(hkeys, vkeys, key, edge, iu0, iu1, iv0, iv1, buf):
+    """Hanging nodes of a cell edge in counter-clockwise order; returns their count.
+
+    ``edge``: 0 bottom (A->B), 1 right (B->C), 2 top (C->D), 3 left (D->A).
+    """
+    n = 0
+    if edge == 0 or edge == 2:
+        vv = iv0 if edge == 0 else iv1
+        a, b = _range(hkeys, vv, iu0, iu1, key)
+        for r in range(a, b):
+            rr = r if edge == 0 else a + b - 1 - r
+            buf[n, 0] = hkeys[rr] % key
+            buf[n, 1] = vv
+            n += 1
+    else:
+        uu = iu1 if edge == 1 else iu0
+        a, b = _range(vkeys, uu, iv0, iv1, key)
+        for r in range(a, b):
+            rr = r if edge == 1 else a + b - 1 - r
+            buf[n, 0] = uu
+            buf[n, 1] = vkeys[rr] % key
+            n += 1
+    return n
+
+
+@jit
+def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
+    """Triangles of cells whose edges may carry hanging nodes (lattice corners).
+
+    Cell corners A=(iu0,iv0), B=(iu1,iv0), C=(iu1,iv1), D=(iu0,iv1).  ``diag[c]`` 0
+    splits along AC, 1 along BD; a triangle with hanging nodes on one of its cell
+    edges is fanned from its opposite corner (the pieces are conforming with the
+    finer neighbour).  ``diag[c] == 2`` fans the whole ring around the cell centre
+    (used when a split would leave a triangle with hanging nodes on two edges).
+    ``starts`` (N+1,) are the output offsets (see :func:`count_cell_triangles`);
+    ``out`` (T, 3, 2) lattice triangles, counter-clockwise; ``kind[t]`` 0 for a
+    plain half of a cell, 1 for a fan piece.
+    """
+    buf = np.empty((counts.max() + 2 if counts.size else 2, 2), dtype=np.int64)
+    corners = np.empty((4, 2), dtype=np.int64)
+    for c in range(cells.shape[0]):
+        iu0 = cells[c, 0]
+        iu1 = cells[c, 1]
+        iv0 = cells[c, 2]
+        iv1 = cells[c, 3]
+        corners[0, 0] = iu0
+        corners[0, 1] = iv0
+        corners[1, 0] = iu1
+        corners[1, 1] = iv0
+        corners[2, 0] = iu1
+        corners[2, 1] = iv1
+        corners[3, 0] = iu0
+        corners[3, 1] = iv1
+        w = starts[c]
+        if diag[c] == 2:
+            cu = (iu0 + iu1) // 2
+            cv = (iv0 + iv1) // 2
+            for e in range(4):
+                n = _edge_nodes(hkeys, vkeys, key, e, iu0, iu1, iv0, iv1, buf)
+                px = corners[e, 0]
+                py = corners[e, 1]
+                for r in range(n + 1):
+                    if r < n:
+                        qx = buf[r, 0]
+                        qy = buf[r, 1]
+                    else:
+                        qx = corners[(e + 1) % 4, 0]
+                        qy = corners[(e + 1) % 4, 1]
+                    out[w, 0, 0] = cu
+                    out[w, 0, 1] = cv
+                    out[w, 1, 0] = px
+                    out[w, 1, 1] = py
+                    out[w, 2, 0] = qx
+                    out[w, 2, 1] = qy
+                    kind[w] = 1
+                    w += 1
+                    px = qx
+                    py = qy
+            continue
+        for half in range(2):
+            # triangle corners (cell corner indices), CCW; the two cell edges it owns
+            if diag[c] == 0:
+                t0, t1, t2 = (0, 1, 2) if half == 0 else (0, 2, 3)
+            else:
+                t0, t1, t2 = (0, 1, 3) if half == 0 else (1, 2, 3)
+            tri = (t0, t1, t2)
+            hang_edge = -1
+            hang_pos = -1
+            for k in range(3):
+                a = tri[k]
+                b = tri[(k + 1) % 3]
+                if b == (a + 1) % 4 and counts[c, a] > 0:  # a cell edge a -> a+1
+                    hang_edge = a
+                    hang_pos = k
+            if hang_edge < 0:
+                for k in range(3):
+                    out[w, k, 0] = corners[tri[k], 0]
+                    out[w, k, 1] = corners[tri[k], 1]
+                kind[w] = 0
+                w += 1
+                continue
+            n = _edge_nodes(hkeys, vkeys, key, hang_edge, iu0, iu1, iv0, iv1, buf)
+            a = tri[hang_pos]
+            b = tri[(hang_pos + 1) % 3]
+            o = tri[(hang_pos + 2) % 3]
+            px = corners[a, 0]
+            py = corners[a, 1]
+            for r in range(n + 1):
+                if r < n:
+                    qx = buf[r, 0]
+                    qy = buf[r, 1]
+                else:
+                    qx = corners[b, 0]
+                    qy = corners[b, 1]
+                out[w, 0, 0] = corners[o, 0]
+                out[w, 0, 1] = corners[o, 1]
+                out[w, 1, 0] = px
+                out[w, 1, 1] = py
+                out[w, 2, 0] = qx
+                out[w, 2, 1] = qy
+                kind[w] = 1
+                w += 1
+                px = qx
+                py = qy
