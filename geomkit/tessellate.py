@@ -150,7 +150,7 @@ def _closed_directions(s: Surface) -> tuple[bool, bool]:
     return bool(cu <= eps), bool(cv <= eps)
 
 
-def _triangulate(s, lat, cells, M, state, trim, closed):
+def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     """UV triangles (M, 3, 2) and the index of the cell each came from."""
     pts = qt.lattice_points(cells[state > 0])
     cu, cv = closed
@@ -173,7 +173,7 @@ def _triangulate(s, lat, cells, M, state, trim, closed):
     adjacent_bd = (has[:, 0] & has[:, 1]) | (has[:, 2] & has[:, 3])  # AB+BC, CD+DA: BD
     two = nh == 2
     diag = np.where(two & adjacent_ac, 0, np.where(two & adjacent_bd, 1, diag))
-    diag = np.where(nh >= 3, 2, diag)
+    diag = np.where((nh >= 3) | centre[inside], 2, diag)
     sizes = np.where(diag == 2, 4 + counts.sum(axis=1), 2 + counts.sum(axis=1))
     starts = np.zeros(len(c) + 1, dtype=np.int64)
     np.cumsum(sizes, out=starts[1:])
@@ -267,13 +267,16 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = _closed_directions(s)
     force = None
+    fanned = set()  # cells whose split failed the measurement: centre fan instead
     rounds = 0
     for rounds in range(1, 40):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
                                 CELL_TARGET * EXACT_ABOVE * tol, max_edge, max_angle, active,
                                 force)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
-        tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed)
+        centre = np.array([tuple(c) in fanned for c in cells.tolist()], dtype=bool) \
+            if fanned else np.zeros(len(cells), dtype=bool)
+        tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed, centre)
         todo = np.nonzero(np.isnan(dev))[0]
         if len(todo):
             sub = np.ascontiguousarray(tri_uv[todo])
@@ -286,8 +289,15 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
         bad = dev > tol
         if not bad.any():
             break
+        # a failing split or fan first becomes a centre fan (better shaped pieces);
+        # a failing centre fan or trimmed cell is split
         force = np.zeros(len(cells), dtype=bool)
-        force[owner[bad]] = True
+        for ci in np.unique(owner[bad]):
+            key = tuple(cells[ci].tolist())
+            if state[ci] == 1 and key not in fanned:
+                fanned.add(key)
+            else:
+                force[ci] = True
     V, F, UV, good = _weld(s, tri_uv)
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
