@@ -137,18 +137,22 @@ def measure(surface, lat: Lattice, cells: np.ndarray, k: int, exact_above: float
 
 def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: int,
            exact_above: float, max_edge=None, max_angle=None, active=None, force=None,
-           max_rounds: int = 60):
+           known=None, max_rounds: int = 60):
     """Split cells until each cell's better two-triangle split measures <= ``target``.
 
     Acceptance uses the measured deviation (:func:`measure`); how many children a
     failing cell gets comes from the chord estimates (:func:`split_counts`), or from
     the measured excess when the estimates see no need.  ``active(cells) -> mask``
     restricts refinement (e.g. to cells not trimmed away); ``force`` marks cells to
-    halve once in both directions.  Values of unsplit cells are kept between rounds.
+    halve once in both directions.  Values of unsplit cells are kept between rounds;
+    ``known = (E, M)`` passes them in for ``cells`` from an earlier call.
     Returns ``(cells, E, M)``: estimates and measurements of the final cells.
     """
-    E = estimate(surface, lat, cells, m)
-    M = measure(surface, lat, cells, k, exact_above)
+    if known is not None:
+        E, M = known
+    else:
+        E = estimate(surface, lat, cells, m)
+        M = measure(surface, lat, cells, k, exact_above)
     for _ in range(max_rounds):
         dev = np.minimum(M[:, 0], M[:, 1])
         need = dev > target
@@ -184,6 +188,33 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: i
         moved = (nu > 1) | (nv > 1)
         if not moved.any():
             return cells, E, M
+        kids = split(cells[moved], nu[moved], nv[moved])
+        cells = np.concatenate([cells[~moved], kids])
+        E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])
+        M = np.concatenate([M[~moved], measure(surface, lat, kids, k, exact_above)])
+    return cells, E, M
+
+
+def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarray, m: int,
+            k: int, exact_above: float, max_hang: int = 2, max_rounds: int = 30):
+    """Grade the cells: split any cell with more than ``max_hang`` hanging nodes on an
+    edge, so no cell borders a much finer region.  Sampled measurements stay
+    trustworthy (a coarse cell next to a sharply curved region is where sampling
+    would miss the peak) and the conforming fans stay well shaped.
+    Returns ``(cells, E, M)``."""
+    for _ in range(max_rounds):
+        cnt = EdgeIndex(lattice_points(cells)).counts(cells)
+        hu = np.maximum(cnt[:, 0], cnt[:, 2])
+        hv = np.maximum(cnt[:, 1], cnt[:, 3])
+        wu = cells[:, 1] - cells[:, 0]
+        wv = cells[:, 3] - cells[:, 2]
+        nu = np.where(hu > max_hang, -(-(hu + 1) // (max_hang + 1)), 1)
+        nv = np.where(hv > max_hang, -(-(hv + 1) // (max_hang + 1)), 1)
+        nu = np.minimum(nu, wu)
+        nv = np.minimum(nv, wv)
+        moved = (nu > 1) | (nv > 1)
+        if not moved.any():
+            break
         kids = split(cells[moved], nu[moved], nv[moved])
         cells = np.concatenate([cells[~moved], kids])
         E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])

@@ -54,6 +54,8 @@ TRIM_TARGET = 0.5
 EXACT_ABOVE = 1.0
 """Samples whose parametric gap exceeds ``EXACT_ABOVE * tol`` get the two one-sided
 distances measured instead (see :func:`geomkit._kernels.tess.triangle_deviation`)."""
+MAX_HANGING = 2
+"""Grading: a cell edge carries at most this many hanging nodes (finer neighbours)."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -166,14 +168,9 @@ def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     counts = index.counts(c)
     has = counts > 0
     nh = has.sum(axis=1)
-    # diagonal: the measured better one, unless hanging nodes sit on two adjacent
-    # edges, which only the other diagonal separates; three or four: centre fan
+    # the measured better diagonal; a cell whose pieces failed: centre fan
     diag = (M[inside, 1] < M[inside, 0]).astype(np.int64)
-    adjacent_ac = (has[:, 1] & has[:, 2]) | (has[:, 3] & has[:, 0])  # BC+CD, DA+AB: AC
-    adjacent_bd = (has[:, 0] & has[:, 1]) | (has[:, 2] & has[:, 3])  # AB+BC, CD+DA: BD
-    two = nh == 2
-    diag = np.where(two & adjacent_ac, 0, np.where(two & adjacent_bd, 1, diag))
-    diag = np.where((nh >= 3) | centre[inside], 2, diag)
+    diag = np.where(centre[inside], 2, diag)
     sizes = np.where(diag == 2, 4 + counts.sum(axis=1), 2 + counts.sum(axis=1))
     starts = np.zeros(len(c) + 1, dtype=np.int64)
     np.cumsum(sizes, out=starts[1:])
@@ -267,12 +264,16 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = _closed_directions(s)
     force = None
+    known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
     rounds = 0
     for rounds in range(1, 40):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
                                 CELL_TARGET * EXACT_ABOVE * tol, max_edge, max_angle, active,
-                                force)
+                                force, known)
+        cells, E, M = qt.balance(s, lat, cells, E, M, m, k, CELL_TARGET * EXACT_ABOVE * tol,
+                                 MAX_HANGING)
+        known = (E, M)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
         centre = np.array([tuple(c) in fanned for c in cells.tolist()], dtype=bool) \
             if fanned else np.zeros(len(cells), dtype=bool)

@@ -453,15 +453,17 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
     """Triangles of cells whose edges may carry hanging nodes (lattice corners).
 
     Cell corners A=(iu0,iv0), B=(iu1,iv0), C=(iu1,iv1), D=(iu0,iv1).  ``diag[c]`` 0
-    splits along AC, 1 along BD; a triangle with hanging nodes on one of its cell
-    edges is fanned from its opposite corner (the pieces are conforming with the
-    finer neighbour).  ``diag[c] == 2`` fans the whole ring around the cell centre
-    (used when a split would leave a triangle with hanging nodes on two edges).
+    splits along AC, 1 along BD.  A half-triangle (P0, P1, P2) owning cell edges
+    P0P1 (hanging nodes a_i) and P1P2 (hanging nodes b_j) is fanned from P2 over
+    P0, a_1..a_k and then from a_k over P1, b_1..b_m, P2: every piece is
+    non-degenerate and the pieces conform to the finer neighbours.  ``diag[c] == 2``
+    fans the whole ring around the cell centre instead.
     ``starts`` (N+1,) are the output offsets (see :func:`count_cell_triangles`);
     ``out`` (T, 3, 2) lattice triangles, counter-clockwise; ``kind[t]`` 0 for a
     plain half of a cell, 1 for a fan piece.
     """
     buf = np.empty((counts.max() + 2 if counts.size else 2, 2), dtype=np.int64)
+    buf2 = np.empty_like(buf)
     corners = np.empty((4, 2), dtype=np.int64)
     for c in range(cells.shape[0]):
         iu0 = cells[c, 0]
@@ -503,42 +505,51 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
                     py = qy
             continue
         for half in range(2):
-            # triangle corners (cell corner indices), CCW; the two cell edges it owns
+            # the half-triangle (P0, P1, P2), counter-clockwise, owning the cell edges
+            # P0 -> P1 (e1) and P1 -> P2 (e2); its third side is the diagonal
             if diag[c] == 0:
-                t0, t1, t2 = (0, 1, 2) if half == 0 else (0, 2, 3)
+                c0, c1, c2 = (0, 1, 2) if half == 0 else (2, 3, 0)
             else:
-                t0, t1, t2 = (0, 1, 3) if half == 0 else (1, 2, 3)
-            tri = (t0, t1, t2)
-            hang_edge = -1
-            hang_pos = -1
-            for k in range(3):
-                a = tri[k]
-                b = tri[(k + 1) % 3]
-                if b == (a + 1) % 4 and counts[c, a] > 0:  # a cell edge a -> a+1
-                    hang_edge = a
-                    hang_pos = k
-            if hang_edge < 0:
-                for k in range(3):
-                    out[w, k, 0] = corners[tri[k], 0]
-                    out[w, k, 1] = corners[tri[k], 1]
-                kind[w] = 0
-                w += 1
-                continue
-            n = _edge_nodes(hkeys, vkeys, key, hang_edge, iu0, iu1, iv0, iv1, buf)
-            a = tri[hang_pos]
-            b = tri[(hang_pos + 1) % 3]
-            o = tri[(hang_pos + 2) % 3]
-            px = corners[a, 0]
-            py = corners[a, 1]
-            for r in range(n + 1):
-                if r < n:
+                c0, c1, c2 = (3, 0, 1) if half == 0 else (1, 2, 3)
+            k1 = _edge_nodes(hkeys, vkeys, key, c0, iu0, iu1, iv0, iv1, buf)
+            k2 = _edge_nodes(hkeys, vkeys, key, c1, iu0, iu1, iv0, iv1, buf2)
+            # fan from P2 over P0, a_1..a_k1 (, P1 when k2 == 0)
+            px = corners[c0, 0]
+            py = corners[c0, 1]
+            last = k1 if k2 > 0 else k1 + 1
+            for r in range(last):
+                if r < k1:
                     qx = buf[r, 0]
                     qy = buf[r, 1]
                 else:
-                    qx = corners[b, 0]
-                    qy = corners[b, 1]
-                out[w, 0, 0] = corners[o, 0]
-                out[w, 0, 1] = corners[o, 1]
+                    qx = corners[c1, 0]
+                    qy = corners[c1, 1]
+                out[w, 0, 0] = corners[c2, 0]
+                out[w, 0, 1] = corners[c2, 1]
+                out[w, 1, 0] = px
+                out[w, 1, 1] = py
+                out[w, 2, 0] = qx
+                out[w, 2, 1] = qy
+                kind[w] = 0 if (k1 == 0 and k2 == 0) else 1
+                w += 1
+                px = qx
+                py = qy
+            if k2 == 0:
+                continue
+            # then fan from a_k1 (or P0) over P1, b_1..b_k2, P2
+            ax = px
+            ay = py
+            px = corners[c1, 0]
+            py = corners[c1, 1]
+            for r in range(k2 + 1):
+                if r < k2:
+                    qx = buf2[r, 0]
+                    qy = buf2[r, 1]
+                else:
+                    qx = corners[c2, 0]
+                    qy = corners[c2, 1]
+                out[w, 0, 0] = ax
+                out[w, 0, 1] = ay
                 out[w, 1, 0] = px
                 out[w, 1, 1] = py
                 out[w, 2, 0] = qx
