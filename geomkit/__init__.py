@@ -4,6 +4,7 @@ Public API (users' scripts depend on these names):
 
 * :class:`Surface` — B-spline / NURBS surfaces with trims; ``evaluate``,
   ``derivatives``, ``normals``, ``classify_uv``, ``bezier_patches``.
+* :func:`tessellate` -> :class:`Mesh` — triangles within a chord tolerance that holds.
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
 * :mod:`geomkit.samples` — the bundled canonical cases.
 * :mod:`geomkit.errors` — the :class:`GeomkitError` hierarchy.
@@ -16,13 +17,14 @@ from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      MissingDependencyError)
 from .evaluation import derivatives, evaluate, normals
 from .io import Case, load, load_case, save
+from .tessellate import tessellate
 from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
-from .types import BezierPatches, Surface, TrimCurve, TrimLoop
+from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Surface", "TrimCurve", "TrimLoop", "BezierPatches", "Case",
+    "Surface", "TrimCurve", "TrimLoop", "BezierPatches", "Case", "Mesh", "tessellate",
     "load", "load_case", "save", "samples",
     "evaluate", "derivatives", "normals", "classify_uv", "bezier_patches",
     "INSIDE", "OUTSIDE", "ON_BOUNDARY",

@@ -9,10 +9,24 @@ import sys
 from .errors import GeomkitError
 
 EXAMPLES = """examples:
-  geomkit demo                 run the main job on the bundled samples
-  geomkit info part.json       list the surfaces of a file
-  geomkit samples              list the bundled sample cases
+  geomkit demo                              run the main job on the bundled samples
+  geomkit info part.json                    list the surfaces of a file
+  geomkit mesh part.json --tol 0.01 -o part.stl
+                                            triangulate within 0.01 (STL/PLY/OBJ)
+  geomkit mesh sphere --tol 1e-3 -o s.ply   a bundled sample by name
+  geomkit samples                           list the bundled sample cases
 """
+
+
+def _load_input(name: str):
+    """Surfaces from a file path, or from a bundled sample name."""
+    from pathlib import Path
+
+    from . import load_case, samples
+
+    if not Path(name).exists() and name in samples.names():
+        return samples.load_case(name)
+    return load_case(name)
 
 
 def _cmd_demo(args) -> int:
@@ -39,9 +53,7 @@ def _cmd_demo(args) -> int:
 
 
 def _cmd_info(args) -> int:
-    from . import load_case
-
-    case = load_case(args.file)
+    case = _load_input(args.file)
     out = {"name": case.name, "surfaces": []}
     for s in case.surfaces:
         (u0, u1), (v0, v1) = s.domain
@@ -57,6 +69,45 @@ def _cmd_info(args) -> int:
                   f"{s['degree']}, net {s['control_net']}, domain {s['domain']}, "
                   f"{s['trim_loops']} trim loop(s), bounds {s['bounds']}")
     return 0
+
+
+def _cmd_mesh(args) -> int:
+    import math
+    from pathlib import Path
+
+    from . import tessellate
+
+    src = Path(args.input)
+    out = Path(args.output)
+    if src.exists() and out.exists() and src.resolve() == out.resolve():
+        raise FileExistsError(f"{out}: is the input; choose another output")
+    if out.exists() and not args.overwrite:
+        raise FileExistsError(f"{out}: exists; pass --overwrite to replace it")
+    case = _load_input(args.input)
+    max_angle = math.radians(args.max_angle) if args.max_angle is not None else None
+    mesh = tessellate(case.surfaces, args.tol, max_angle=max_angle, max_edge=args.max_edge)
+    mesh.export(out, overwrite=args.overwrite)
+    info = {"input": args.input, "output": str(out), "surfaces": len(case.surfaces),
+            "vertices": int(mesh.vertices.shape[0]), "faces": int(mesh.faces.shape[0]),
+            "tol": args.tol, "max_deviation": mesh.max_deviation, "area": mesh.area,
+            "seconds": sum(st["seconds"] for st in mesh.stats["surfaces"])}
+    if args.json:
+        print(json.dumps(info, indent=1))
+    else:
+        print(f"{out}: {info['faces']} triangles, {info['vertices']} vertices from "
+              f"{info['surfaces']} surface(s); measured max deviation "
+              f"{info['max_deviation']:.3g} <= tol {args.tol:g}; {info['seconds']:.2f} s")
+    return 0
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not (value > 0) or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
+    return value
 
 
 def _cmd_samples(args) -> int:
@@ -93,6 +144,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_info)
+    p = sub.add_parser("mesh", help="triangulate surfaces within a chord tolerance",
+                       description="Triangulate every surface of INPUT so that each "
+                                   "triangle is within --tol of its surface (measured), "
+                                   "and write STL, PLY or OBJ by the output's extension.")
+    p.add_argument("input", help="geomkit-case/1 or geomdl JSON file, or a sample name")
+    p.add_argument("--tol", type=_positive_float, required=True,
+                   help="chord tolerance, model units")
+    p.add_argument("-o", "--output", required=True, help="output .stl, .ply or .obj")
+    p.add_argument("--max-angle", type=_positive_float, default=None,
+                   help="largest normal angle across a cell, degrees")
+    p.add_argument("--max-edge", type=_positive_float, default=None,
+                   help="largest cell edge, model units")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_mesh)
     p = sub.add_parser("samples", help="list the bundled samples")
     p.set_defaults(func=_cmd_samples)
     return ap
@@ -108,6 +174,9 @@ def main(argv=None) -> int:
     except FileExistsError as exc:
         print(f"geomkit: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

@@ -30,7 +30,9 @@ from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError
 from .types import Surface
 
 __all__ = ["Case", "load", "load_case", "save", "surface_to_dict", "surface_from_dict",
-           "to_geomdl", "from_geomdl", "CASE_FORMAT"]
+           "to_geomdl", "from_geomdl", "export_mesh", "CASE_FORMAT", "MESH_FORMATS"]
+
+MESH_FORMATS = (".stl", ".ply", ".obj")
 
 CASE_FORMAT = "geomkit-case/1"
 
@@ -260,14 +262,37 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     else:
         raise InvalidInputError(f"unknown format {format!r}; use {CASE_FORMAT!r} or 'geomdl'",
                                 "format")
+    return _atomic_write(p, lambda fh: fh.write(json.dumps(doc, indent=1).encode("utf-8")))
+
+
+def _atomic_write(p: Path, write) -> Path:
+    """Write through a temporary file in the target folder, then rename into place."""
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(doc, fh, indent=1)
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
         os.replace(tmp, p)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return p
+
+
+def export_mesh(mesh, path, overwrite: bool = False) -> Path:
+    """Write a :class:`~geomkit.Mesh` as STL (binary), PLY (binary) or OBJ, by extension.
+
+    Written atomically; an existing file is kept unless ``overwrite=True``.
+    """
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MESH_FORMATS:
+        raise InvalidInputError(f"unknown mesh format {p.suffix!r}; use one of "
+                                f"{', '.join(MESH_FORMATS)}", "path")
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    data = mesh.to_trimesh().export(file_type=ext[1:])
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    return _atomic_write(p, lambda fh: fh.write(data))

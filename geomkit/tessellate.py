@@ -304,7 +304,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1],
              "seconds": time.perf_counter() - t0}
-    return V, F[good], UV, dev[good], dev.max() if len(dev) else 0.0, stats
+    return V, F[good], UV, dev[good], tri_uv[good], stats
 
 
 def tessellate(surfaces, tol: float, max_angle: float | None = None,
@@ -350,10 +350,11 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
     if max_angle is not None and max_angle >= np.pi:
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
-    Vs, Fs, UVs, vs, fs, ds, stats = [], [], [], [], [], [], []
+    Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        V, F, UV, dev, _, st = _tessellate_one(s, tol, max_angle, max_edge, k)
+        V, F, UV, dev, tuv, st = _tessellate_one(s, tol, max_angle, max_edge, k)
+        fuv.append(tuv)
         Vs.append(V)
         Fs.append(F + offset)
         UVs.append(UV)
@@ -364,4 +365,4 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
         offset += len(V)
     return Mesh(np.concatenate(Vs), np.concatenate(Fs).astype(np.int64), np.concatenate(UVs),
                 np.concatenate(vs), np.concatenate(fs), np.concatenate(ds), tol,
-                {"surfaces": stats})
+                {"surfaces": stats}, np.ascontiguousarray(np.concatenate(fuv)))

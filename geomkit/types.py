@@ -500,6 +500,8 @@ class Mesh:
     max_deviation : float, the largest entry of ``face_deviation`` (0 for no faces).
     tol : float, the tolerance the mesh was built for.
     stats : dict, counts and timings of the build.
+    face_uv : (m, 3, 2) float, the parameters of each face corner on its surface
+        (exact for that face, also where a vertex is shared by several parameters).
     """
 
     vertices: np.ndarray
@@ -510,6 +512,7 @@ class Mesh:
     face_deviation: np.ndarray
     tol: float = float("nan")
     stats: dict = None
+    face_uv: np.ndarray = None
 
     @property
     def max_deviation(self) -> float:
