@@ -124,14 +124,24 @@ def corner_angle(surface, lat: Lattice, cells: np.ndarray) -> np.ndarray:
     return worst
 
 
-def measure(surface, lat: Lattice, cells: np.ndarray, k: int, exact_above: float):
-    """(N, 2) measured deviation of each cell's two splits (see ``cell_deviation``)."""
-    M = np.empty((cells.shape[0], 2))
-    if cells.shape[0]:
+def measure(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, k: int,
+            exact_above: float, target: float):
+    """(N, 2) measured deviation of each cell's two splits (see ``cell_deviation``).
+
+    Only cells whose estimate passes ``target`` are measured (the others will be
+    split anyway: their entries are +inf); the diagonal the estimate prefers is
+    measured first and the other only if the first fails (+inf when skipped).
+    """
+    M = np.full((cells.shape[0], 2), np.inf)
+    todo = np.nonzero(np.minimum(E[:, 0], E[:, 1]) <= target)[0]
+    if len(todo):
         (u0, u1), (v0, v1) = surface.domain
+        first = (E[todo, 1] < E[todo, 0]).astype(np.int64)
+        out = np.empty((len(todo), 2))
         cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,
-                       surface.knots_u, surface.knots_v, lat.cells_uv(cells), k,
-                       u0, u1, v0, v1, exact_above, M)
+                       surface.knots_u, surface.knots_v, lat.cells_uv(cells[todo]), first,
+                       k, u0, u1, v0, v1, exact_above, target, out)
+        M[todo] = out
     return M
 
 
@@ -152,7 +162,7 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: i
         E, M = known
     else:
         E = estimate(surface, lat, cells, m)
-        M = measure(surface, lat, cells, k, exact_above)
+        M = measure(surface, lat, cells, E, k, exact_above, target)
     for _ in range(max_rounds):
         dev = np.minimum(M[:, 0], M[:, 1])
         need = dev > target
@@ -179,7 +189,8 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: i
         wv = cells[:, 3] - cells[:, 2]
         # measured excess the estimates did not predict: split by the measured ratio
         miss = need & (nu == 1) & (nv == 1)
-        r = np.ceil(np.sqrt(np.maximum(dev, target) / target)).astype(np.int64)
+        excess = np.where(np.isfinite(dev), dev, np.minimum(E[:, 0], E[:, 1]))
+        r = np.ceil(np.sqrt(np.clip(excess, target, 64 * target) / target)).astype(np.int64)
         r = np.clip(r, 2, 8)
         nu = np.where(miss, r, nu)
         nv = np.where(miss, r, nv)
@@ -190,13 +201,15 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: i
             return cells, E, M
         kids = split(cells[moved], nu[moved], nv[moved])
         cells = np.concatenate([cells[~moved], kids])
-        E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])
-        M = np.concatenate([M[~moved], measure(surface, lat, kids, k, exact_above)])
+        Ek = estimate(surface, lat, kids, m)
+        E = np.concatenate([E[~moved], Ek])
+        M = np.concatenate([M[~moved], measure(surface, lat, kids, Ek, k, exact_above, target)])
     return cells, E, M
 
 
 def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarray, m: int,
-            k: int, exact_above: float, max_hang: int = 2, max_rounds: int = 30):
+            k: int, exact_above: float, target: float, max_hang: int = 2,
+            max_rounds: int = 30):
     """Grade the cells: split any cell with more than ``max_hang`` hanging nodes on an
     edge, so no cell borders a much finer region.  Sampled measurements stay
     trustworthy (a coarse cell next to a sharply curved region is where sampling
@@ -217,15 +230,17 @@ def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarr
             break
         kids = split(cells[moved], nu[moved], nv[moved])
         cells = np.concatenate([cells[~moved], kids])
-        E = np.concatenate([E[~moved], estimate(surface, lat, kids, m)])
-        M = np.concatenate([M[~moved], measure(surface, lat, kids, k, exact_above)])
+        Ek = estimate(surface, lat, kids, m)
+        E = np.concatenate([E[~moved], Ek])
+        M = np.concatenate([M[~moved], measure(surface, lat, kids, Ek, k, exact_above, target)])
     return cells, E, M
 
 
 def lattice_points(cells: np.ndarray) -> np.ndarray:
     """(k, 2) unique lattice corners ``(gu, gv)`` of the cells."""
-    c = np.concatenate([cells[:, [0, 2]], cells[:, [1, 2]], cells[:, [1, 3]], cells[:, [0, 3]]])
-    return np.unique(c, axis=0)
+    keys = np.unique(np.concatenate([cells[:, 2] * KEY + cells[:, 0], cells[:, 2] * KEY + cells[:, 1],
+                                     cells[:, 3] * KEY + cells[:, 1], cells[:, 3] * KEY + cells[:, 0]]))
+    return np.stack([keys % KEY, keys // KEY], axis=1)
 
 
 class EdgeIndex:

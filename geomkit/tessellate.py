@@ -230,7 +230,9 @@ def _weld(s: Surface, tri_uv: np.ndarray):
     (u0, u1), (v0, v1) = s.domain
     # crossing points computed in two neighbouring cells may differ by rounding
     dom = max(u1 - u0, v1 - v0)
-    uniq, inv = np.unique(flat, axis=0, return_inverse=True)
+    z = np.ascontiguousarray(flat).view(np.complex128).ravel()  # (u, v) as u + iv
+    uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
+    uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
     inv = inv.ravel()
     pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")]
     P = evaluate(s, uniq)
@@ -272,7 +274,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                                 CELL_TARGET * EXACT_ABOVE * tol, max_edge, max_angle, active,
                                 force, known)
         cells, E, M = qt.balance(s, lat, cells, E, M, m, k, CELL_TARGET * EXACT_ABOVE * tol,
-                                 MAX_HANGING)
+                                 CELL_TARGET * tol, MAX_HANGING)
         known = (E, M)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
         centre = np.array([tuple(c) in fanned for c in cells.tolist()], dtype=bool) \

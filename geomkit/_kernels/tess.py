@@ -292,12 +292,14 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
 
 
 @pjit
-def cell_deviation(Pw, p, q, U, V, cells, k, umin, umax, vmin, vmax, exact_above, out):
-    """Measured deviation of both two-triangle splits of UV cells (parallel).
+def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exact_above,
+                   target, out):
+    """Measured deviation of the two-triangle splits of UV cells (parallel).
 
     ``cells`` (N, 4) ``u0, u1, v0, v1``; ``out`` (N, 2): column 0 for the diagonal
     (u0,v0)-(u1,v1), column 1 for (u1,v0)-(u0,v1), each the larger of its two
-    triangles' :func:`triangle_deviation`.
+    triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
+    when it is within ``target`` the other is not measured (+inf).
     """
     N = cells.shape[0]
     for c in prange(N):
@@ -315,7 +317,12 @@ def cell_deviation(Pw, p, q, U, V, cells, k, umin, umax, vmin, vmax, exact_above
         for r in range(4):
             surface_point(Pw, p, q, U, V, UVc[r, 0], UVc[r, 1], Nu, Nv, left, right, tmp, X[r])
         T = np.empty((3, 3))
-        for diag in range(2):
+        out[c, 0] = np.inf
+        out[c, 1] = np.inf
+        for step in range(2):
+            diag = first[c] if step == 0 else 1 - first[c]
+            if step == 1 and out[c, first[c]] <= target:
+                break
             worst = 0.0
             for half in range(2):
                 if diag == 0:
