@@ -32,7 +32,7 @@ def _load_input(name: str):
 def _cmd_demo(args) -> int:
     from .demo import run_demo
 
-    summary = run_demo(grid=args.grid)
+    summary = run_demo(grid=args.grid, tol=args.tol)
     if args.json:
         print(json.dumps(summary, indent=1))
         return 0
@@ -47,8 +47,17 @@ def _cmd_demo(args) -> int:
         print(f"{r['case']:18s} {r['surface'][:18]:18s} {r['kind']:8s} "
               f"{r['degree'][0]},{r['degree'][1]:<3d} {r['control_net'][0]}x{r['control_net'][1]:<4d}"
               f"{r['eval_us_per_point']:6.3f}  {check}")
-    print(f"{len(summary['surfaces'])} surfaces evaluated on {args.grid}x{args.grid} grids "
-          f"in {summary['seconds']:.2f} s")
+    print()
+    print(f"{'case':18s} {'tol':>6s} {'triangles':>9s} {'max dev':>9s} {'area':>12s} "
+          f"{'truth':>12s} {'s':>6s}")
+    for r in summary["surfaces"]:
+        m = r.get("case_mesh")
+        if m:
+            truth = f"{m['area_truth']:12.4f}" if m["area_truth"] else f"{'-':>12s}"
+            print(f"{r['case']:18s} {m['tol']:6.0e} {m['faces']:9d} {m['max_deviation']:9.2e} "
+                  f"{m['area']:12.4f} {truth} {m['seconds']:6.2f}")
+    print(f"{len(summary['surfaces'])} surfaces evaluated on {args.grid}x{args.grid} grids and "
+          f"tessellated in {summary['seconds']:.2f} s")
     return 0
 
 
@@ -138,6 +147,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the main job on the bundled samples")
     p.add_argument("--grid", type=_positive_int, default=200, help="grid size per surface (default 200)")
+    p.add_argument("--tol", type=_positive_float, default=1e-2,
+                   help="tessellation tolerance (default 0.01)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_demo)
     p = sub.add_parser("info", help="describe the surfaces of a file")
