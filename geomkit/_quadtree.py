@@ -67,14 +67,30 @@ def split(cells: np.ndarray, nu: np.ndarray, nv: np.ndarray) -> np.ndarray:
         c = cells[(nu == a) & (nv == b)]
         wu = c[:, 1] - c[:, 0]
         wv = c[:, 3] - c[:, 2]
+        ou = _offsets(c[:, 0], wu, a)
+        ov = _offsets(c[:, 2], wv, b)
         for i in range(a):
-            u0 = c[:, 0] + (wu * i) // a
-            u1 = c[:, 0] + (wu * (i + 1)) // a
             for j in range(b):
-                v0 = c[:, 2] + (wv * j) // b
-                v1 = c[:, 2] + (wv * (j + 1)) // b
-                out.append(np.stack([u0, u1, v0, v1], axis=1))
+                out.append(np.stack([ou[:, i], ou[:, i + 1], ov[:, j], ov[:, j + 1]], axis=1))
     return np.concatenate(out)
+
+
+def _offsets(start: np.ndarray, width: np.ndarray, n: int) -> np.ndarray:
+    """(N, n+1) lattice boundaries splitting ``[start, start + width]`` into n parts.
+
+    Interior boundaries snap to a power-of-two grid of about an eighth of a part, so
+    that cells split independently put nearby lines on the same lattice value
+    (otherwise lines one unit apart leave sliver triangles between neighbours).
+    """
+    k = np.arange(n + 1)
+    exact = start[:, None] + (width[:, None] * k[None, :]) // n
+    g = np.maximum(width // (8 * n), 1)
+    g = 1 << (np.floor(np.log2(g)).astype(np.int64))
+    snapped = ((exact + g[:, None] // 2) // g[:, None]) * g[:, None]
+    snapped[:, 0] = start
+    snapped[:, -1] = start + width
+    ok = np.all(np.diff(snapped, axis=1) > 0, axis=1)
+    return np.where(ok[:, None], snapped, exact)
 
 
 def split_counts(e, eu, ev, target, max_parts=8):
