@@ -199,8 +199,8 @@ def _triangulate_cut(lat, cells, cut, index, trim):
 
     starts, ring = index.rings(cells[cut])
     ruv = np.c_[lat.u(ring[:, 0]), lat.v(ring[:, 1])]
-    polys = shapely.polygons([np.vstack([ruv[a:b], ruv[a:a + 1]])
-                              for a, b in zip(starts[:-1], starts[1:])])
+    ring_id = np.repeat(np.arange(len(cut)), np.diff(starts))
+    polys = shapely.polygons(shapely.linearrings(ruv, indices=ring_id))
     pieces = shapely.intersection(polys, trim.region)
     tri = shapely.constrained_delaunay_triangles(pieces)
     parts, idx = shapely.get_parts(tri, return_index=True)
@@ -336,19 +336,29 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
     """
     if isinstance(surfaces, Surface):
         surfaces = [surfaces]
+    if not isinstance(surfaces, (list, tuple)) or not surfaces \
+            or not all(isinstance(s, Surface) for s in surfaces):
+        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
+                                f"{type(surfaces).__name__}", "surfaces")
     surfaces = list(surfaces)
-    if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
-        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces",
-                                "surfaces")
     try:
         tol = float(tol)
     except (TypeError, ValueError):
         raise InvalidInputError(f"must be a positive number, got {tol!r}", "tol") from None
     if not np.isfinite(tol) or tol <= 0:
         raise InvalidInputError(f"must be a positive finite number, got {tol!r}", "tol")
+    checked = {}
     for name, val in (("max_angle", max_angle), ("max_edge", max_edge)):
-        if val is not None and (not np.isfinite(val) or val <= 0):
-            raise InvalidInputError(f"must be a positive finite number, got {val!r}", name)
+        if val is not None:
+            try:
+                val = float(val)
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"must be a positive number, got {val!r}",
+                                        name) from None
+            if not np.isfinite(val) or val <= 0:
+                raise InvalidInputError(f"must be a positive finite number, got {val!r}", name)
+        checked[name] = val
+    max_angle, max_edge = checked["max_angle"], checked["max_edge"]
     if max_angle is not None and max_angle >= np.pi:
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
