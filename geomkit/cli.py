@@ -24,7 +24,11 @@ def _load_input(name: str):
 
     from . import load_case, samples
 
-    if not Path(name).exists() and name in samples.names():
+    try:
+        exists = Path(name).exists()
+    except OSError:  # e.g. a name too long for the file system: load_case reports it
+        exists = False
+    if not exists and name in samples.names():
         return samples.load_case(name)
     return load_case(name)
 
@@ -88,7 +92,7 @@ def _cmd_mesh(args) -> int:
 
     src = Path(args.input)
     out = Path(args.output)
-    if src.exists() and out.exists() and src.resolve() == out.resolve():
+    if out.exists() and src.exists() and src.resolve() == out.resolve():
         raise FileExistsError(f"{out}: is the input; choose another output")
     if out.exists() and not args.overwrite:
         raise FileExistsError(f"{out}: exists; pass --overwrite to replace it")

@@ -40,11 +40,18 @@ def test_demo_prints_every_sample(capsys):
     rc, out, err = run(capsys, "demo", "--grid", "12")
     assert rc == 0 and err == ""
     lines = out.strip().splitlines()
-    rows = lines[1:-1]
+    blank = lines.index("")
+    rows = lines[1:blank]
+    mesh_rows = lines[blank + 2:-1]
     n_surfaces = sum(len(samples.load(n)) for n in samples.names())
     assert len(rows) == n_surfaces
     assert sorted({r.split()[0] for r in rows}) == samples.names()
     assert lines[-1].startswith(f"{n_surfaces} surfaces evaluated on 12x12 grids")
+    # the tessellation table: one row per case, measured deviation within the tolerance
+    assert sorted(r.split()[0] for r in mesh_rows) == samples.names()
+    for r in mesh_rows:
+        tol, faces, dev = float(r.split()[1]), int(r.split()[2]), float(r.split()[3])
+        assert faces > 0 and 0 <= dev <= tol
     plate = [r for r in rows if r.startswith("plate_with_hole")]
     assert len(plate) == 1 and "trimmed:" in plate[0]
     for name in ("sphere", "torus", "cylinder_quarter"):
