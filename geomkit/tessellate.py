@@ -9,7 +9,9 @@ Method (Paper 1 step 1, then beyond it):
    when given.  Flat regions stay coarse.
 2. **Trim boundary.**  Each trim curve becomes a polyline whose 3-D chords
    ``S(C(t_i))``–``S(C(t_i+1))`` deviate at most ``tol / 2`` from the exact boundary
-   curve ``S(C(t))`` (checked at interior samples, split at parameter midpoints).
+   curve ``S(C(t))``, and from the image under ``S`` of the UV chord (the mesh
+   boundary runs through UV-chord points where it crosses cell edges) — checked at
+   interior samples, split at parameter midpoints.
 3. **Triangles.**  A cell untouched by the trim becomes two triangles (the diagonal
    with the smaller deviation), or, when finer neighbours put hanging nodes on its
    edges, a fan around its centre — so there are no cracks between levels.  A cell
@@ -114,8 +116,15 @@ class _TrimPolylines:
                 dev = np.empty(len(t) - 1)
                 chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
                                 C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Cm), dev)
-                bad = dev > chord_tol
-                if c.is_polyline or not bad.any():
+                # the mesh boundary also passes through points of the UV chord (where it
+                # crosses cell edges), mapped by S: their images must stay near the 3-D
+                # chord too, or a non-uniform parametrisation bows the boundary out
+                Lm = C[:-1, None, :] + (C[1:] - C[:-1])[:, None, :] * mids[None, :, None]
+                dev_uv = np.empty(len(t) - 1)
+                chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                                C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Lm), dev_uv)
+                bad = np.maximum(dev, dev_uv) > chord_tol
+                if not bad.any():
                     break
                 t = np.sort(np.concatenate([t, 0.5 * (t[:-1] + t[1:])[bad]]))
             out.append(C if not out else C[1:])
