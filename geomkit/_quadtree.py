@@ -161,6 +161,14 @@ def measure(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, k: int,
     return M
 
 
+def _replace(surface, lat, cells, E, M, moved, nu, nv, m, k, exact_above, target):
+    """Split the ``moved`` cells and estimate/measure only their children."""
+    kids = split(cells[moved], nu[moved], nv[moved])
+    Ek = estimate(surface, lat, kids, m)
+    return (np.concatenate([cells[~moved], kids]), np.concatenate([E[~moved], Ek]),
+            np.concatenate([M[~moved], measure(surface, lat, kids, Ek, k, exact_above, target)]))
+
+
 def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: int,
            exact_above: float, max_edge=None, max_angle=None, active=None, force=None,
            known=None, max_rounds: int = 60):
@@ -215,11 +223,8 @@ def refine(surface, lat: Lattice, cells: np.ndarray, target: float, m: int, k: i
         moved = (nu > 1) | (nv > 1)
         if not moved.any():
             return cells, E, M
-        kids = split(cells[moved], nu[moved], nv[moved])
-        cells = np.concatenate([cells[~moved], kids])
-        Ek = estimate(surface, lat, kids, m)
-        E = np.concatenate([E[~moved], Ek])
-        M = np.concatenate([M[~moved], measure(surface, lat, kids, Ek, k, exact_above, target)])
+        cells, E, M = _replace(surface, lat, cells, E, M, moved, nu, nv, m, k, exact_above,
+                               target)
     return cells, E, M
 
 
@@ -244,11 +249,8 @@ def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarr
         moved = (nu > 1) | (nv > 1)
         if not moved.any():
             break
-        kids = split(cells[moved], nu[moved], nv[moved])
-        cells = np.concatenate([cells[~moved], kids])
-        Ek = estimate(surface, lat, kids, m)
-        E = np.concatenate([E[~moved], Ek])
-        M = np.concatenate([M[~moved], measure(surface, lat, kids, Ek, k, exact_above, target)])
+        cells, E, M = _replace(surface, lat, cells, E, M, moved, nu, nv, m, k, exact_above,
+                               target)
     return cells, E, M
 
 
