@@ -456,6 +456,18 @@ def _edge_nodes(hkeys, vkeys, key, edge, iu0, iu1, iv0, iv1, buf):
 
 
 @jit
+def _put(out, kind, w, ax, ay, bx, by, cx, cy, k):
+    """Write lattice triangle (a, b, c) of kind ``k`` at row ``w``."""
+    out[w, 0, 0] = ax
+    out[w, 0, 1] = ay
+    out[w, 1, 0] = bx
+    out[w, 1, 1] = by
+    out[w, 2, 0] = cx
+    out[w, 2, 1] = cy
+    kind[w] = k
+
+
+@jit
 def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
     """Triangles of cells whose edges may carry hanging nodes (lattice corners).
 
@@ -500,13 +512,8 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
                     else:
                         qx = corners[(e + 1) % 4, 0]
                         qy = corners[(e + 1) % 4, 1]
-                    out[w, 0, 0] = cu
-                    out[w, 0, 1] = cv
-                    out[w, 1, 0] = px
-                    out[w, 1, 1] = py
-                    out[w, 2, 0] = qx
-                    out[w, 2, 1] = qy
-                    kind[w] = 1
+                    _put(out, kind, w, cu, cv, px, py, qx, qy,
+                         1)
                     w += 1
                     px = qx
                     py = qy
@@ -531,13 +538,8 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
                 else:
                     qx = corners[c1, 0]
                     qy = corners[c1, 1]
-                out[w, 0, 0] = corners[c2, 0]
-                out[w, 0, 1] = corners[c2, 1]
-                out[w, 1, 0] = px
-                out[w, 1, 1] = py
-                out[w, 2, 0] = qx
-                out[w, 2, 1] = qy
-                kind[w] = 0 if (k1 == 0 and k2 == 0) else 1
+                _put(out, kind, w, corners[c2, 0], corners[c2, 1], px, py, qx, qy,
+                     0 if (k1 == 0 and k2 == 0) else 1)
                 w += 1
                 px = qx
                 py = qy
@@ -555,13 +557,8 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
                 else:
                     qx = corners[c2, 0]
                     qy = corners[c2, 1]
-                out[w, 0, 0] = ax
-                out[w, 0, 1] = ay
-                out[w, 1, 0] = px
-                out[w, 1, 1] = py
-                out[w, 2, 0] = qx
-                out[w, 2, 1] = qy
-                kind[w] = 1
+                _put(out, kind, w, ax, ay, px, py, qx, qy,
+                     1)
                 w += 1
                 px = qx
                 py = qy
