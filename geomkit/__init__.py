@@ -5,6 +5,8 @@ Public API (users' scripts depend on these names):
 * :class:`Surface` — B-spline / NURBS surfaces with trims; ``evaluate``,
   ``derivatives``, ``normals``, ``classify_uv``, ``bezier_patches``.
 * :func:`tessellate` -> :class:`Mesh` — triangles within a chord tolerance that holds.
+* :func:`project_points` -> :class:`Projection` — exact feet of points (CMM deviation);
+  :class:`VoxelGrid`, :func:`nearest_triangles` (Paper 1).
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
 * :mod:`geomkit.samples` — the bundled canonical cases.
 * :mod:`geomkit.errors` — the :class:`GeomkitError` hierarchy.
@@ -17,9 +19,12 @@ from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      MissingDependencyError)
 from .evaluation import derivatives, evaluate, normals
 from .io import Case, load, load_case, save
+from .projection import Projector, project_points
+from .results import MeshNearest, Projection
 from .tessellate import tessellate
 from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
 from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
+from .voxel import VoxelGrid, nearest_triangles
 
 __version__ = "0.1.0"
 
@@ -31,4 +36,6 @@ __all__ = [
     "errors", "tolerances", "GeomkitError", "InvalidInputError", "InvalidSurfaceError",
     "InvalidTrimError", "DegenerateGeometryError", "FileFormatError",
     "MissingDependencyError",
+    "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
+    "MeshNearest",
 ]

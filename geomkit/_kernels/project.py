@@ -1,0 +1,453 @@
+"""Point projection kernels: safeguarded Newton for the foot point on the exact surface.
+
+Surfaces are passed packed (see :func:`geomkit.projection._pack`): ``Pw_all``
+(sum nu*nv, 4) homogeneous control points, per surface ``meta[s] = (offset, nu, nv,
+p, q, U offset, V offset)`` into ``Pw_all``, ``U_all``, ``V_all``, and the domain
+``dom[s] = (umin, umax, vmin, vmax)``.
+
+The Newton iteration minimises f(u, v) = |S(u, v) - x|^2 / 2 over the domain box:
+
+* Newton step on the exact Hessian when it is positive definite, otherwise the
+  Gauss–Newton matrix (J^T J, always positive semi-definite) with a small
+  Levenberg damping — so every step is a descent direction, also at poles where
+  S_u vanishes;
+* bounds by an active set: a parameter at its bound whose gradient pushes outward is
+  frozen (the foot slides along the domain edge, or stops at a corner);
+* backtracking halves the step until f does not increase (monotone, hence bounded);
+* stop when the 3-D step is below ``step_tol`` or no decrease is possible.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._numba import jit, pjit, prange
+from .surface import _binomial_table, derivs_scratch, surface_derivs
+from .voxel import point_candidates
+
+MAX_ITER = 100
+FOOT_OK = 0
+FOOT_NOT_CONVERGED = 1
+
+
+@jit
+def _surface(Pw_all, U_all, V_all, meta, s):
+    o, nu, nv, p, q, uo, vo = (meta[s, 0], meta[s, 1], meta[s, 2], meta[s, 3], meta[s, 4],
+                               meta[s, 5], meta[s, 6])
+    Pw = Pw_all[o:o + nu * nv].reshape((nu, nv, 4))
+    U = U_all[uo:uo + nu + p + 1]
+    V = V_all[vo:vo + nv + q + 1]
+    return Pw, p, q, U, V
+
+
+@jit
+def _f(SKL, x):
+    r0 = SKL[0, 0, 0] - x[0]
+    r1 = SKL[0, 0, 1] - x[1]
+    r2 = SKL[0, 0, 2] - x[2]
+    return r0 * r0 + r1 * r1 + r2 * r2
+
+
+@jit
+def _wrap(u, lo, hi, closed):
+    """Clamp to [lo, hi], or wrap around when the surface is closed that way."""
+    if closed:
+        per = hi - lo
+        while u < lo:
+            u += per
+        while u > hi:
+            u -= per
+        return u
+    return min(hi, max(lo, u))
+
+
+@jit
+def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u, v,
+                step_tol, bin_, scr, SKL):
+    """Local minimiser of |S(u, v) - x| over the domain box, started at (u, v).
+
+    On a surface closed in u (or v) the iteration crosses the seam instead of
+    stopping on it.
+
+    Returns ``(u, v, distance, iterations, status)``; ``SKL`` holds the derivatives
+    up to order 2 at the returned parameters.
+    """
+    u = min(umax, max(umin, u))
+    v = min(vmax, max(vmin, v))
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    f = _f(SKL, x)
+    it = 0
+    status = FOOT_NOT_CONVERGED
+    while it < MAX_ITER:
+        it += 1
+        r0 = SKL[0, 0, 0] - x[0]
+        r1 = SKL[0, 0, 1] - x[1]
+        r2 = SKL[0, 0, 2] - x[2]
+        su0, su1, su2 = SKL[1, 0, 0], SKL[1, 0, 1], SKL[1, 0, 2]
+        sv0, sv1, sv2 = SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2]
+        gu = r0 * su0 + r1 * su1 + r2 * su2
+        gv = r0 * sv0 + r1 * sv1 + r2 * sv2
+        ga = su0 * su0 + su1 * su1 + su2 * su2
+        gb = su0 * sv0 + su1 * sv1 + su2 * sv2
+        gc = sv0 * sv0 + sv1 * sv1 + sv2 * sv2
+        a = ga + r0 * SKL[2, 0, 0] + r1 * SKL[2, 0, 1] + r2 * SKL[2, 0, 2]
+        b = gb + r0 * SKL[1, 1, 0] + r1 * SKL[1, 1, 1] + r2 * SKL[1, 1, 2]
+        c = gc + r0 * SKL[0, 2, 0] + r1 * SKL[0, 2, 1] + r2 * SKL[0, 2, 2]
+        fixu = not closed_u and ((u <= umin and gu > 0.0) or (u >= umax and gu < 0.0))
+        fixv = not closed_v and ((v <= vmin and gv > 0.0) or (v >= vmax and gv < 0.0))
+        lam = 1e-14 * (ga + gc) + 1e-300
+        du = 0.0
+        dv = 0.0
+        if fixu and fixv:
+            status = FOOT_OK
+            break
+        elif fixu:
+            hv = c if c > 0.0 else gc + lam
+            dv = -gv / hv
+        elif fixv:
+            hu = a if a > 0.0 else ga + lam
+            du = -gu / hu
+        else:
+            det = a * c - b * b
+            if a > 0.0 and det > 1e-14 * a * c:
+                du = -(c * gu - b * gv) / det
+                dv = -(a * gv - b * gu) / det
+            else:
+                ga2 = ga + lam
+                gc2 = gc + lam
+                det = ga2 * gc2 - gb * gb
+                if not det > 0.0:
+                    det = ga2 * gc2
+                    gb = 0.0
+                du = -(gc2 * gu - gb * gv) / det
+                dv = -(ga2 * gv - gb * gu) / det
+        if not (math.isfinite(du) and math.isfinite(dv)):
+            break
+        alpha = 1.0
+        accepted = False
+        un = u
+        vn = v
+        for _ in range(60):
+            un = _wrap(u + alpha * du, umin, umax, closed_u)
+            vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
+            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
+            fn = _f(SKL, x)
+            if fn <= f:
+                accepted = True
+                break
+            alpha *= 0.5
+        # the step actually taken (across a seam: the unwrapped one)
+        ddu = min(umax, max(umin, u + alpha * du)) - u if not closed_u else alpha * du
+        ddv = min(vmax, max(vmin, v + alpha * dv)) - v if not closed_v else alpha * dv
+        s0 = su0 * ddu + sv0 * ddv
+        s1 = su1 * ddu + sv1 * ddv
+        s2 = su2 * ddu + sv2 * ddv
+        step = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if not accepted:
+            # no decrease along a descent direction: stationary within rounding
+            surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+            status = FOOT_OK
+            break
+        u = un
+        v = vn
+        f = fn
+        if step <= step_tol or (ddu == 0.0 and ddv == 0.0):
+            status = FOOT_OK
+            break
+    return u, v, math.sqrt(f), it, status
+
+
+@pjit
+def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
+                  occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, step_tol,
+                  max_dist,
+                  max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_flags,
+                  out_work):
+    """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
+
+    For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
+    ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
+    nearest first.  ``out_lb[i]`` is the mesh lower bound of the point's distance
+    (certified up to the mesh deviation bounds ``fdev``).  ``out_flags[i]`` bit 0:
+    more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
+    """
+    n = P.shape[0]
+    m = F.shape[0]
+    CH = 64
+    nch = (n + CH - 1) // CH
+    bin_ = _binomial_table(2)
+    K = out_s.shape[1]
+    for ch in prange(nch):
+        stamp = np.full(m, -1, dtype=np.int64)
+        hk = np.empty(256)
+        hv = np.empty(256, dtype=np.int64)
+        cap = 64
+        ct = np.empty(cap, dtype=np.int64)
+        cd = np.empty(cap)
+        cs = np.empty(cap)
+        cw = np.empty(cap)
+        SKL = np.empty((3, 3, 3))
+        pmax = 1
+        qmax = 1
+        for s in range(meta.shape[0]):
+            pmax = max(pmax, meta[s, 3])
+            qmax = max(qmax, meta[s, 4])
+        scr = derivs_scratch(pmax, qmax, 2)
+        x = np.empty(3)
+        for i in range(ch * CH, min(n, (ch + 1) * CH)):
+            x[0] = P[i, 0]
+            x[1] = P[i, 1]
+            x[2] = P[i, 2]
+            k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+                x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+                start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+            out_lb[i] = LB
+            out_work[i, 0] = pops
+            out_work[i, 1] = tested
+            flags = 1 if ovf else 0
+            nf = 0
+            best = np.inf
+            if k == 0:
+                flags |= 2
+            for c in range(k):
+                if nf >= K or nf >= max_starts:
+                    break
+                t = ct[c]
+                if cd[c] - fdev[t] >= best:
+                    break  # sorted by distance: no later candidate can win either
+                s = face_surf[t]
+                sw = cs[c]
+                ww = cw[c]
+                u0 = face_uv[t, 0, 0] + sw * (face_uv[t, 1, 0] - face_uv[t, 0, 0]) \
+                    + ww * (face_uv[t, 2, 0] - face_uv[t, 0, 0])
+                v0 = face_uv[t, 0, 1] + sw * (face_uv[t, 1, 1] - face_uv[t, 0, 1]) \
+                    + ww * (face_uv[t, 2, 1] - face_uv[t, 0, 1])
+                # a start inside the basin of a foot already found is skipped: within
+                # two UV diameters of its triangle from that foot
+                du0 = max(abs(face_uv[t, 1, 0] - face_uv[t, 0, 0]),
+                          max(abs(face_uv[t, 2, 0] - face_uv[t, 0, 0]),
+                              abs(face_uv[t, 2, 0] - face_uv[t, 1, 0])))
+                dv0 = max(abs(face_uv[t, 1, 1] - face_uv[t, 0, 1]),
+                          max(abs(face_uv[t, 2, 1] - face_uv[t, 0, 1]),
+                              abs(face_uv[t, 2, 1] - face_uv[t, 1, 1])))
+                dup = False
+                for j in range(nf):
+                    if out_s[i, j] == s and abs(out_uv[i, j, 0] - u0) <= 2.0 * du0 \
+                            and abs(out_uv[i, j, 1] - v0) <= 2.0 * dv0:
+                        dup = True
+                        break
+                if dup:
+                    continue
+                Pw, p, q, U, Vk = _surface(Pw_all, U_all, V_all, meta, s)
+                u, v, d, it, st = foot_newton(Pw, p, q, U, Vk, dom[s, 0], dom[s, 1],
+                                              dom[s, 2], dom[s, 3], closed[s, 0] != 0,
+                                              closed[s, 1] != 0, x, u0, v0, step_tol,
+                                              bin_, scr, SKL)
+                # insert sorted by distance
+                j = nf
+                while j > 0 and out_d[i, j - 1] > d:
+                    out_s[i, j] = out_s[i, j - 1]
+                    out_uv[i, j, 0] = out_uv[i, j - 1, 0]
+                    out_uv[i, j, 1] = out_uv[i, j - 1, 1]
+                    out_d[i, j] = out_d[i, j - 1]
+                    out_st[i, j] = out_st[i, j - 1]
+                    j -= 1
+                out_s[i, j] = s
+                out_uv[i, j, 0] = u
+                out_uv[i, j, 1] = v
+                out_d[i, j] = d
+                out_st[i, j] = st
+                nf += 1
+                best = min(best, d)
+            out_nf[i] = nf
+            out_flags[i] = flags
+
+
+# ---------------------------------------------------------------- trim boundary feet
+@jit
+def _bernstein(n, t, out):
+    """Bernstein polynomials of degree n >= 0 at t into out[:n+1] (triangle recursion)."""
+    out[0] = 1.0
+    for k in range(1, n + 1):
+        saved = 0.0
+        for j in range(k):
+            tj = out[j]
+            out[j] = saved + (1.0 - t) * tj
+            saved = t * tj
+        out[k] = saved
+
+
+@jit
+def _bernstein_d2(n, t, B, B1, B2):
+    """Bernstein polynomials of degree n at t (B) and their first (B1) and second (B2)
+    derivatives: B'_i = n (b_{i-1} - b_i) with b of degree n - 1, and
+    B''_i = n (n - 1) (c_{i-2} - 2 c_{i-1} + c_i) with c of degree n - 2."""
+    _bernstein(n, t, B)
+    for i in range(n + 1):
+        B1[i] = 0.0
+        B2[i] = 0.0
+    if n >= 1:
+        _bernstein(n - 1, t, B1)  # b, degree n - 1, in B1[:n]
+        prev = 0.0
+        for i in range(n + 1):
+            cur = B1[i] if i < n else 0.0
+            B1[i] = n * (prev - cur)
+            prev = cur
+    if n >= 2:
+        _bernstein(n - 2, t, B2)  # c, degree n - 2, in B2[:n-1]
+        p2 = 0.0
+        p1 = 0.0
+        for i in range(n + 1):
+            cur = B2[i] if i < n - 1 else 0.0
+            B2[i] = n * (n - 1) * (p2 - 2.0 * p1 + cur)
+            p2 = p1
+            p1 = cur
+
+
+@jit
+def trim_curve_d2(Q, n, t, B, B1, B2, out):
+    """Rational 2-D Bézier curve (homogeneous control points ``Q`` (n+1, 3)) at t:
+    ``out[0]`` = C, ``out[1]`` = C', ``out[2]`` = C''."""
+    _bernstein_d2(n, t, B, B1, B2)
+    A = np.zeros((3, 3))  # [order, component]
+    for i in range(n + 1):
+        for c in range(3):
+            A[0, c] += B[i] * Q[i, c]
+            A[1, c] += B1[i] * Q[i, c]
+            A[2, c] += B2[i] * Q[i, c]
+    w = A[0, 2]
+    w1 = A[1, 2]
+    w2 = A[2, 2]
+    for c in range(2):
+        C = A[0, c] / w
+        C1 = (A[1, c] - w1 * C) / w
+        C2 = (A[2, c] - 2.0 * w1 * C1 - w2 * C) / w
+        out[0, c] = C
+        out[1, c] = C1
+        out[2, c] = C2
+
+
+@jit
+def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
+    """f, f', f'' of f(t) = |S(C(t)) - x|^2 / 2 and the 3-D speed |dS/dt|."""
+    trim_curve_d2(Q, n, t, B, B1, B2, Cd)
+    u = min(dom[1], max(dom[0], Cd[0, 0]))
+    v = min(dom[3], max(dom[2], Cd[0, 1]))
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    cu = Cd[1, 0]
+    cv = Cd[1, 1]
+    f = 0.0
+    g = 0.0
+    hh = 0.0
+    sp = 0.0
+    for c in range(3):
+        r = SKL[0, 0, c] - x[c]
+        St = SKL[1, 0, c] * cu + SKL[0, 1, c] * cv
+        Stt = (SKL[2, 0, c] * cu * cu + 2.0 * SKL[1, 1, c] * cu * cv + SKL[0, 2, c] * cv * cv
+               + SKL[1, 0, c] * Cd[2, 0] + SKL[0, 1, c] * Cd[2, 1])
+        f += r * r
+        g += r * St
+        hh += St * St + r * Stt
+        sp += St * St
+    return 0.5 * f, g, hh, math.sqrt(sp), u, v
+
+
+@pjit
+def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t, step_tol,
+              out_uv, out_d, out_seg, out_t):
+    """Nearest point of each point on the trim boundary of one surface.
+
+    Starts from the three nearest boundary samples (``samp_*``: points S(C(t)) on the
+    segments), then a safeguarded 1-D Newton in each segment's parameter t in [0, 1].
+    """
+    n = P.shape[0]
+    M = samp_xyz.shape[0]
+    bin_ = _binomial_table(2)
+    pmax = seg.shape[1] - 1
+    for i in prange(n):
+        scr = derivs_scratch(p, q, 2)
+        SKL = np.empty((3, 3, 3))
+        B = np.empty(pmax + 1)
+        B1 = np.empty(pmax + 1)
+        B2 = np.empty(pmax + 1)
+        Cd = np.empty((3, 2))
+        x = P[i]
+        best_i = np.array([-1, -1, -1])
+        best_d = np.array([np.inf, np.inf, np.inf])
+        for k in range(M):
+            d = ((samp_xyz[k, 0] - x[0]) ** 2 + (samp_xyz[k, 1] - x[1]) ** 2
+                 + (samp_xyz[k, 2] - x[2]) ** 2)
+            if d < best_d[2]:
+                j = 2
+                while j > 0 and best_d[j - 1] > d:
+                    best_d[j] = best_d[j - 1]
+                    best_i[j] = best_i[j - 1]
+                    j -= 1
+                best_d[j] = d
+                best_i[j] = k
+        out_d[i] = np.inf
+        for r in range(3):
+            k = best_i[r]
+            if k < 0:
+                continue
+            sg = samp_seg[k]
+            nd = deg[sg]
+            Q = seg[sg]
+            t = samp_t[k]
+            f, g, hh, sp, u, v = _trim_point(Pw, p, q, U, V, dom, Q, nd, t, x, bin_, scr,
+                                             SKL, B, B1, B2, Cd)
+            for _ in range(MAX_ITER):
+                if hh > 0.0:
+                    dt = -g / hh
+                else:
+                    dt = -g / (sp * sp + 1e-300)
+                if t <= 0.0 and dt < 0.0 or t >= 1.0 and dt > 0.0:
+                    break
+                alpha = 1.0
+                ok = False
+                tn = t
+                for _ls in range(60):
+                    tn = min(1.0, max(0.0, t + alpha * dt))
+                    fn, gn, hn, spn, un, vn = _trim_point(Pw, p, q, U, V, dom, Q, nd, tn,
+                                                          x, bin_, scr, SKL, B, B1, B2, Cd)
+                    if fn <= f:
+                        ok = True
+                        break
+                    alpha *= 0.5
+                if not ok:
+                    break
+                step = abs(tn - t) * sp
+                moved = tn != t
+                t, f, g, hh, sp, u, v = tn, fn, gn, hn, spn, un, vn
+                if step <= step_tol or not moved:
+                    break
+            d = math.sqrt(2.0 * f)
+            if d < out_d[i]:
+                out_d[i] = d
+                trim_curve_d2(Q, nd, t, B, B1, B2, Cd)
+                out_uv[i, 0] = min(dom[1], max(dom[0], Cd[0, 0]))
+                out_uv[i, 1] = min(dom[3], max(dom[2], Cd[0, 1]))
+                out_seg[i] = sg
+                out_t[i] = t
+
+
+@jit
+def trim_samples(seg, deg, per_segment, out_uv, out_seg, out_t):
+    """``per_segment`` parameter samples of every trim segment, t in [0, 1]."""
+    pmax = seg.shape[1] - 1
+    B = np.empty(pmax + 1)
+    B1 = np.empty(pmax + 1)
+    B2 = np.empty(pmax + 1)
+    Cd = np.empty((3, 2))
+    k = 0
+    for s in range(seg.shape[0]):
+        for j in range(per_segment):
+            t = j / (per_segment - 1.0)
+            trim_curve_d2(seg[s], deg[s], t, B, B1, B2, Cd)
+            out_uv[k, 0] = Cd[0, 0]
+            out_uv[k, 1] = Cd[0, 1]
+            out_seg[k] = s
+            out_t[k] = t
+            k += 1

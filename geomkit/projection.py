@@ -1,0 +1,375 @@
+"""Exact projection of points onto trimmed NURBS surfaces (CMM deviation).
+
+Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the answer):
+
+1. tessellate the surfaces once (:func:`geomkit.tessellate`, chord tolerance
+   ``mesh_tol``) and bin the triangles in a :class:`~geomkit.VoxelGrid`;
+2. per point, a best-first search over the grid collects every triangle t whose
+   surface piece can hold the nearest point: with d_t the point–triangle distance
+   and e_t the triangle's deviation bound, every t with
+   ``d_t - e_t <= min(d_t' + e_t')``; ``min(d_t - e_t)`` is the reported lower bound;
+3. from the nearest candidates (skipping starts inside the basin of a foot already
+   found, and every candidate whose lower bound exceeds the best foot) a
+   safeguarded Newton iteration on the exact surface finds the foot
+   (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
+   active set on the domain box, backtracking);
+4. on trimmed surfaces a foot outside the face is replaced by the nearest point of
+   the trim boundary (1-D Newton on the exact trim curve mapped onto the surface),
+   so the answer is the nearest point of the *trimmed* face.
+
+The nearest foot wins; points with many feet (the sphere centre) get the exact
+distance and one of them.  Work is parallel over points (numba ``prange``), in chunks
+of ``chunk_size`` points, so memory stays bounded for any number of points
+(:meth:`Projector.iter_project` streams).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import results as R
+from ._kernels import project as _pk
+from ._validate import as_float_array
+from .errors import InvalidInputError
+from .evaluation import evaluate, normals
+from .results import Projection
+from .tessellate import _closed_directions, tessellate
+from .trimming import INSIDE, OUTSIDE, _segments, classify_uv
+from .types import Surface
+from .voxel import VoxelGrid
+
+__all__ = ["Projector", "project_points", "DEFAULT_MESH_TOL", "DEVIATION_SAFETY"]
+
+DEFAULT_MESH_TOL = 2e-3
+"""Default candidate mesh chord tolerance, relative to the largest surface size."""
+DEVIATION_SAFETY = 2.0
+"""The triangles' measured deviations are multiplied by this in the candidate search
+(they are measured at samples, not proven)."""
+STEP_TOL = 1e-12
+"""Newton stops when the 3-D step is below this times the model size."""
+MAX_STARTS = 6
+"""Newton runs per point at most (distinct basins among the candidates)."""
+TRIM_SAMPLES = 32
+"""Samples per trim segment that seed the trim-boundary Newton."""
+CHUNK_SIZE = 1 << 16
+
+
+def _as_surfaces(surfaces) -> list[Surface]:
+    if isinstance(surfaces, Surface):
+        return [surfaces]
+    if isinstance(surfaces, (list, tuple)) and surfaces and \
+            all(isinstance(s, Surface) for s in surfaces):
+        return list(surfaces)
+    raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
+                            f"{type(surfaces).__name__}", "surfaces")
+
+
+def _pack(surfaces):
+    """Concatenate the surfaces' kernel arrays (see :mod:`geomkit._kernels.project`)."""
+    meta = np.zeros((len(surfaces), 7), dtype=np.int64)
+    dom = np.zeros((len(surfaces), 4))
+    Pw, U, V = [], [], []
+    o = uo = vo = 0
+    for i, s in enumerate(surfaces):
+        H = s.homogeneous
+        nu, nv = H.shape[:2]
+        meta[i] = (o, nu, nv, s.degree_u, s.degree_v, uo, vo)
+        (a, b), (c, d) = s.domain
+        dom[i] = (a, b, c, d)
+        Pw.append(H.reshape(-1, 4))
+        U.append(s.knots_u)
+        V.append(s.knots_v)
+        o += nu * nv
+        uo += s.knots_u.size
+        vo += s.knots_v.size
+    return (np.ascontiguousarray(np.concatenate(Pw)), np.concatenate(U), np.concatenate(V),
+            meta, dom)
+
+
+class _TrimData:
+    """Trim segments of one surface and dense samples on their images."""
+
+    def __init__(self, s: Surface):
+        seg, deg, _, _ = _segments(s)
+        self.seg = np.ascontiguousarray(seg)
+        self.deg = deg
+        M = seg.shape[0] * TRIM_SAMPLES
+        uv = np.empty((M, 2))
+        self.samp_seg = np.empty(M, dtype=np.int64)
+        self.samp_t = np.empty(M)
+        _pk.trim_samples(self.seg, deg, TRIM_SAMPLES, uv, self.samp_seg, self.samp_t)
+        (u0, u1), (v0, v1) = s.domain
+        uv[:, 0] = np.clip(uv[:, 0], u0, u1)
+        uv[:, 1] = np.clip(uv[:, 1], v0, v1)
+        self.samp_xyz = np.ascontiguousarray(evaluate(s, uv))
+
+
+class Projector:
+    """Reusable projection onto fixed surfaces: the candidate mesh and voxel grid are
+    built once (:func:`project_points` caches one per surface list).
+
+    Parameters
+    ----------
+    surfaces : Surface or list of Surface
+    mesh_tol : float, optional
+        Chord tolerance of the candidate mesh (model units); default
+        :data:`DEFAULT_MESH_TOL` times the largest surface size.  It changes speed, not
+        accuracy: the answer always comes from the exact surface.
+    voxel_size : float, optional
+        See :class:`~geomkit.VoxelGrid`.
+    """
+
+    def __init__(self, surfaces, mesh_tol: float | None = None,
+                 voxel_size: float | None = None):
+        t0 = time.perf_counter()
+        self.surfaces = _as_surfaces(surfaces)
+        self.size = max(s.size for s in self.surfaces)
+        if mesh_tol is None:
+            mesh_tol = DEFAULT_MESH_TOL * self.size
+        mesh_tol = float(mesh_tol)
+        if not (math.isfinite(mesh_tol) and mesh_tol > 0):
+            raise InvalidInputError(f"must be a finite number > 0, got {mesh_tol!r}",
+                                    "mesh_tol")
+        self.mesh = tessellate(self.surfaces, mesh_tol)
+        self.grid = VoxelGrid(self.mesh, voxel_size)
+        self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * self.mesh.face_deviation)
+        self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
+        self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
+        self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
+        self.packed = _pack(self.surfaces)
+        # closed directions (seams are crossed) and free edges (only these are edges)
+        self.closed = np.zeros((len(self.surfaces), 2), dtype=np.int64)
+        self.free_edges = np.ones((len(self.surfaces), 4), dtype=bool)
+        for i, s in enumerate(self.surfaces):
+            cu, cv = _closed_directions(s)
+            self.closed[i] = (cu, cv)
+            H = s.homogeneous
+            X = H[..., :3] / H[..., 3:]
+            eps = 1e-10 * s.size
+            rows = (X[0], X[-1], X[:, 0], X[:, -1])  # u0, u1, v0, v1 edges
+            for e, row in enumerate(rows):
+                collapsed = np.ptp(row, axis=0).max() <= eps
+                self.free_edges[i, e] = not (collapsed or (cu if e < 2 else cv))
+        self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
+        self.build_time = time.perf_counter() - t0
+
+    def __repr__(self) -> str:
+        return (f"<Projector {len(self.surfaces)} surfaces, {self.mesh.faces.shape[0]} "
+                f"candidate triangles, {self.grid!r}>")
+
+    # ------------------------------------------------------------------ one chunk
+    def _chunk(self, P: np.ndarray, max_distance: float) -> Projection:
+        n = P.shape[0]
+        K = MAX_STARTS
+        fs = np.full((n, K), -1, dtype=np.int64)
+        fuv = np.zeros((n, K, 2))
+        fd = np.full((n, K), np.inf)
+        fst = np.zeros((n, K), dtype=np.int64)
+        nf = np.zeros(n, dtype=np.int64)
+        lb = np.zeros(n)
+        flags = np.zeros(n, dtype=np.int64)
+        work = np.zeros((n, 2), dtype=np.int64)
+        g = self.grid
+        Pw, U, V, meta, dom = self.packed
+        _pk.project_batch(P, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
+                          self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
+                          STEP_TOL * self.size, max_distance, K, fs, fuv, fd, fst, nf, lb,
+                          flags, work)
+        cols = np.arange(K)[None, :]
+        fd[cols >= nf[:, None]] = np.inf
+        from_trim = np.zeros((n, K), dtype=bool)
+        # trimmed faces: feet outside the face are replaced by the trim-boundary foot
+        extra_d = np.full(n, np.inf)
+        extra_uv = np.zeros((n, 2))
+        extra_s = np.full(n, -1, dtype=np.int64)
+        for si, td in self.trims.items():
+            on = (fs == si) & np.isfinite(fd)
+            if not on.any():
+                continue
+            cls = classify_uv(self.surfaces[si], fuv[on])
+            bad = np.zeros_like(on)
+            bad[on] = cls == OUTSIDE
+            if not bad.any():
+                continue
+            fd[bad] = np.inf
+            rows = np.nonzero(bad.any(axis=1))[0]
+            s = self.surfaces[si]
+            tuv = np.empty((rows.size, 2))
+            td_ = np.empty(rows.size)
+            tseg = np.empty(rows.size, dtype=np.int64)
+            tt = np.empty(rows.size)
+            _pk.trim_feet(np.ascontiguousarray(P[rows]), s.homogeneous, s.degree_u,
+                          s.degree_v, s.knots_u, s.knots_v, dom[si], td.seg, td.deg,
+                          td.samp_xyz, td.samp_seg, td.samp_t, STEP_TOL * self.size,
+                          tuv, td_, tseg, tt)
+            better = td_ < extra_d[rows]
+            r = rows[better]
+            extra_d[r] = td_[better]
+            extra_uv[r] = tuv[better]
+            extra_s[r] = si
+        j = np.argmin(fd, axis=1)
+        rows = np.arange(n)
+        best_d = fd[rows, j]
+        use_trim = extra_d < best_d
+        dist = np.where(use_trim, extra_d, best_d)
+        uv = np.where(use_trim[:, None], extra_uv, fuv[rows, j])
+        surf = np.where(use_trim, extra_s, fs[rows, j])
+        newton_ok = np.where(use_trim, True, fst[rows, j] == _pk.FOOT_OK)
+        status = np.full(n, R.INTERIOR, dtype=np.int8)
+        status[use_trim] = R.TRIM_EDGE
+        found = np.isfinite(dist)
+        beyond = ~found | (dist > max_distance)
+        status[~newton_ok] = R.FAILED
+        status[beyond] = R.BEYOND
+        foot = np.full((n, 3), np.nan)
+        nrm = np.full((n, 3), np.nan)
+        resid = np.full(n, np.nan)
+        for si, s in enumerate(self.surfaces):
+            sel = (surf == si) & (status != R.BEYOND) & (status != R.FAILED)
+            if not sel.any():
+                continue
+            (u0, u1), (v0, v1) = s.domain
+            q = uv[sel]
+            q[:, 0] = np.clip(q[:, 0], u0, u1)
+            q[:, 1] = np.clip(q[:, 1], v0, v1)
+            uv[sel] = q
+            foot[sel] = evaluate(s, q)
+            nrm[sel] = normals(s, q)
+            st = status[sel]
+            eps_u = 1e-12 * (u1 - u0)
+            eps_v = 1e-12 * (v1 - v0)
+            fe = self.free_edges[si]
+            edge = ((fe[0] & (q[:, 0] <= u0 + eps_u)) | (fe[1] & (q[:, 0] >= u1 - eps_u))
+                    | (fe[2] & (q[:, 1] <= v0 + eps_v)) | (fe[3] & (q[:, 1] >= v1 - eps_v)))
+            st[(st == R.INTERIOR) & edge] = R.DOMAIN_EDGE
+            if s.is_trimmed:
+                inner = st == R.INTERIOR
+                if inner.any():
+                    c = classify_uv(s, q[inner])
+                    sub = st[inner]
+                    sub[c != INSIDE] = R.TRIM_EDGE
+                    st[inner] = sub
+            status[sel] = st
+        ok = (status != R.BEYOND) & (status != R.FAILED)
+        diff = P - foot
+        dist = np.where(ok, np.linalg.norm(diff, axis=1), np.nan)
+        along = np.einsum("ij,ij->i", diff, nrm)
+        signed = np.where(ok, np.copysign(dist, along), np.nan)
+        signed[ok & (dist == 0)] = 0.0
+        tang = np.sqrt(np.maximum(0.0, dist ** 2 - along ** 2))
+        resid = np.where(status == R.INTERIOR, tang, np.where(ok, 0.0, np.nan))
+        uv[~ok] = np.nan
+        surf = np.where(ok, surf, -1).astype(np.int32)
+        lower = np.where(ok, np.minimum(lb, dist), lb)
+        return Projection(point=foot, uv=uv, surface=surf, distance=dist,
+                          signed_distance=signed, normal=nrm, status=status,
+                          lower_bound=lower, residual=resid,
+                          feet_tried=np.minimum(nf, 127).astype(np.int8),
+                          stats={"candidate_overflow": int(np.count_nonzero(flags & 1)),
+                                 "cells_opened": int(work[:, 0].sum()),
+                                 "triangles_tested": int(work[:, 1].sum()),
+                                 "newton_runs": int(nf.sum()),
+                                 "lower_bound_above_distance":
+                                     int(np.count_nonzero(ok & (lb > dist)))})
+
+    # ------------------------------------------------------------------ public
+    def iter_project(self, points, max_distance: float | None = None,
+                     chunk_size: int = CHUNK_SIZE, progress=None):
+        """Project in chunks, yielding one :class:`Projection` per chunk (bounded
+        memory for any number of points, e.g. a ``numpy.memmap``)."""
+        arr = points if isinstance(points, np.ndarray) else np.asarray(points, dtype=float)
+        if arr.ndim == 0 or arr.shape[-1] != 3:
+            raise InvalidInputError(f"expected an array of shape (..., 3), got {arr.shape}",
+                                    "points")
+        arr = arr.reshape(-1, 3)
+        md = np.inf if max_distance is None else float(max_distance)
+        if math.isnan(md) or md < 0:
+            raise InvalidInputError(f"must be a number >= 0, got {max_distance!r}",
+                                    "max_distance")
+        chunk_size = int(chunk_size)
+        if chunk_size < 1:
+            raise InvalidInputError(f"must be >= 1, got {chunk_size}", "chunk_size")
+        n = arr.shape[0]
+        for a in range(0, n, chunk_size):
+            b = min(n, a + chunk_size)
+            P = np.ascontiguousarray(arr[a:b], dtype=np.float64)
+            bad = ~np.isfinite(P).all(axis=1)
+            if bad.any():
+                i = a + int(np.nonzero(bad)[0][0])
+                raise InvalidInputError(f"non-finite coordinates in row {i}: "
+                                        f"{arr[i].tolist()}", "points")
+            yield self._chunk(P, md)
+            if progress is not None:
+                progress(b, n)
+
+    def project(self, points, max_distance: float | None = None,
+                chunk_size: int = CHUNK_SIZE, progress=None) -> Projection:
+        """Project all points; see :func:`project_points`."""
+        t0 = time.perf_counter()
+        parts = list(self.iter_project(points, max_distance, chunk_size, progress))
+        if not parts:
+            e2, e3 = np.empty((0, 2)), np.empty((0, 3))
+            return Projection(e3, e2, np.empty(0, np.int32), np.empty(0), np.empty(0), e3,
+                              np.empty(0, np.int8), np.empty(0), np.empty(0),
+                              np.empty(0, np.int8), {"time": 0.0})
+        out = Projection(*(np.concatenate([getattr(p, f) for p in parts]) for f in
+                           ("point", "uv", "surface", "distance", "signed_distance",
+                            "normal", "status", "lower_bound", "residual", "feet_tried")))
+        out.stats = {k: sum(p.stats[k] for p in parts) for k in parts[0].stats}
+        out.stats.update(time=time.perf_counter() - t0, build_time=self.build_time,
+                         candidate_triangles=int(self.mesh.faces.shape[0]))
+        return out
+
+
+def _cached_projector(surfaces, mesh_tol) -> Projector:
+    surfaces = _as_surfaces(surfaces)
+    key = ("projector", tuple(id(s) for s in surfaces), mesh_tol)
+    cache = surfaces[0]._cache
+    pr = cache.get(key)
+    if pr is None:
+        pr = Projector(surfaces, mesh_tol)
+        cache[key] = pr
+    return pr
+
+
+def project_points(surfaces, points, max_distance: float | None = None, *,
+                   mesh_tol: float | None = None, chunk_size: int = CHUNK_SIZE,
+                   progress=None) -> Projection:
+    """Nearest points (feet) of points on trimmed NURBS surfaces.
+
+    Parameters
+    ----------
+    surfaces : Surface or list of Surface
+    points : (..., 3) float
+    max_distance : float, optional
+        Points farther than this from every surface get status ``BEYOND`` (NaN
+        values); the search stops early for them.
+    mesh_tol : float, optional
+        Candidate mesh tolerance, see :class:`Projector` (speed only).
+    chunk_size : int
+        Points per parallel batch (bounds the working memory).
+    progress : callable(done, total), optional
+        Called after each chunk.
+
+    Returns
+    -------
+    Projection
+        Per point: foot, (u, v), surface index, distance, signed distance, unit normal,
+        status (interior / domain edge / trim edge / beyond / failed) and a lower bound
+        from the mesh.  The foot is a point of the exact trimmed surface; the distance
+        is the minimum over all candidate basins, converged to ~1e-12 of the model
+        size (tested against analytic distances to 1e-9).
+
+    Examples
+    --------
+    >>> import geomkit
+    >>> sphere = geomkit.samples.load("sphere")[0]
+    >>> pr = geomkit.project_points(sphere, [[0, 0, 13.0], [0, 0, 0]])
+    >>> [round(float(d), 9) for d in pr.signed_distance]
+    [3.0, -10.0]
+    """
+    pr = _cached_projector(surfaces, mesh_tol)
+    return pr.project(points, max_distance, chunk_size, progress)
