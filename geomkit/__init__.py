@@ -17,6 +17,7 @@ from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      MissingDependencyError)
 from .evaluation import derivatives, evaluate, normals
 from .io import Case, load, load_case, save
+from .section import Section, plane_section
 from .tessellate import tessellate
 from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
 from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
@@ -31,4 +32,5 @@ __all__ = [
     "errors", "tolerances", "GeomkitError", "InvalidInputError", "InvalidSurfaceError",
     "InvalidTrimError", "DegenerateGeometryError", "FileFormatError",
     "MissingDependencyError",
+    "plane_section", "Section",
 ]

@@ -72,7 +72,11 @@ def _exact_midpoints(section, ci):
         a, b = uv[sel], uv[sel + 1]
         mid, f = ev.project(0.5 * (a + b), np.linalg.norm(b - a, axis=1), 1e-14)
         Y = ev.points(mid)
-        ok = np.abs(f) <= 1e-9
+        # a UV midpoint across a seam projects elsewhere: keep the chord midpoint
+        # there (within the section's chord tolerance of the curve)
+        near = (np.linalg.norm(Y - M[sel], axis=1)
+                <= np.linalg.norm(X[sel + 1] - X[sel], axis=1))
+        ok = (np.abs(f) <= 1e-9) & near
         M[sel[ok]] = Y[ok]
     return X, M
 
@@ -144,11 +148,11 @@ def to_csv(section, path, overwrite=False):
     lines = ["curve,index,x,y,z,u,v,surface"]
     for ci, (X, uv, sid) in enumerate(zip(section.curves, section.uv, section.surface_index)):
         for i in range(len(X)):
-            lines.append(f"{ci},{i},{X[i, 0]!r},{X[i, 1]!r},{X[i, 2]!r},"
-                         f"{uv[i, 0]!r},{uv[i, 1]!r},{int(sid[i])}")
+            lines.append(f"{ci},{i},{float(X[i, 0])!r},{float(X[i, 1])!r},{float(X[i, 2])!r},"
+                         f"{float(uv[i, 0])!r},{float(uv[i, 1])!r},{int(sid[i])}")
     for i in range(len(section.points)):
         X, uv = section.points[i], section.points_uv[i]
-        lines.append(f"-1,{i},{X[0]!r},{X[1]!r},{X[2]!r},{uv[0]!r},{uv[1]!r},"
+        lines.append(f"-1,{i},{float(X[0])!r},{float(X[1])!r},{float(X[2])!r},{float(uv[0])!r},{float(uv[1])!r},"
                      f"{int(section.points_surface[i])}")
     text = "\n".join(lines) + "\n"
     return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))

@@ -36,6 +36,10 @@ from .types import Surface
 
 __all__ = ["plane_section", "Section", "as_plane"]
 
+TRIM_STEP = 1.0 / 1024
+"""On trimmed surfaces, curve points are at most ``TRIM_STEP * domain size`` apart in
+UV before they are classified (a trim loop smaller than that can be missed)."""
+
 
 @dataclass(eq=False)
 class Section:
@@ -241,6 +245,8 @@ def _clip_trims(s, plane, chains, zsnap):
         uv = c["uv"]
         if c["closed"]:
             uv = np.concatenate([uv, uv[:1]])
+        uv = _densify(ev, uv, TRIM_STEP * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2]),
+                      zsnap)
         inside = s.classify_uv(uv) != OUTSIDE
         if inside.all():
             out.append(c)
@@ -267,15 +273,29 @@ def _clip_trims(s, plane, chains, zsnap):
     return out
 
 
+def _densify(ev, uv, h, zsnap):
+    """Insert exact curve points until consecutive UV points are at most ``h`` apart
+    (so that a trim loop crossing the curve is seen by point classification)."""
+    for _ in range(40):
+        seg = np.linalg.norm(np.diff(uv, axis=0), axis=1)
+        long_ = np.nonzero(seg > h)[0]
+        if not len(long_):
+            break
+        mid, _f = ev.project(0.5 * (uv[long_] + uv[long_ + 1]), seg[long_], 0.25 * zsnap)
+        uv = np.insert(uv, long_ + 1, mid, axis=0)
+    return uv
+
+
 def _boundary(s, ev, a_in, b_out, zsnap, iters=60):
     """The curve point on the trim boundary between an inside and an outside point."""
     a, b = np.array(a_in, float), np.array(b_out, float)
+    band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
     if s.classify_uv(a[None])[0] == OUTSIDE:
         a, b = b, a
     for _ in range(iters):
         m, _f = ev.project(0.5 * (a + b), [np.linalg.norm(b - a)], 0.25 * zsnap)
         m = m[0]
-        if s.classify_uv(m[None])[0] == OUTSIDE:
+        if s.classify_uv(m[None], band)[0] == OUTSIDE:
             b = m
         else:
             a = m
