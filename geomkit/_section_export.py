@@ -152,7 +152,8 @@ def to_csv(section, path, overwrite=False):
                          f"{float(uv[i, 0])!r},{float(uv[i, 1])!r},{int(sid[i])}")
     for i in range(len(section.points)):
         X, uv = section.points[i], section.points_uv[i]
-        lines.append(f"-1,{i},{float(X[0])!r},{float(X[1])!r},{float(X[2])!r},{float(uv[0])!r},{float(uv[1])!r},"
+        lines.append(f"-1,{i},{float(X[0])!r},{float(X[1])!r},{float(X[2])!r},"
+                     f"{float(uv[0])!r},{float(uv[1])!r},"
                      f"{int(section.points_surface[i])}")
     text = "\n".join(lines) + "\n"
     return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))

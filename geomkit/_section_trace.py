@@ -282,7 +282,6 @@ def _refine(ev, leaves, uv, segleaf, tol, zsnap):
     at the accepted segments (distance of the exact midpoint from the 3-D chord).
     """
     X = ev.points(uv)
-    pts = [uv]
     active = np.ones(len(uv) - 1, bool)
     chord = 0.0
     for _ in range(MAX_ROUNDS):
@@ -320,5 +319,4 @@ def _refine(ev, leaves, uv, segleaf, tol, zsnap):
         idx = np.nonzero(active)[0]
         if len(idx):  # out of rounds: report what was reached
             chord = max(chord, np.inf)
-    del pts
     return uv, chord

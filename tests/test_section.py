@@ -22,8 +22,7 @@ def _plane_res(sec, X):
 
 
 def _chord_check(sec, X, closed):
-    """Brute force: every segment's chord is within tol of a dense exact resampling
-    is not available here; check spacing consistency instead (no gaps > 2x median)."""
+    """Segment lengths of a polyline (closed: including the closing segment)."""
     P = np.concatenate([X, X[:1]]) if closed else X
     return np.linalg.norm(np.diff(P, axis=0), axis=1)
 
@@ -206,7 +205,8 @@ def test_brute_force_sign_changes_freeform():
     P = s.evaluate(np.stack([U.ravel(), V.ravel()], 1)).reshape(81, 81, 3)
     F = P @ n + plane[3] / np.linalg.norm(plane[:3])
     X = np.concatenate(sec.curves)
-    for A, B, fa, fb in ((P[:-1], P[1:], F[:-1], F[1:]), (P[:, :-1], P[:, 1:], F[:, :-1], F[:, 1:])):
+    for A, B, fa, fb in ((P[:-1], P[1:], F[:-1], F[1:]),
+                         (P[:, :-1], P[:, 1:], F[:, :-1], F[:, 1:])):
         idx = np.nonzero(fa * fb < 0)
         for i, j in zip(*idx):
             m = 0.5 * (A[i, j] + B[i, j])

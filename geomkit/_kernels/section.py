@@ -261,7 +261,7 @@ def _f_at(Pw, p, q, U, V, plane, u, v, Nu, Nv, left, right, tmp, X):
 
 @jit
 def plane_values(Pw, p, q, U, V, plane, uv, out):
-    """``out[i] = f(uv[i])`` and the points ``out_X`` are not kept; ``uv`` (n, 2)."""
+    """``out[i] = f(uv[i])``, the plane function at ``uv`` (n, 2)."""
     mm = max(p, q) + 1
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
