@@ -7,6 +7,8 @@ Public API (users' scripts depend on these names):
 * :func:`tessellate` -> :class:`Mesh` — triangles within a chord tolerance that holds.
 * :func:`project_points` -> :class:`Projection` — exact feet of points (CMM deviation);
   :class:`VoxelGrid`, :func:`nearest_triangles` (Paper 1).
+* :func:`plane_section` -> :class:`Section` — plane sections (Paper 2), exact points,
+  fit and CSV / DXF / JSON export.
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
 * :mod:`geomkit.samples` — the bundled canonical cases.
 * :mod:`geomkit.errors` — the :class:`GeomkitError` hierarchy.
@@ -21,6 +23,7 @@ from .evaluation import derivatives, evaluate, normals
 from .io import Case, load, load_case, save
 from .projection import Projector, project_points
 from .results import MeshNearest, Projection
+from .section import Section, plane_section
 from .tessellate import tessellate
 from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
 from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
@@ -38,4 +41,5 @@ __all__ = [
     "MissingDependencyError",
     "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
     "MeshNearest",
+    "plane_section", "Section",
 ]

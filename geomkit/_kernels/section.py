@@ -1,0 +1,432 @@
+"""Plane-section kernels: certified Bézier subdivision, edge roots, Newton projections.
+
+The plane is ``plane = (A, B, C, D)`` with a unit normal; the plane function of a
+surface point is ``f(u, v) = A x + B y + C z + D``.  On a rational Bézier patch with
+homogeneous control points ``Qw[i, j] = (w x, w y, w z, w)`` the numerator
+``N(u, v) = sum B_i(u) B_j(v) h_ij`` with ``h_ij = plane . Qw[i, j]`` has the same zero
+set as ``f`` (the weights are positive), so the signs of ``h`` certify:
+
+* all ``h > 0`` or all ``h < 0``: the patch misses the plane (convex hull);
+* the ``h`` differences along u all ``>= 0`` (or all ``<= 0``): ``N`` is monotone in u,
+  every v-line crosses the zero set at most once, no closed loop lies inside, and
+  (with the edge polygons along v having at most one sign change) every edge holds
+  at most one crossing.  Such a leaf is linked by sorting its edge crossings.
+
+This extends Paper 2 (quad states a-g from corner signs, uniform 10x10 subdivision),
+whose corner test cannot exclude a small loop inside a quad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._numba import jit
+from .surface import _binomial_table, derivs_scratch, surface_derivs, surface_point
+
+PRUNE = 0
+MONO_U = 1
+MONO_V = 2
+UNRESOLVED = 3
+SPLIT = 4
+
+
+@jit
+def _split(Q, axis, L, R):
+    """de Casteljau split at the middle of a tensor net ``Q`` (m, n, k) along ``axis``."""
+    m = Q.shape[0]
+    n = Q.shape[1]
+    k = Q.shape[2]
+    if axis == 0:
+        for j in range(n):
+            for c in range(k):
+                for i in range(m):
+                    R[i, j, c] = Q[i, j, c]
+                L[0, j, c] = Q[0, j, c]
+                for r in range(1, m):
+                    for i in range(m - r):
+                        R[i, j, c] = 0.5 * (R[i, j, c] + R[i + 1, j, c])
+                    L[r, j, c] = R[0, j, c]
+    else:
+        for i in range(m):
+            for c in range(k):
+                for j in range(n):
+                    R[i, j, c] = Q[i, j, c]
+                L[i, 0, c] = Q[i, 0, c]
+                for r in range(1, n):
+                    for j in range(n - r):
+                        R[i, j, c] = 0.5 * (R[i, j, c] + R[i, j + 1, c])
+                    L[i, r, c] = R[i, 0, c]
+
+
+@jit
+def _variations(h, zsnap):
+    """Sign changes of a control polygon, zeros (|h| <= zsnap) counted as positive."""
+    count = 0
+    prev = h[0] >= -zsnap
+    for i in range(1, h.shape[0]):
+        cur = h[i] >= -zsnap
+        if cur != prev:
+            count += 1
+        prev = cur
+    return count
+
+
+@jit
+def certify(Q, plane, zsnap):
+    """State of a Bézier net ``Q`` (m, n, 4) against ``plane``: PRUNE, MONO_U, MONO_V
+    or SPLIT (see the module docstring)."""
+    m = Q.shape[0]
+    n = Q.shape[1]
+    h = np.empty((m, n))
+    pos = True
+    neg = True
+    for i in range(m):
+        for j in range(n):
+            w = Q[i, j, 3]
+            val = (plane[0] * Q[i, j, 0] + plane[1] * Q[i, j, 1] + plane[2] * Q[i, j, 2]
+                   + plane[3] * w)
+            if abs(val) <= zsnap * w:
+                val = 0.0
+            h[i, j] = val
+            if val <= 0.0:
+                pos = False
+            if val >= 0.0:
+                neg = False
+    if pos or neg:
+        return PRUNE
+    # monotone in u: every difference along u of one sign (ties allowed)
+    up = True
+    down = True
+    for i in range(m - 1):
+        for j in range(n):
+            d = h[i + 1, j] - h[i, j]
+            if d < -zsnap:
+                up = False
+            if d > zsnap:
+                down = False
+    if up or down:
+        if _variations(h[0, :], zsnap) <= 1 and _variations(h[m - 1, :], zsnap) <= 1:
+            return MONO_U
+    up = True
+    down = True
+    for i in range(m):
+        for j in range(n - 1):
+            d = h[i, j + 1] - h[i, j]
+            if d < -zsnap:
+                up = False
+            if d > zsnap:
+                down = False
+    if up or down:
+        if _variations(h[:, 0], zsnap) <= 1 and _variations(h[:, n - 1], zsnap) <= 1:
+            return MONO_V
+    return SPLIT
+
+
+@jit
+def _net_extent(Q):
+    """(diameter of the Cartesian control net's box, mean polygon length along u, along v)."""
+    m = Q.shape[0]
+    n = Q.shape[1]
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for i in range(m):
+        for j in range(n):
+            for c in range(3):
+                x = Q[i, j, c] / Q[i, j, 3]
+                lo[c] = min(lo[c], x)
+                hi[c] = max(hi[c], x)
+    diam = np.sqrt(np.sum((hi - lo) ** 2))
+    lu = 0.0
+    for i in range(m - 1):
+        for j in range(n):
+            s = 0.0
+            for c in range(3):
+                d = Q[i + 1, j, c] / Q[i + 1, j, 3] - Q[i, j, c] / Q[i, j, 3]
+                s += d * d
+            lu += np.sqrt(s)
+    lv = 0.0
+    for i in range(m):
+        for j in range(n - 1):
+            s = 0.0
+            for c in range(3):
+                d = Q[i, j + 1, c] / Q[i, j + 1, 3] - Q[i, j, c] / Q[i, j, 3]
+                s += d * d
+            lv += np.sqrt(s)
+    return diam, lu / max(n, 1), lv / max(m, 1)
+
+
+@jit
+def subdivide(H, ub, vb, plane, zsnap, min_diam, max_depth):
+    """Certified recursive subdivision of every Bézier patch of a surface.
+
+    Parameters
+    ----------
+    H : (nsu, nsv, p+1, q+1, 4) homogeneous Bézier nets; ``ub`` (nsu+1,), ``vb``
+        (nsv+1,) their parameter breaks.
+    plane : (4,) unit-normal plane; ``zsnap`` absolute zero band of the plane function.
+    min_diam : a sub-patch whose control net spans at most this (3-D box diagonal) is
+        not split further (an UNRESOLVED leaf: tangency or singular crossing).
+    max_depth : cap on the subdivision depth per patch.
+
+    Returns
+    -------
+    leaves : (m, 5) float: u0, u1, v0, v1, state (MONO_U, MONO_V or UNRESOLVED).
+    n_visited : int, sub-patches examined.
+    """
+    nsu = H.shape[0]
+    nsv = H.shape[1]
+    m = H.shape[2]
+    n = H.shape[3]
+    cap = 2 * max_depth + 8
+    stack = np.empty((cap, m, n, 4))
+    boxes = np.empty((cap, 4))
+    depth = np.empty(cap, np.int64)
+    out = np.empty((1024, 5))
+    nout = 0
+    visited = 0
+    for a in range(nsu):
+        for b in range(nsv):
+            if ub[a + 1] <= ub[a] or vb[b + 1] <= vb[b]:
+                continue
+            top = 0
+            stack[0] = H[a, b]
+            boxes[0, 0] = ub[a]
+            boxes[0, 1] = ub[a + 1]
+            boxes[0, 2] = vb[b]
+            boxes[0, 3] = vb[b + 1]
+            depth[0] = 0
+            top = 1
+            while top > 0:
+                top -= 1
+                visited += 1
+                Q = stack[top].copy()
+                u0 = boxes[top, 0]
+                u1 = boxes[top, 1]
+                v0 = boxes[top, 2]
+                v1 = boxes[top, 3]
+                d = depth[top]
+                state = certify(Q, plane, zsnap)
+                if state == PRUNE:
+                    continue
+                diam, lu, lv = _net_extent(Q)
+                if state == SPLIT and (diam <= min_diam or d >= max_depth):
+                    state = UNRESOLVED
+                if state != SPLIT:
+                    if nout == out.shape[0]:
+                        bigger = np.empty((2 * nout, 5))
+                        bigger[:nout] = out
+                        out = bigger
+                    out[nout, 0] = u0
+                    out[nout, 1] = u1
+                    out[nout, 2] = v0
+                    out[nout, 3] = v1
+                    out[nout, 4] = state
+                    nout += 1
+                    continue
+                axis = 0 if lu >= lv else 1
+                L = stack[top]
+                R = stack[top + 1]
+                _split(Q, axis, L, R)
+                if axis == 0:
+                    um = 0.5 * (u0 + u1)
+                    boxes[top, 0] = u0
+                    boxes[top, 1] = um
+                    boxes[top, 2] = v0
+                    boxes[top, 3] = v1
+                    boxes[top + 1, 0] = um
+                    boxes[top + 1, 1] = u1
+                    boxes[top + 1, 2] = v0
+                    boxes[top + 1, 3] = v1
+                else:
+                    vm = 0.5 * (v0 + v1)
+                    boxes[top, 0] = u0
+                    boxes[top, 1] = u1
+                    boxes[top, 2] = v0
+                    boxes[top, 3] = vm
+                    boxes[top + 1, 0] = u0
+                    boxes[top + 1, 1] = u1
+                    boxes[top + 1, 2] = vm
+                    boxes[top + 1, 3] = v1
+                depth[top] = d + 1
+                depth[top + 1] = d + 1
+                top += 2
+    return out[:nout].copy(), visited
+
+
+@jit
+def _f_at(Pw, p, q, U, V, plane, u, v, Nu, Nv, left, right, tmp, X):
+    surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, X)
+    return plane[0] * X[0] + plane[1] * X[1] + plane[2] * X[2] + plane[3]
+
+
+@jit
+def plane_values(Pw, p, q, U, V, plane, uv, out):
+    """``out[i] = f(uv[i])``, the plane function at ``uv`` (n, 2)."""
+    mm = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(mm)
+    right = np.empty(mm)
+    tmp = np.empty(4)
+    X = np.empty(3)
+    for i in range(uv.shape[0]):
+        out[i] = _f_at(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, X)
+
+
+@jit
+def edge_roots(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out):
+    """Root of ``f`` on each segment ``a[i] -> b[i]`` (UV) with ``fa[i] * fb[i] < 0``.
+
+    Illinois regula falsi with bisection safeguard until the bracket is shorter than
+    ``ttol`` (in the segment parameter t in [0, 1]); ``out[i]`` = t.  The bracket is
+    oriented from the negative end, so the result does not depend on the edge
+    direction's sign convention.
+    """
+    mm = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(mm)
+    right = np.empty(mm)
+    tmp = np.empty(4)
+    X = np.empty(3)
+    for i in range(a.shape[0]):
+        lo = 0.0
+        hi = 1.0
+        flo = fa[i]
+        fhi = fb[i]
+        side = 0
+        t = 0.5
+        for it in range(200):
+            if hi - lo <= ttol:
+                break
+            if it % 3 == 2:
+                t = 0.5 * (lo + hi)
+            else:
+                t = lo + (hi - lo) * flo / (flo - fhi)
+                if not (t > lo and t < hi):
+                    t = 0.5 * (lo + hi)
+            u = a[i, 0] + t * (b[i, 0] - a[i, 0])
+            v = a[i, 1] + t * (b[i, 1] - a[i, 1])
+            ft = _f_at(Pw, p, q, U, V, plane, u, v, Nu, Nv, left, right, tmp, X)
+            if ft == 0.0:
+                lo = t
+                hi = t
+                break
+            if (ft < 0.0) == (flo < 0.0):
+                lo = t
+                flo = ft
+                if side == -1:
+                    fhi *= 0.5
+                side = -1
+            else:
+                hi = t
+                fhi = ft
+                if side == 1:
+                    flo *= 0.5
+                side = 1
+        out[i] = 0.5 * (lo + hi)
+
+
+@jit
+def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f):
+    """Newton along the UV gradient of ``f`` onto ``f = 0`` from each ``uv[i]``.
+
+    ``x <- x - f g / |g|^2`` with ``g = (plane.S_u, plane.S_v)``, the total move from
+    the start limited to ``maxstep[i]`` and the iterate clamped to ``box`` (u0, u1,
+    v0, v1).  Stops when ``|f| <= ftol``.  Writes the final parameters and ``f``.
+    """
+    bin_ = _binomial_table(1)
+    scr = derivs_scratch(p, q, 1)
+    SKL = np.empty((2, 2, 3))
+    for i in range(uv.shape[0]):
+        u = uv[i, 0]
+        v = uv[i, 1]
+        f = 0.0
+        for it in range(maxit + 1):
+            surface_derivs(Pw, p, q, U, V, u, v, 1, bin_, scr, SKL)
+            f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
+                 + plane[3])
+            if abs(f) <= ftol or it == maxit:
+                break
+            gu = plane[0] * SKL[1, 0, 0] + plane[1] * SKL[1, 0, 1] + plane[2] * SKL[1, 0, 2]
+            gv = plane[0] * SKL[0, 1, 0] + plane[1] * SKL[0, 1, 1] + plane[2] * SKL[0, 1, 2]
+            g2 = gu * gu + gv * gv
+            if not g2 > 0.0:
+                break
+            un = u - f * gu / g2
+            vn = v - f * gv / g2
+            du = un - uv[i, 0]
+            dv = vn - uv[i, 1]
+            dist = np.sqrt(du * du + dv * dv)
+            if dist > maxstep[i]:
+                un = uv[i, 0] + du * maxstep[i] / dist
+                vn = uv[i, 1] + dv * maxstep[i] / dist
+            un = min(max(un, box[0]), box[1])
+            vn = min(max(vn, box[2]), box[3])
+            if un == u and vn == v:
+                break
+            u = un
+            v = vn
+        out_uv[i, 0] = u
+        out_uv[i, 1] = v
+        out_f[i] = f
+
+
+@jit
+def critical_points(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f):
+    """A critical point of ``f`` (``plane.S_u = plane.S_v = 0``) in each UV box.
+
+    Damped Newton on the gradient with the Hessian ``plane.S_uu`` etc., started at the
+    box centre and clamped to the box (rows of ``boxes``: u0, u1, v0, v1).  Writes the
+    parameters and ``f`` there; the caller accepts the point as a contact when ``|f|``
+    is within its contact tolerance.
+    """
+    bin_ = _binomial_table(2)
+    scr = derivs_scratch(p, q, 2)
+    SKL = np.empty((3, 3, 3))
+    for i in range(boxes.shape[0]):
+        u0 = boxes[i, 0]
+        u1 = boxes[i, 1]
+        v0 = boxes[i, 2]
+        v1 = boxes[i, 3]
+        u = 0.5 * (u0 + u1)
+        v = 0.5 * (v0 + v1)
+        best_u = u
+        best_v = v
+        best = np.inf
+        for it in range(maxit):
+            surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+            f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
+                 + plane[3])
+            if abs(f) < best:
+                best = abs(f)
+                best_u = u
+                best_v = v
+            gu = 0.0
+            gv = 0.0
+            huu = 0.0
+            huv = 0.0
+            hvv = 0.0
+            for c in range(3):
+                gu += plane[c] * SKL[1, 0, c]
+                gv += plane[c] * SKL[0, 1, c]
+                huu += plane[c] * SKL[2, 0, c]
+                huv += plane[c] * SKL[1, 1, c]
+                hvv += plane[c] * SKL[0, 2, c]
+            lam = 1e-12 * (abs(huu) + abs(hvv) + 1e-300)
+            a11 = huu + lam if huu >= 0 else huu - lam
+            a22 = hvv + lam if hvv >= 0 else hvv - lam
+            det = a11 * a22 - huv * huv
+            if det == 0.0:
+                break
+            du = -(a22 * gu - huv * gv) / det
+            dv = -(a11 * gv - huv * gu) / det
+            un = min(max(u + du, u0), u1)
+            vn = min(max(v + dv, v0), v1)
+            if un == u and vn == v:
+                break
+            u = un
+            v = vn
+        out_uv[i, 0] = best_u
+        out_uv[i, 1] = best_v
+        out_f[i] = best if np.isfinite(best) else np.nan

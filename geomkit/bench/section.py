@@ -1,0 +1,123 @@
+"""Plane sections against Open CASCADE, same run: ``BRepAlgoAPI_Section`` and
+``GeomAPI_IntSS``.
+
+For each case and plane: median wall time of geomkit (after JIT warm-up), of
+``BRepAlgoAPI_Section.Build`` and of ``GeomAPI_IntSS``; the number of curves / points
+each finds; and for each the largest plane residual and the largest distance to the
+surface (``GeomAPI_ProjectPointOnSurf`` via :func:`geomkit.oracles.occ.project_point`
+on up to 60 points per curve, the same projection for all three).  Then a tolerance
+sweep of geomkit (time, points, achieved chord error).
+
+Usage: ``python -m geomkit.bench.section [--repeat 5]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from geomkit import plane_section, samples
+
+CASES = [
+    ("sphere_plane_cut", 0, [0, 0, 1, -6.0]),
+    ("sphere", 0, [0, 0, 1, -10.0]),
+    ("sphere", 0, [0, 0, 1, -(10 - 1e-7)]),
+    ("sphere", 0, [0.3, -0.5, 0.8, -2.0]),
+    ("torus", 0, [1, 0, 0, 0.0]),
+    ("saddle", 0, [0, 0, 1, 0.0]),
+    ("wave_seed003", 0, [-0.5407575913134987, 0.0, 0.8411784753765534, -21.630303652539943]),
+    ("freeform_1", 0, [0.3, 0.2, 1.0, -20.0]),
+    ("heavy_weights", 0, [0, 0, 1, -0.5]),
+    ("crease", 0, [1, 0, 0, -20.0]),
+]
+
+
+def _median_time(fn, repeat):
+    ts, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts)), out
+
+
+def _residuals(occ, gsurf, plane, polys):
+    if not polys:
+        return float("nan"), float("nan")
+    n = np.asarray(plane[:3], float)
+    d = float(plane[3]) / np.linalg.norm(n)
+    n = n / np.linalg.norm(n)
+    X = np.concatenate(polys)
+    pr = float(np.abs(X @ n + d).max())
+    sub = np.concatenate([P[:: max(1, len(P) // 60)] for P in polys])
+    res = occ.project_point(gsurf, sub, include_boundary=False)
+    dist = res[0]
+    return pr, float(np.max(np.atleast_1d(dist)))
+
+
+def run(repeat=5, tol=1e-6, out=print):
+    from geomkit.oracles import occ, occ_section
+
+    have = occ.HAVE_OCP
+    plane_section(samples.load("sphere"), [0, 0, 1, -3], 1e-3)   # JIT warm-up
+    plane_section(samples.load("sphere"), [0, 0, 1, -10], 1e-3)
+    out(f"tol {tol:g}; times are medians of {repeat}; residuals: plane | surface distance")
+    out(f"{'case':18s} {'plane':>24s} | {'gk ms':>7s} {'n':>5s} {'plane':>8s} {'surf':>8s} | "
+        f"{'BRep ms':>7s} {'n':>3s} {'plane':>8s} {'surf':>8s} | {'IntSS ms':>8s} {'n':>3s} "
+        f"{'plane':>8s} {'surf':>8s} | {'gk/BRep':>7s} {'gk/IntSS':>8s}")
+    rows = []
+    for name, idx, plane in CASES:
+        s = samples.load(name)[idx]
+        tg, sec = _median_time(lambda: plane_section(s, plane, tol), repeat)
+        gk_n = f"{len(sec.curves)}c{len(sec.points)}p"
+        row = {"case": name, "plane": plane, "gk_s": tg, "gk_curves": len(sec.curves),
+               "gk_points": len(sec.points)}
+        txt = f"{name:18s} {str(np.round(plane, 3).tolist()):>24s} | {tg * 1e3:7.1f} {gk_n:>5s} "
+        if have:
+            gs = occ.make_surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                                  s.control_points, s.weights)
+            gpr, gsr = _residuals(occ, gs, plane, sec.curves + ([sec.points] if len(sec.points)
+                                                                 else []))
+            txt += f"{gpr:8.1e} {gsr:8.1e} | "
+            face = occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                                 s.control_points, s.weights)
+            tb, (bp, _) = _median_time(lambda: occ.section(face, plane, deflection=tol), repeat)
+            bpr, bsr = _residuals(occ, gs, plane, bp)
+            ti, (ip, _) = _median_time(lambda: occ_section.intss(gs, plane, 1e-7, tol), repeat)
+            ipr, isr = _residuals(occ, gs, plane, ip)
+            txt += (f"{tb * 1e3:7.1f} {len(bp):3d} {bpr:8.1e} {bsr:8.1e} | {ti * 1e3:8.1f} "
+                    f"{len(ip):3d} {ipr:8.1e} {isr:8.1e} | {tg / tb:7.2f} {tg / ti:8.2f}")
+            row.update(brep_s=tb, brep_n=len(bp), intss_s=ti, intss_n=len(ip), gk_plane=gpr,
+                       gk_surf=gsr, brep_plane=bpr, brep_surf=bsr, intss_plane=ipr,
+                       intss_surf=isr)
+        out(txt)
+        rows.append(row)
+    if have:
+        out(f"median time ratio geomkit/BRepAlgoAPI_Section "
+            f"{np.median([r['gk_s'] / r['brep_s'] for r in rows]):.2f}, geomkit/GeomAPI_IntSS "
+            f"{np.median([r['gk_s'] / r['intss_s'] for r in rows]):.2f}")
+    out("")
+    out("tolerance sweep (wave_seed003, Paper 2 plane; sphere_plane_cut z=6)")
+    out(f"{'case':18s} {'tol':>7s} {'ms':>8s} {'points':>7s} {'chord err':>9s} {'residual':>9s}")
+    for name, idx, plane in (CASES[6], CASES[0]):
+        s = samples.load(name)[idx]
+        for t in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
+            dt, sec = _median_time(lambda: plane_section(s, plane, t), max(1, repeat // 2))
+            npts = sum(len(c) for c in sec.curves)
+            out(f"{name:18s} {t:7.0e} {dt * 1e3:8.1f} {npts:7d} {sec.max_chord_error:9.2e} "
+                f"{sec.max_residual:9.1e}")
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--tol", type=float, default=1e-6)
+    a = ap.parse_args(argv)
+    run(a.repeat, a.tol)
+
+
+if __name__ == "__main__":
+    main()
