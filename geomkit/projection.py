@@ -50,7 +50,7 @@ DEVIATION_SAFETY = 2.0
 (they are measured at samples, not proven)."""
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
-MAX_STARTS = 6
+MAX_STARTS = 8
 """Newton runs per point at most (distinct basins among the candidates)."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
@@ -116,8 +116,9 @@ class Projector:
     surfaces : Surface or list of Surface
     mesh_tol : float, optional
         Chord tolerance of the candidate mesh (model units); default
-        :data:`DEFAULT_MESH_TOL` times the largest surface size.  It changes speed, not
-        accuracy: the answer always comes from the exact surface.
+        :data:`DEFAULT_MESH_TOL` times the largest surface size, which is also the
+        largest value used (coarser meshes give too many near-tie candidates).  Finer
+        meshes change speed, not the answer: it always comes from the exact surface.
     voxel_size : float, optional
         See :class:`~geomkit.VoxelGrid`.
     """
@@ -133,6 +134,9 @@ class Projector:
         if not (math.isfinite(mesh_tol) and mesh_tol > 0):
             raise InvalidInputError(f"must be a finite number > 0, got {mesh_tol!r}",
                                     "mesh_tol")
+        # coarser candidate meshes let near-tie basins slip past the candidate limit
+        # (seen at 2.5x the default on freeform_1): the default is also the maximum
+        mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
         self.mesh = tessellate(self.surfaces, mesh_tol)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * self.mesh.face_deviation)

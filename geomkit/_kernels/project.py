@@ -28,6 +28,7 @@ from .surface import _binomial_table, derivs_scratch, surface_derivs
 from .voxel import point_candidates
 
 MAX_ITER = 100
+FLAT_RATIO = 0.1
 FOOT_OK = 0
 FOOT_NOT_CONVERGED = 1
 
@@ -79,6 +80,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
     surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
     f = _f(SKL, x)
     it = 0
+    escapes = 0
     status = FOOT_NOT_CONVERGED
     while it < MAX_ITER:
         it += 1
@@ -125,35 +127,129 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                 dv = -(ga2 * gv - gb * gu) / det
         if not (math.isfinite(du) and math.isfinite(dv)):
             break
+        # the full Newton step in 3-D (clamped to the box): the convergence measure
+        ddu = min(umax, max(umin, u + du)) - u if not closed_u else du
+        ddv = min(vmax, max(vmin, v + dv)) - v if not closed_v else dv
+        s0 = su0 * ddu + sv0 * ddv
+        s1 = su1 * ddu + sv1 * ddv
+        s2 = su2 * ddu + sv2 * ddv
+        full_step = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if full_step <= 1e4 * step_tol and escapes < 4:
+            # stationary: a minimum only if the Hessian of the free parameters is
+            # positive definite; from a saddle or a maximum, step along the direction
+            # of negative curvature (both ways) and go on
+            eu = 0.0
+            ev = 0.0
+            if fixv:
+                if not a > 0.0:
+                    eu = 1.0
+            elif fixu:
+                if not c > 0.0:
+                    ev = 1.0
+            elif not (a > 0.0 and a * c - b * b > 1e-14 * a * c):
+                lmin = 0.5 * (a + c) - math.sqrt(0.25 * (a - c) ** 2 + b * b)
+                if abs(b) > abs(lmin - a):
+                    eu = b
+                    ev = lmin - a
+                else:
+                    eu = lmin - c
+                    ev = b
+                if eu == 0.0 and ev == 0.0:
+                    eu = 1.0
+            if eu != 0.0 or ev != 0.0:
+                s0 = su0 * eu + sv0 * ev
+                s1 = su1 * eu + sv1 * ev
+                s2 = su2 * eu + sv2 * ev
+                ln = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+                if ln > 0.0:
+                    L = max(1e-3 * math.sqrt(f), 1e6 * step_tol) / ln
+                    bu = u
+                    bvv = v
+                    bf = f
+                    for sgn in (-1.0, 1.0):
+                        ut = _wrap(u + sgn * L * eu, umin, umax, closed_u)
+                        vt = _wrap(v + sgn * L * ev, vmin, vmax, closed_v)
+                        surface_derivs(Pw, p, q, U, V, ut, vt, 2, bin_, scr, SKL)
+                        ft = _f(SKL, x)
+                        if ft < bf:
+                            bu = ut
+                            bvv = vt
+                            bf = ft
+                    escapes += 1
+                    surface_derivs(Pw, p, q, U, V, bu, bvv, 2, bin_, scr, SKL)
+                    if bf < f:
+                        u = bu
+                        v = bvv
+                        f = bf
+                        continue
+        if full_step <= step_tol:
+            un = _wrap(u + du, umin, umax, closed_u)
+            vn = _wrap(v + dv, vmin, vmax, closed_v)
+            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
+            fn = _f(SKL, x)
+            if fn <= f:
+                u = un
+                v = vn
+                f = fn
+            else:
+                surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+            status = FOOT_OK
+            break
         alpha = 1.0
         accepted = False
         un = u
         vn = v
-        for _ in range(60):
+        # near convergence a failing decrease is rounding: give up after 2 halvings
+        tries = 30 if full_step > 1e4 * step_tol else 2
+        for _ in range(tries):
             un = _wrap(u + alpha * du, umin, umax, closed_u)
             vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
             surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
             fn = _f(SKL, x)
-            if fn <= f:
+            if fn < f:
                 accepted = True
                 break
             alpha *= 0.5
-        # the step actually taken (across a seam: the unwrapped one)
-        ddu = min(umax, max(umin, u + alpha * du)) - u if not closed_u else alpha * du
-        ddv = min(vmax, max(vmin, v + alpha * dv)) - v if not closed_v else alpha * dv
-        s0 = su0 * ddu + sv0 * ddv
-        s1 = su1 * ddu + sv1 * ddv
-        s2 = su2 * ddu + sv2 * ddv
-        step = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if (not accepted or alpha < 1.0 / 64.0) and du != 0.0 and dv != 0.0 \
+                and full_step > 1e4 * step_tol:
+            # a kink (a C0 knot line, a crease) or a bound cuts the joint step short:
+            # try moving one parameter at a time, keep the best
+            fbest = fn if accepted else f
+            for axis in range(2):
+                if axis == 0:
+                    su_ = 0.0
+                    sv_ = -gv / (c if c > 0.0 else gc + lam)
+                else:
+                    su_ = -gu / (a if a > 0.0 else ga + lam)
+                    sv_ = 0.0
+                beta = 1.0
+                for _ in range(30):
+                    ut = _wrap(u + beta * su_, umin, umax, closed_u)
+                    vt = _wrap(v + beta * sv_, vmin, vmax, closed_v)
+                    surface_derivs(Pw, p, q, U, V, ut, vt, 2, bin_, scr, SKL)
+                    ft = _f(SKL, x)
+                    if ft < fbest:
+                        fbest = ft
+                        un = ut
+                        vn = vt
+                        fn = ft
+                        accepted = True
+                        break
+                    beta *= 0.5
+            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
         if not accepted:
             # no decrease along a descent direction: stationary within rounding
             surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
             status = FOOT_OK
             break
+        moved = un != u or vn != v
+        stalled = f - fn <= 1e-13 * f and full_step <= 1e4 * step_tol
         u = un
         v = vn
         f = fn
-        if step <= step_tol or (ddu == 0.0 and ddv == 0.0):
+        if not moved or stalled:
+            # rounding noise in the gradient keeps a tiny step alive: the distance is
+            # exact to second order in that step (|step| <= 1e4 step_tol)
             status = FOOT_OK
             break
     return u, v, math.sqrt(f), it, status
@@ -232,8 +328,20 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
                 dv0 = max(abs(face_uv[t, 1, 1] - face_uv[t, 0, 1]),
                           max(abs(face_uv[t, 2, 1] - face_uv[t, 0, 1]),
                               abs(face_uv[t, 2, 1] - face_uv[t, 1, 1])))
+                # ... but only on a nearly flat triangle (deviation <= FLAT_RATIO x its
+                # 3-D diameter): a curved piece may hold a second basin
+                diam = 0.0
+                for e0 in range(3):
+                    e1 = (e0 + 1) % 3
+                    ex = V[F[t, e0], 0] - V[F[t, e1], 0]
+                    ey = V[F[t, e0], 1] - V[F[t, e1], 1]
+                    ez = V[F[t, e0], 2] - V[F[t, e1], 2]
+                    diam = max(diam, ex * ex + ey * ey + ez * ez)
+                flat = fdev[t] <= FLAT_RATIO * math.sqrt(diam)
                 dup = False
                 for j in range(nf):
+                    if not flat:
+                        break
                     if out_s[i, j] == s and abs(out_uv[i, j, 0] - u0) <= 2.0 * du0 \
                             and abs(out_uv[i, j, 1] - v0) <= 2.0 * dv0:
                         dup = True
