@@ -129,31 +129,46 @@ def _body(x, field):
     return x
 
 
+def _as_poses(value, field, single):
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and \
+            value.flags.c_contiguous:
+        P = value           # fast path: no copy, the kernel checks finiteness
+    else:
+        try:
+            P = np.ascontiguousarray(value, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInputError(f"expected numbers, could not convert ({exc})",
+                                    field) from None
+    if single:
+        if P.shape != (4, 4):
+            raise InvalidInputError(f"expected shape (4, 4), got {P.shape}", field)
+        P3 = P.reshape(1, 4, 4)
+    else:
+        if P.shape == (4, 4):
+            P = P.reshape(1, 4, 4)
+        if P.ndim != 3 or P.shape[1:] != (4, 4):
+            raise InvalidInputError(f"expected shape (n, 4, 4) or (4, 4), got {P.shape}",
+                                    field)
+        P3 = P
+    k, code, val = kb.pose_status(P3, POSE_TOL)
+    if k >= 0:
+        f = field if single else f"{field}[{k}]"
+        msg = {1: f"non-finite value {val!r}",
+               2: f"last row must be (0, 0, 0, 1), got {P3[k, 3].tolist()}",
+               3: f"rotation is not orthonormal (|R^T R - I| = {val:.3g} > {POSE_TOL:g})",
+               4: "rotation has determinant -1 (a reflection)"}[code]
+        raise InvalidInputError(msg, f)
+    return P
+
+
 def validate_pose(pose, field="pose") -> np.ndarray:
     """A (4, 4) float rigid transform, checked: finite, last row (0, 0, 0, 1),
     rotation orthonormal within :data:`POSE_TOL` with determinant +1."""
-    P = as_float_array(pose, field, shape=(4, 4))
-    if not np.array_equal(P[3], [0.0, 0.0, 0.0, 1.0]):
-        raise InvalidInputError(f"last row must be (0, 0, 0, 1), got {P[3].tolist()}", field)
-    R = P[:3, :3]
-    err = np.abs(R.T @ R - np.eye(3)).max()
-    if err > POSE_TOL:
-        raise InvalidInputError(f"rotation is not orthonormal (|R^T R - I| = {err:.3g} > "
-                                f"{POSE_TOL:g})", field)
-    if np.linalg.det(R) < 0:
-        raise InvalidInputError("rotation has determinant -1 (a reflection)", field)
-    return P
+    return _as_poses(pose, field, True)
 
 
 def _poses(poses, field):
-    P = as_float_array(poses, field)
-    if P.shape == (4, 4):
-        P = P[None]
-    if P.ndim != 3 or P.shape[1:] != (4, 4):
-        raise InvalidInputError(f"expected shape (n, 4, 4) or (4, 4), got {P.shape}", field)
-    for k in range(P.shape[0]):
-        validate_pose(P[k], f"{field}[{k}]")
-    return P
+    return _as_poses(poses, field, False)
 
 
 def _same_kind(a, b):

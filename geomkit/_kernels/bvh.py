@@ -354,3 +354,31 @@ def refit_kdop(T, child, rng, Rw, tw, K):
             for d in range(7):
                 Ki[2 * d] = min(a[2 * d], b[2 * d])
                 Ki[2 * d + 1] = max(a[2 * d + 1], b[2 * d + 1])
+
+
+@jit
+def pose_status(P, tol):
+    """Check rigid poses ``P`` (n, 4, 4).  Returns ``(k, code, value)`` for the first
+    bad pose k (code 1 non-finite, 2 last row not (0, 0, 0, 1), 3 rotation not
+    orthonormal within ``tol`` (value: max |R^T R - I|), 4 determinant < 0), or
+    ``(-1, 0, 0.0)`` when all are rigid."""
+    for k in range(P.shape[0]):
+        for r in range(4):
+            for c in range(4):
+                if not np.isfinite(P[k, r, c]):
+                    return k, 1, P[k, r, c]
+        if P[k, 3, 0] != 0.0 or P[k, 3, 1] != 0.0 or P[k, 3, 2] != 0.0 or P[k, 3, 3] != 1.0:
+            return k, 2, 0.0
+        err = 0.0
+        for i in range(3):
+            for j in range(3):
+                s = P[k, 0, i] * P[k, 0, j] + P[k, 1, i] * P[k, 1, j] + P[k, 2, i] * P[k, 2, j]
+                err = max(err, abs(s - (1.0 if i == j else 0.0)))
+        if err > tol:
+            return k, 3, err
+        det = (P[k, 0, 0] * (P[k, 1, 1] * P[k, 2, 2] - P[k, 1, 2] * P[k, 2, 1])
+               - P[k, 0, 1] * (P[k, 1, 0] * P[k, 2, 2] - P[k, 1, 2] * P[k, 2, 0])
+               + P[k, 0, 2] * (P[k, 1, 0] * P[k, 2, 1] - P[k, 1, 1] * P[k, 2, 0]))
+        if det < 0.0:
+            return k, 4, det
+    return -1, 0, 0.0

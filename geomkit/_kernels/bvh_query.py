@@ -26,7 +26,7 @@ import numpy as np
 
 from ._numba import jit, pjit, prange
 from .bvh import refit_kdop
-from .triangles import triangle_triangle_distance, triangles_intersect
+from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
 LB_SHRINK = 1.0 - 1e-9
@@ -35,9 +35,9 @@ INV_SQRT3 = 1.0 / np.sqrt(3.0)
 
 
 @jit
-def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T):
-    """B-node box in the axes of A-node box: ``Rab = RA^T Rr RB``, ``T`` centre."""
-    M = np.empty((3, 3))
+def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
+    """B-node box in the axes of A-node box: ``Rab = RA^T Rr RB``, ``T`` centre
+    (``M`` (3, 3) scratch)."""
     for r in range(3):
         for c in range(3):
             M[r, c] = Rr[r, 0] * RB[j, 0, c] + Rr[r, 1] * RB[j, 1, c] + Rr[r, 2] * RB[j, 2, c]
@@ -51,15 +51,15 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T):
 
 
 @jit
-def box_separation(Rab, T, a, b, early):
+def box_separation(Rab, T, a, b, early, Ab):
     """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3).
 
     ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
     value is returned at once (a collision test needs only the sign).  A value
-    > 0 proves the boxes disjoint and bounds their distance from below.
+    > 0 proves the boxes disjoint and bounds their distance from below.  ``Ab``
+    (3, 3) is scratch.
     """
-    Ab = np.empty((3, 3))
     for r in range(3):
         for c in range(3):
             Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
@@ -114,11 +114,12 @@ def kdop_separation(KA, KB, i, j, order, early):
 
 
 @jit
-def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T):
+def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
+              scr):
     if kind == 2:
         return kdop_separation(KA, KB, i, j, order, early)
-    _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T)
-    return box_separation(Rab, T, EA[i], EB[j], early)
+    _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, scr[0])
+    return box_separation(Rab, T, EA[i], EB[j], early, scr[1])
 
 
 @jit
@@ -149,6 +150,8 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     st = np.empty((STACK, 2), dtype=np.int64)
     Rab = np.empty((3, 3))
     T = np.empty(3)
+    scr = np.empty((2, 3, 3))
+    hit = np.empty(3)
     ta = np.empty((3, 3))
     tb = np.empty((3, 3))
     cap = out_pairs.shape[0]
@@ -163,7 +166,7 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         j = st[top, 1]
         tests += 1
         if _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, True,
-                     Rab, T) > 0.0:
+                     Rab, T, scr) > 0.0:
             continue
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
@@ -172,7 +175,7 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                 _move(TA, ra, MA, mA, ta)
                 for rb in range(rngB[j, 0], rngB[j, 1]):
                     _move(TB, rb, MB, mB, tb)
-                    if triangles_intersect(ta, tb):
+                    if _intersect_point(ta, tb, hit):
                         if npairs < cap:
                             out_pairs[npairs, 0] = orderA[ra]
                             out_pairs[npairs, 1] = orderB[rb]
@@ -210,6 +213,8 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     stlb = np.empty(STACK)
     Rab = np.empty((3, 3))
     T = np.empty(3)
+    scr = np.empty((2, 3, 3))
+    hit = np.empty(3)
     ta = np.empty((3, 3))
     tb = np.empty((3, 3))
     p = np.empty(3)
@@ -221,7 +226,7 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     st[0, 0] = 0
     st[0, 1] = 0
     stlb[0] = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                        Rab, T) * LB_SHRINK
+                        Rab, T, scr) * LB_SHRINK
     top = 1
     while top > 0:
         top -= 1
@@ -251,9 +256,9 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
         b0 = _node_sep(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T) * LB_SHRINK
+                       Rab, T, scr) * LB_SHRINK
         b1 = _node_sep(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T) * LB_SHRINK
+                       Rab, T, scr) * LB_SHRINK
         tests += 2
         if b0 > b1:   # nearer pair on top of the stack
             i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
