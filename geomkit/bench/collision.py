@@ -39,7 +39,7 @@ def _meshes(quick):
     out["sphere"] = (m.vertices, m.faces)
     m = geomkit.tessellate(geomkit.samples.load("freeform_1"), 1e-2 * s)
     out["freeform_1"] = (m.vertices * 0.5, m.faces)
-    t = trimesh.creation.icosphere(7 if not quick else 5, 8.0)
+    t = trimesh.creation.icosphere(5 if not quick else 4, 8.0)
     out["icosphere"] = (t.vertices, t.faces)
     t = trimesh.creation.capsule(height=30, radius=5, count=[160, 160] if not quick else [60, 60])
     out["capsule"] = (t.vertices, t.faces)
