@@ -11,11 +11,14 @@ Public API (users' scripts depend on these names):
   fit and CSV / DXF / JSON export.
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
 * :mod:`geomkit.samples` — the bundled canonical cases.
+* :class:`Body`, :func:`collide`, :func:`collide_many`, :func:`min_distance` — OBB /
+  14-DOP / AABB trees and exact triangle tests (Papers 3, 5).
 * :mod:`geomkit.errors` — the :class:`GeomkitError` hierarchy.
 """
 
 from . import errors, samples, tolerances
 from .bezier import bezier_patches
+from .collision import Body, Contact, Contacts, Distance, collide, collide_many, min_distance
 from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      InvalidInputError, InvalidSurfaceError, InvalidTrimError,
                      MissingDependencyError)
@@ -42,4 +45,5 @@ __all__ = [
     "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
     "MeshNearest",
     "plane_section", "Section",
+    "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
 ]

@@ -1,0 +1,322 @@
+"""BVH traversal kernels: collision and minimum distance of two trees (Papers 3, 5).
+
+Both traversals walk node pairs with an explicit stack (no recursion), descending
+the node with the larger extent.  Node tests:
+
+* box trees (OBB, AABB): the 15-axis separating-axis test of Paper 3 (Gottschalk's
+  form) with B's box carried into A's frame by the relative motion ``(Rr, tr)``;
+  ``SAT_EPS`` is added to every ``|R_ij|`` so that axes from nearly parallel edges
+  never separate by rounding (the radii only grow: conservative);
+* 14-DOP trees: both trees already refitted in the world frame; the 7 interval
+  tests run in :data:`geomkit._kernels.bvh.KDOP_ORDER` (Paper 5: after an
+  overlapping direction, the direction most different from it).
+
+Leaf pairs go to the exact triangle kernels of :mod:`.triangles`; triangles are
+moved on the fly, A's by ``(MA, mA)`` and B's by ``(MB, mB)`` into the common frame
+of the node test (A's frame for boxes, the world for 14-DOPs).
+
+Lower bounds for distance: for boxes, the largest separation over the 15 SAT axes
+(normalised; axes from nearly parallel edges skipped), for 14-DOPs the largest
+interval gap over the 7 unit directions; both shrunk by ``LB_SHRINK``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._numba import jit, pjit, prange
+from .bvh import refit_kdop
+from .triangles import _intersect_point, triangle_triangle_distance
+
+SAT_EPS = 1e-10
+LB_SHRINK = 1.0 - 1e-9
+STACK = 1024
+INV_SQRT3 = 1.0 / np.sqrt(3.0)
+
+
+@jit
+def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
+    """B-node box in the axes of A-node box: ``Rab = RA^T Rr RB``, ``T`` centre
+    (``M`` (3, 3) scratch)."""
+    for r in range(3):
+        for c in range(3):
+            M[r, c] = Rr[r, 0] * RB[j, 0, c] + Rr[r, 1] * RB[j, 1, c] + Rr[r, 2] * RB[j, 2, c]
+    d0 = Rr[0, 0] * CB[j, 0] + Rr[0, 1] * CB[j, 1] + Rr[0, 2] * CB[j, 2] + tr[0] - CA[i, 0]
+    d1 = Rr[1, 0] * CB[j, 0] + Rr[1, 1] * CB[j, 1] + Rr[1, 2] * CB[j, 2] + tr[1] - CA[i, 1]
+    d2 = Rr[2, 0] * CB[j, 0] + Rr[2, 1] * CB[j, 1] + Rr[2, 2] * CB[j, 2] + tr[2] - CA[i, 2]
+    for r in range(3):
+        T[r] = RA[i, 0, r] * d0 + RA[i, 1, r] * d1 + RA[i, 2, r] * d2
+        for c in range(3):
+            Rab[r, c] = RA[i, 0, r] * M[0, c] + RA[i, 1, r] * M[1, c] + RA[i, 2, r] * M[2, c]
+
+
+@jit
+def box_separation(Rab, T, a, b, early, Ab):
+    """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3).
+
+    ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
+    centre ``T``, in A's box axes.  With ``early`` the first separating axis's
+    value is returned at once (a collision test needs only the sign).  A value
+    > 0 proves the boxes disjoint and bounds their distance from below.  ``Ab``
+    (3, 3) is scratch.
+    """
+    for r in range(3):
+        for c in range(3):
+            Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
+    best = -np.inf
+    for i in range(3):   # A's face normals
+        s = abs(T[i]) - a[i] - (b[0] * Ab[i, 0] + b[1] * Ab[i, 1] + b[2] * Ab[i, 2])
+        if s > best:
+            best = s
+            if early and s > 0.0:
+                return s
+    for j in range(3):   # B's face normals
+        s = abs(T[0] * Rab[0, j] + T[1] * Rab[1, j] + T[2] * Rab[2, j]) - b[j] - \
+            (a[0] * Ab[0, j] + a[1] * Ab[1, j] + a[2] * Ab[2, j])
+        if s > best:
+            best = s
+            if early and s > 0.0:
+                return s
+    for i in range(3):   # A_i x B_j
+        i1 = (i + 1) % 3
+        i2 = (i + 2) % 3
+        for j in range(3):
+            j1 = (j + 1) % 3
+            j2 = (j + 2) % 3
+            ra = a[i1] * Ab[i2, j] + a[i2] * Ab[i1, j]
+            rb = b[j1] * Ab[i, j2] + b[j2] * Ab[i, j1]
+            s = abs(T[i2] * Rab[i1, j] - T[i1] * Rab[i2, j]) - ra - rb
+            if s > 0.0:
+                if early:
+                    return s
+                ln2 = 1.0 - Rab[i, j] * Rab[i, j]
+                if ln2 > 1e-12:
+                    s /= np.sqrt(ln2)
+                    if s > best:
+                        best = s
+    return best
+
+
+@jit
+def kdop_separation(KA, KB, i, j, order, early):
+    """Largest interval gap of two 14-DOPs over the 7 unit directions (Paper 5)."""
+    best = -np.inf
+    for q in range(7):
+        d = order[q]
+        g = max(KA[i, 2 * d] - KB[j, 2 * d + 1], KB[j, 2 * d] - KA[i, 2 * d + 1])
+        if d >= 3:
+            g *= INV_SQRT3
+        if g > best:
+            best = g
+            if early and g > 0.0:
+                return g
+    return best
+
+
+@jit
+def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
+              scr):
+    if kind == 2:
+        return kdop_separation(KA, KB, i, j, order, early)
+    _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, scr[0])
+    return box_separation(Rab, T, EA[i], EB[j], early, scr[1])
+
+
+@jit
+def _size(kind, E, K, i):
+    if kind == 2:
+        return max(K[i, 1] - K[i, 0], K[i, 3] - K[i, 2], K[i, 5] - K[i, 4])
+    return max(E[i, 0], E[i, 1], E[i, 2])
+
+
+@jit
+def _move(T, r, M, m, out):
+    for v in range(3):
+        x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
+        for k in range(3):
+            out[v, k] = M[k, 0] * x + M[k, 1] * y + M[k, 2] * z + m[k]
+
+
+@jit
+def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                  childB, rngB, CB, RB, EB, KB, TB, orderB,
+                  Rr, tr, MA, mA, MB, mB, order, first_only, out_pairs):
+    """All intersecting triangle pairs of two trees (or the first, ``first_only``).
+
+    Writes up to ``len(out_pairs)`` pairs of original face indices; returns
+    ``(n_pairs, bv_tests)`` where ``n_pairs`` may exceed the buffer (call again
+    with a larger one).
+    """
+    st = np.empty((STACK, 2), dtype=np.int64)
+    Rab = np.empty((3, 3))
+    T = np.empty(3)
+    scr = np.empty((2, 3, 3))
+    hit = np.empty(3)
+    ta = np.empty((3, 3))
+    tb = np.empty((3, 3))
+    cap = out_pairs.shape[0]
+    npairs = 0
+    tests = 0
+    st[0, 0] = 0
+    st[0, 1] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        i = st[top, 0]
+        j = st[top, 1]
+        tests += 1
+        if _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, True,
+                     Rab, T, scr) > 0.0:
+            continue
+        la = childA[i, 0] < 0
+        lb = childB[j, 0] < 0
+        if la and lb:
+            for ra in range(rngA[i, 0], rngA[i, 1]):
+                _move(TA, ra, MA, mA, ta)
+                for rb in range(rngB[j, 0], rngB[j, 1]):
+                    _move(TB, rb, MB, mB, tb)
+                    if _intersect_point(ta, tb, hit):
+                        if npairs < cap:
+                            out_pairs[npairs, 0] = orderA[ra]
+                            out_pairs[npairs, 1] = orderB[rb]
+                        npairs += 1
+                        if first_only:
+                            return npairs, tests
+            continue
+        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+            st[top, 0] = childA[i, 1]
+            st[top, 1] = j
+            st[top + 1, 0] = childA[i, 0]
+            st[top + 1, 1] = j
+        else:
+            st[top, 0] = i
+            st[top, 1] = childB[j, 1]
+            st[top + 1, 0] = i
+            st[top + 1, 1] = childB[j, 0]
+        top += 2
+    return npairs, tests
+
+
+@jit
+def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                   childB, rngB, CB, RB, EB, KB, TB, orderB,
+                   Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q):
+    """Minimum distance of two trees by branch and bound (node lower bounds).
+
+    ``margin > 0``: stop at the first triangle pair closer than ``margin`` and
+    prune every node pair whose bound reaches ``margin``.  Returns ``(d, fa, fb,
+    bv_tests)``: the distance (``inf`` if nothing is closer than ``margin``), the
+    original face indices (-1 if none) and the number of node bounds computed;
+    the closest points go to ``out_p``, ``out_q`` in the common frame.
+    """
+    st = np.empty((STACK, 2), dtype=np.int64)
+    stlb = np.empty(STACK)
+    Rab = np.empty((3, 3))
+    T = np.empty(3)
+    scr = np.empty((2, 3, 3))
+    hit = np.empty(3)
+    ta = np.empty((3, 3))
+    tb = np.empty((3, 3))
+    p = np.empty(3)
+    q = np.empty(3)
+    best = margin if margin > 0.0 else np.inf
+    fa = -1
+    fb = -1
+    tests = 1
+    st[0, 0] = 0
+    st[0, 1] = 0
+    stlb[0] = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                        Rab, T, scr) * LB_SHRINK
+    top = 1
+    while top > 0:
+        top -= 1
+        if stlb[top] >= best:
+            continue
+        i = st[top, 0]
+        j = st[top, 1]
+        la = childA[i, 0] < 0
+        lb = childB[j, 0] < 0
+        if la and lb:
+            for ra in range(rngA[i, 0], rngA[i, 1]):
+                _move(TA, ra, MA, mA, ta)
+                for rb in range(rngB[j, 0], rngB[j, 1]):
+                    _move(TB, rb, MB, mB, tb)
+                    d = triangle_triangle_distance(ta, tb, p, q)
+                    if d < best:
+                        best = d
+                        fa = orderA[ra]
+                        fb = orderB[rb]
+                        out_p[:] = p
+                        out_q[:] = q
+                        if margin > 0.0 or d == 0.0:
+                            return best, fa, fb, tests
+            continue
+        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+            i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
+        else:
+            i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
+        b0 = _node_sep(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                       Rab, T, scr) * LB_SHRINK
+        b1 = _node_sep(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                       Rab, T, scr) * LB_SHRINK
+        tests += 2
+        if b0 > b1:   # nearer pair on top of the stack
+            i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
+        if b1 < best:
+            st[top, 0] = i1
+            st[top, 1] = j1
+            stlb[top] = b1
+            top += 1
+        if b0 < best:
+            st[top, 0] = i0
+            st[top, 1] = j0
+            stlb[top] = b0
+            top += 1
+    if best == margin and margin > 0.0:
+        best = np.inf
+    return best, fa, fb, tests
+
+
+@pjit
+def collide_many_boxes(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                       childB, rngB, CB, RB, EB, KB, TB, orderB,
+                       Rrs, trs, order, first_only, colliding, npairs, tests):
+    """Box trees (OBB / AABB) under many relative motions ``Rrs`` (n, 3, 3),
+    ``trs`` (n, 3), in parallel: flags, pair counts and node tests per motion."""
+    n = Rrs.shape[0]
+    eye = np.eye(3)
+    zero = np.zeros(3)
+    for k in prange(n):
+        buf = np.empty((0, 2), dtype=np.int64)
+        c, t = collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                             childB, rngB, CB, RB, EB, KB, TB, orderB,
+                             Rrs[k], trs[k], eye, zero, Rrs[k], trs[k], order,
+                             first_only, buf)
+        colliding[k] = c > 0
+        npairs[k] = c
+        tests[k] = t
+
+
+@pjit
+def collide_many_kdops(childA, rngA, KA, TA, orderA, childB, rngB, KB, TB, orderB,
+                       RAs, tAs, RBs, tBs, order, first_only, colliding, npairs, tests):
+    """14-DOP trees under many world poses, in parallel: each pose refits both
+    trees in the world frame (Paper 5's rebuild, O(triangles)) and traverses."""
+    n = RAs.shape[0]
+    empty3 = np.empty((0, 3))
+    empty33 = np.empty((0, 3, 3))
+    eye = np.eye(3)
+    zero = np.zeros(3)
+    for k in prange(n):
+        KAw = np.empty_like(KA)
+        KBw = np.empty_like(KB)
+        refit_kdop(TA, childA, rngA, RAs[k], tAs[k], KAw)
+        refit_kdop(TB, childB, rngB, RBs[k], tBs[k], KBw)
+        buf = np.empty((0, 2), dtype=np.int64)
+        c, t = collide_trees(2, childA, rngA, empty3, empty33, empty3, KAw, TA, orderA,
+                             childB, rngB, empty3, empty33, empty3, KBw, TB, orderB,
+                             eye, zero, RAs[k], tAs[k], RBs[k], tBs[k], order,
+                             first_only, buf)
+        colliding[k] = c > 0
+        npairs[k] = c
+        tests[k] = t

@@ -1,0 +1,310 @@
+"""Collision core (Papers 3 and 5) against brute force, coal, and invariants.
+
+* brute force: every triangle pair through the exact kernels (collide pairs equal,
+  min_distance equal within 1e-12 relative) for the three tree kinds;
+* coal (independent library, skipped when absent): identical sets of intersecting
+  triangle pairs on >= 1,000 random poses over pairs of tessellated shared cases
+  and trimesh primitives, and the same distances;
+* hypothesis: symmetry, invariance under a common rigid motion, collide <=>
+  min_distance == 0;
+* input validation: poses, meshes, mixed tree kinds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+import geomkit
+from geomkit._kernels._numba import jit
+from geomkit._kernels.triangles import triangle_triangle_distance, triangles_intersect
+from geomkit.collision import Body, collide, collide_many, min_distance
+from geomkit.errors import InvalidInputError
+
+BVS = ("obb", "aabb", "kdop14")
+
+
+# ---------------------------------------------------------------- meshes
+_MESHES = {}
+
+
+def mesh(name):
+    """Small meshes of comparable size (~20 units): tessellated shared cases and
+    trimesh primitives, as (vertices, faces)."""
+    if name not in _MESHES:
+        if name == "torus":
+            m = geomkit.tessellate(geomkit.samples.load("torus"), 0.3)
+            V, F = m.vertices * 0.4, m.faces
+        elif name == "sphere":
+            m = geomkit.tessellate(geomkit.samples.load("sphere"), 0.3)
+            V, F = m.vertices, m.faces
+        elif name == "freeform":
+            m = geomkit.tessellate(geomkit.samples.load("freeform_1"), 0.5)
+            V, F = m.vertices * 0.2, m.faces
+        elif name == "box":
+            t = trimesh.creation.box((12, 8, 5))
+            V, F = t.vertices, t.faces
+        elif name == "capsule":
+            t = trimesh.creation.capsule(height=14, radius=4, count=[16, 16])
+            V, F = t.vertices, t.faces
+        elif name == "icosphere":
+            t = trimesh.creation.icosphere(2, 7.0)
+            V, F = t.vertices, t.faces
+        V = np.ascontiguousarray(V - V.mean(axis=0), float)
+        _MESHES[name] = (V, np.ascontiguousarray(F, np.int64))
+    return _MESHES[name]
+
+
+_BODIES = {}
+
+
+def body(name, bv):
+    if (name, bv) not in _BODIES:
+        _BODIES[name, bv] = Body(mesh(name), bv=bv)
+    return _BODIES[name, bv]
+
+
+def random_poses(n, seed, spread=12.0):
+    rng = np.random.default_rng(seed)
+    P = np.tile(np.eye(4), (n, 1, 1))
+    P[:, :3, :3] = Rotation.random(n, random_state=rng.integers(1 << 31)).as_matrix()
+    P[:, :3, 3] = rng.uniform(-spread, spread, (n, 3))
+    return P
+
+
+def moved(V, P):
+    return V @ P[:3, :3].T + P[:3, 3]
+
+
+# ---------------------------------------------------------------- brute force
+@jit
+def _brute(VA, FA, VB, FB, want_pairs, out):
+    ta = np.empty((3, 3))
+    tb = np.empty((3, 3))
+    p = np.empty(3)
+    q = np.empty(3)
+    best = np.inf
+    n = 0
+    for i in range(FA.shape[0]):
+        for v in range(3):
+            ta[v] = VA[FA[i, v]]
+        for j in range(FB.shape[0]):
+            for v in range(3):
+                tb[v] = VB[FB[j, v]]
+            if want_pairs:
+                if triangles_intersect(ta, tb):
+                    out[n, 0] = i
+                    out[n, 1] = j
+                    n += 1
+            else:
+                best = min(best, triangle_triangle_distance(ta, tb, p, q))
+    return n, best
+
+
+def brute_pairs(VA, FA, VB, FB):
+    out = np.empty((FA.shape[0] * FB.shape[0], 2), np.int64)
+    n, _ = _brute(VA, FA, VB, FB, True, out)
+    return {tuple(x) for x in out[:n].tolist()}
+
+
+def brute_distance(VA, FA, VB, FB):
+    return _brute(VA, FA, VB, FB, False, np.empty((0, 2), np.int64))[1]
+
+
+@pytest.mark.parametrize("bv", BVS)
+def test_against_brute_force(bv):
+    pairs = [("torus", "icosphere"), ("box", "capsule"), ("freeform", "sphere")]
+    hits = 0
+    for k, (na, nb) in enumerate(pairs):
+        (VA, FA), (VB, FB) = mesh(na), mesh(nb)
+        a, b = body(na, bv), body(nb, bv)
+        Pa = random_poses(1, 100 + k, spread=2.0)[0]
+        for Pb in random_poses(8, k, spread=15.0):
+            WA, WB = moved(VA, Pa), moved(VB, Pb)
+            ref = brute_pairs(WA, FA, WB, FB)
+            c = collide(a, Pa, b, Pb)
+            assert {tuple(x) for x in c.pairs.tolist()} == ref
+            assert c.colliding == bool(ref)
+            first = collide(a, Pa, b, Pb, all_pairs=False)
+            assert first.colliding == bool(ref) and len(first.pairs) == int(bool(ref))
+            assert {tuple(x) for x in first.pairs.tolist()} <= ref
+            hits += bool(ref)
+            d = min_distance(a, Pa, b, Pb)
+            dref = brute_distance(WA, FA, WB, FB)
+            assert abs(d.distance - dref) <= 1e-12 * max(dref, 1e-300) or d.distance == dref
+            assert (d.distance == 0.0) == bool(ref)
+            if d.distance > 0:
+                assert abs(np.linalg.norm(d.point_a - d.point_b) - d.distance) <= 1e-9
+                ta = WA[FA[d.triangle_a]]
+                tb = WB[FB[d.triangle_b]]
+                p, q = np.empty(3), np.empty(3)
+                assert triangle_triangle_distance(ta, tb, p, q) == pytest.approx(d.distance,
+                                                                                 rel=1e-9)
+    assert 4 <= hits <= 20
+
+
+# ---------------------------------------------------------------- coal
+def _coal_model(coal, V, F):
+    m = coal.BVHModelOBBRSS()
+    m.beginModel(len(F), len(V))
+    m.addVertices(np.asarray(V, float))
+    m.addTriangles(np.asarray(F, np.int64))
+    m.endModel()
+    return m
+
+
+def test_agrees_with_coal_on_1000_poses():
+    coal = pytest.importorskip("coal")
+    pairs = [("torus", "sphere"), ("freeform", "capsule"), ("box", "icosphere"),
+             ("torus", "freeform")]
+    n_per = 250
+    total = mism_flag = 0
+    hit = 0
+    for k, (na, nb) in enumerate(pairs):
+        (VA, FA), (VB, FB) = mesh(na), mesh(nb)
+        ca, cb = _coal_model(coal, VA, FA), _coal_model(coal, VB, FB)
+        Pas = random_poses(n_per, 500 + k, spread=1.0)
+        Pbs = random_poses(n_per, 600 + k, spread=16.0)
+        many = {bv: collide_many(body(na, bv), body(nb, bv), Pas, Pbs) for bv in BVS}
+        req = coal.CollisionRequest()
+        req.num_max_contacts = 10 ** 6
+        for i in range(n_per):
+            res = coal.CollisionResult()
+            coal.collide(ca, coal.Transform3s(Pas[i, :3, :3], Pas[i, :3, 3]), cb,
+                         coal.Transform3s(Pbs[i, :3, :3], Pbs[i, :3, 3]), req, res)
+            ref = {(c.b1, c.b2) for c in res.getContacts()}
+            c = collide(body(na, "obb"), Pas[i], body(nb, "obb"), Pbs[i])
+            got = {tuple(x) for x in c.pairs.tolist()}
+            assert got == ref, (na, nb, i, sorted(got ^ ref)[:5])
+            for bv in BVS:
+                mism_flag += bool(many[bv].colliding[i]) != bool(ref)
+            total += 1
+            hit += bool(ref)
+    assert total >= 1000 and mism_flag == 0
+    assert 150 < hit < 850
+
+
+def test_distance_agrees_with_coal():
+    coal = pytest.importorskip("coal")
+    (VA, FA), (VB, FB) = mesh("torus"), mesh("capsule")
+    ca, cb = _coal_model(coal, VA, FA), _coal_model(coal, VB, FB)
+    for P in random_poses(20, 7, spread=25.0):
+        res = coal.DistanceResult()
+        ref = coal.distance(ca, coal.Transform3s(), cb, coal.Transform3s(P[:3, :3], P[:3, 3]),
+                            coal.DistanceRequest(), res)
+        for bv in BVS:
+            d = min_distance(body("torus", bv), np.eye(4), body("capsule", bv), P)
+            if ref > 0:
+                assert d.distance == pytest.approx(ref, rel=1e-7, abs=1e-9)
+            else:
+                assert d.distance == 0.0
+
+
+# ---------------------------------------------------------------- properties
+names = st.sampled_from(["torus", "box", "capsule", "freeform"])
+kinds = st.sampled_from(BVS)
+seeds = st.integers(0, 2 ** 31 - 1)
+
+
+@given(names, names, kinds, seeds)
+def test_symmetry(na, nb, bv, seed):
+    Pa, Pb = random_poses(2, seed, spread=8.0)
+    a, b = body(na, bv), body(nb, bv)
+    c1 = collide(a, Pa, b, Pb)
+    c2 = collide(b, Pb, a, Pa)
+    assert np.array_equal(c1.pairs, c2.pairs[np.lexsort((c2.pairs[:, 0], c2.pairs[:, 1]))][:, ::-1])
+    d1 = min_distance(a, Pa, b, Pb)
+    d2 = min_distance(b, Pb, a, Pa)
+    assert d1.distance == pytest.approx(d2.distance, rel=1e-12, abs=1e-300)
+
+
+@given(names, names, kinds, seeds)
+def test_common_rigid_motion(na, nb, bv, seed):
+    Pa, Pb, G = random_poses(3, seed, spread=8.0)
+    a, b = body(na, bv), body(nb, bv)
+    c1 = collide(a, Pa, b, Pb)
+    d1 = min_distance(a, Pa, b, Pb)
+    c2 = collide(a, G @ Pa, b, G @ Pb)
+    d2 = min_distance(a, G @ Pa, b, G @ Pb)
+    # the motion changes rounding only: pairs within rounding of touching may flip
+    assert c1.colliding == c2.colliding or min(d1.distance, d2.distance) < 1e-9
+    assert d1.distance == pytest.approx(d2.distance, rel=1e-9, abs=1e-9)
+    if d1.distance > 0:
+        assert np.allclose(G[:3, :3] @ d1.point_a + G[:3, 3], d2.point_a, atol=1e-7) or \
+            d1.triangle_a != d2.triangle_a
+
+
+@given(names, names, kinds, seeds)
+def test_collide_iff_zero_distance(na, nb, bv, seed):
+    Pa, Pb = random_poses(2, seed, spread=8.0)
+    a, b = body(na, bv), body(nb, bv)
+    c = collide(a, Pa, b, Pb, all_pairs=False)
+    d = min_distance(a, Pa, b, Pb)
+    assert c.colliding == (d.distance == 0.0)
+    assert collide_many(a, b, Pa, Pb).colliding[0] == c.colliding
+
+
+# ---------------------------------------------------------------- margin, batch
+def test_margin_and_batch_forms():
+    a, b = body("torus", "obb"), body("capsule", "obb")
+    Ps = random_poses(40, 3, spread=20.0)
+    many = collide_many(a, b, np.eye(4), Ps, all_pairs=True)
+    for P, col, n in zip(Ps, many.colliding, many.n_pairs):
+        c = collide(a, np.eye(4), b, P)
+        assert col == c.colliding and n == len(c.pairs)
+        d = min_distance(a, np.eye(4), b, P).distance
+        for margin in (0.5, 2.0):
+            m = min_distance(a, np.eye(4), b, P, margin=margin)
+            assert m.within_margin == (d < margin)
+            if m.within_margin:
+                assert d <= m.distance < margin
+            else:
+                assert m.distance == np.inf and m.triangle_a == -1
+
+
+def test_face_tags_and_input_mesh_types():
+    m = geomkit.tessellate(geomkit.samples.load("sphere_pair"), 0.5)
+    a = Body(m)
+    assert np.array_equal(a.face_tags, m.face_surface)
+    b = Body(m.to_trimesh(), bv="aabb", face_tags=np.arange(len(m.faces)))
+    assert b.depth >= 1 and b.n_nodes == b.child.shape[0]
+    c = collide(a, np.eye(4), Body(m), np.eye(4))
+    assert c.colliding and np.array_equal(c.tags, m.face_surface[c.pairs])
+
+
+@pytest.mark.parametrize("pose, msg", [
+    (np.eye(3), "shape"),
+    (np.diag([1.0, 1.0, 2.0, 1.0]), "orthonormal"),
+    (np.diag([1.0, 1.0, -1.0, 1.0]), "determinant"),
+    (np.full((4, 4), np.nan), "non-finite"),
+    (np.vstack([np.eye(4)[:3], [[0, 0, 1, 1]]]), "last row"),
+])
+def test_bad_poses(pose, msg):
+    a = body("box", "obb")
+    with pytest.raises(InvalidInputError, match=msg) as e:
+        collide(a, np.eye(4), a, pose)
+    assert e.value.field == "pose_b"
+
+
+def test_bad_inputs():
+    V, F = mesh("box")
+    with pytest.raises(InvalidInputError, match="bv"):
+        Body((V, F), bv="sphere")
+    with pytest.raises(InvalidInputError, match="faces"):
+        Body((V, F + 1000))
+    with pytest.raises(InvalidInputError, match="faces"):
+        Body((V, F[:0]))
+    with pytest.raises(InvalidInputError, match="vertices"):
+        Body((V[:, :2], F))
+    with pytest.raises(InvalidInputError, match="face_tags"):
+        Body((V, F), face_tags=[1, 2])
+    with pytest.raises(InvalidInputError, match="14-DOP"):
+        collide(body("box", "obb"), np.eye(4), body("box", "kdop14"), np.eye(4))
+    with pytest.raises(InvalidInputError, match="margin"):
+        min_distance(body("box", "obb"), np.eye(4), body("box", "obb"), np.eye(4), margin=-1)
+    with pytest.raises(InvalidInputError, match="Body"):
+        collide((V, F), np.eye(4), body("box", "obb"), np.eye(4))
