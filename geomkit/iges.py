@@ -13,6 +13,8 @@ from the file's P section, so every value is taken exactly as written.
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
   line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
   means the outer boundary is the domain boundary.
+* Gaps between the pieces of a boundary (CAD files carry 1e-5..1e-3 of the domain)
+  are bridged by straight UV segments and counted (``gaps_closed``, ``max_gap``).
 * Faces that cannot be read exactly — a surface that is not a 128 (e.g. 120 surface
   of revolution), a boundary without a parameter-space curve, a 100 arc in parameter
   space — are skipped and listed in :attr:`IgesResult.skipped` (never guessed).
@@ -49,7 +51,7 @@ class IgesResult:
     entities : list of int, the directory sequence number of each surface's entity.
     skipped : list of str, one line per face not read and why.
     counts : dict, entities per type in the file.
-    gaps_closed : int, trim-piece gaps closed (see ``GAP_TOL``); max_gap : their largest
+    gaps_closed : int, trim-piece gaps bridged by UV segments (see ``GAP_TOL``); max_gap : their largest
         size in UV.
     """
 
@@ -222,37 +224,31 @@ class _Reader:
         return self._close_gaps(pieces, de, domain)
 
     def _close_gaps(self, pieces, de, domain):
-        """Join consecutive pieces whose ends miss by at most GAP_TOL x the domain size
-        (CAD files carry gaps of ~1e-5 in UV): the start of the next piece is moved onto
-        the end of the previous one (its first control point; the curve moves by at
-        most the gap, near that end).  Larger gaps skip the face."""
+        """Bridge gaps between consecutive pieces (CAD files carry gaps of 1e-5 to 1e-3
+        of the domain in UV) with straight UV segments: the exact pieces are kept as
+        they are.  Gaps above GAP_TOL x the domain size skip the face."""
         if domain is None:
             return pieces
         (u0, u1), (v0, v1) = domain
         size = max(u1 - u0, v1 - v0)
-        out = list(pieces)
-        for k in range(len(out)):
-            a, b = out[k], out[(k + 1) % len(out)]
+        out = []
+        for k, a in enumerate(pieces):
+            out.append(a)
+            b = pieces[(k + 1) % len(pieces)]
             gap = float(np.hypot(*(a.end - b.start)))
-            if gap == 0.0:
+            if gap <= 1e-9 * size:
                 continue
             if gap > GAP_TOL * size:
                 raise _Skip(f"boundary 142 at DE {de}: pieces {k} and "
-                            f"{(k + 1) % len(out)} are {gap:.3g} apart in UV (more than "
+                            f"{(k + 1) % len(pieces)} are {gap:.3g} apart in UV (more than "
                             f"{GAP_TOL:g} of the domain)")
             self.gaps.append(gap)
-            P = np.array(b.control_points)
-            P[0] = a.end
-            j = (k + 1) % len(out)
-            if len(out) == 1:
-                P[-1] = P[0]
-            out[j] = TrimCurve.create(b.degree, b.knots, P, None if b.is_polyline
-                                      and np.all(b.weights == 1) else b.weights)
+            out.append(TrimCurve.polyline([a.end, b.start]))
         return out
 
 
-GAP_TOL = 1e-3
-"""Largest gap between the pieces of a trim loop that is closed, relative to the
+GAP_TOL = 1e-2
+"""Largest gap between the pieces of a trim loop that is bridged, relative to the
 parameter domain size."""
 
 
