@@ -117,6 +117,7 @@ class _Reader:
         self.recs, _ = _param_records(path)
         self.dir = {}
         self.gaps = []
+        self.clipped = 0
         for e in iges.items:
             self.dir[e.sequence_number] = e
 
@@ -221,7 +222,29 @@ class _Reader:
         pieces = self.pcurve_pieces(bptr, where)
         if not pieces:
             raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
-        return self._close_gaps(pieces, de, domain)
+        return self._close_gaps(self._clip(pieces, domain), de, domain)
+
+    def _clip(self, pieces, domain):
+        """Move control points that lie at most CLIP_TOL x the domain size outside the
+        parameter domain onto its edge (files round the domain ends: 0.011739075 vs
+        0.0117390748871053); the curve moves by at most that much.  Points farther out
+        are kept, and validation reports them."""
+        if domain is None:
+            return pieces
+        (u0, u1), (v0, v1) = domain
+        eps = CLIP_TOL * max(u1 - u0, v1 - v0)
+        out = []
+        for c in pieces:
+            P = np.array(c.control_points)
+            Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
+            moved = np.abs(Q - P).max()
+            if moved == 0 or moved > eps:
+                out.append(c)
+                continue
+            self.clipped += 1
+            out.append(TrimCurve.create(c.degree, c.knots, Q,
+                                        None if np.all(c.weights == 1) else c.weights))
+        return out
 
     def _close_gaps(self, pieces, de, domain):
         """Bridge gaps between consecutive pieces (CAD files carry gaps of 1e-5 to 1e-3
@@ -247,6 +270,8 @@ class _Reader:
         return out
 
 
+CLIP_TOL = 1e-7
+"""Trim control points this close outside the domain (relative) are moved onto it."""
 GAP_TOL = 1e-2
 """Largest gap between the pieces of a trim loop that is bridged, relative to the
 parameter domain size."""
