@@ -246,7 +246,7 @@ def deviation(surfaces, points, normals=None, probe_radius: float = 0.0,
     >>> [round(float(d), 9) for d in rep.deviation]
     [0.5, -1.0]
     >>> rep.stats["over"], rep.stats["under"]
-    (1, 0)
+    (1, 1)
     """
     t0 = time.perf_counter()
     P0, N = as_points(points, normals)
