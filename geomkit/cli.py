@@ -6,20 +6,32 @@ import argparse
 import json
 import sys
 
-from .errors import GeomkitError
+import numpy as np
+
+from .errors import GeomkitError, InvalidInputError
 
 EXAMPLES = """examples:
-  geomkit demo                              run the main job on the bundled samples
+  geomkit demo                              deviation + section on built-in data,
+                                            reports in ./geomkit-demo/
+  geomkit deviation part.igs cmm.csv --probe-radius 1.5 --tolerance -0.05 0.05 --align
+                                            CMM deviation report in ./cmm-deviation/
+  geomkit distance part.json points.xyz -o dist.csv
+                                            exact distances of points to the surfaces
+  geomkit section part.step --plane 1 0 0 -20 --step 5 --count 10 -o cuts
+                                            10 parallel sections as CSV/DXF/JSON/PNG
   geomkit info part.json                    list the surfaces of a file
   geomkit mesh part.json --tol 0.01 -o part.stl
                                             triangulate within 0.01 (STL/PLY/OBJ)
-  geomkit mesh sphere --tol 1e-3 -o s.ply   a bundled sample by name
   geomkit samples                           list the bundled sample cases
+
+Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges: entities 128 and 144),
+STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name.  Points: CSV/XYZ
+(x y z [i j k]) or STL/PLY scans.  Errors: one line on stderr, exit code 2.
 """
 
 
-def _load_input(name: str):
-    """Surfaces from a file path, or from a bundled sample name."""
+def _load_input(name: str, skip_invalid: bool = False):
+    """Surfaces from a file path (JSON, IGES, STEP), or from a bundled sample name."""
     from pathlib import Path
 
     from . import load_case, samples
@@ -30,38 +42,276 @@ def _load_input(name: str):
         exists = False
     if not exists and name in samples.names():
         return samples.load_case(name)
+    ext = Path(name).suffix.lower()
+    if ext in (".igs", ".iges"):
+        from .io import Case
+        from .iges import read_iges
+
+        res = read_iges(name, skip_invalid=skip_invalid)
+        _warn_skipped(res.skipped)
+        return Case(Path(name).stem, res.surfaces)
+    if ext in (".stp", ".step"):
+        from .io import Case
+        from .step import read_step
+
+        res = read_step(name, skip_invalid=skip_invalid)
+        _warn_skipped(res.skipped)
+        return Case(Path(name).stem, res.surfaces)
     return load_case(name)
+
+
+def _warn_skipped(skipped):
+    if skipped:
+        print(f"geomkit: warning: {len(skipped)} face(s) skipped, first: {skipped[0]}",
+              file=sys.stderr)
+
+
+def _progress(label: str):
+    """A ``progress(done, total)`` callable drawing a rich bar on stderr, or None when
+    stderr is not a terminal (pipes and CI logs stay clean)."""
+    if not sys.stderr.isatty():
+        return None, None
+    from rich.console import Console
+    from rich.progress import Progress
+
+    prog = Progress(console=Console(stderr=True), transient=True)
+    task = prog.add_task(label, total=None)
+    prog.start()
+
+    def update(done, total):
+        prog.update(task, completed=done, total=total)
+
+    return update, prog
 
 
 def _cmd_demo(args) -> int:
     from .demo import run_demo
 
-    summary = run_demo(grid=args.grid, tol=args.tol)
+    summary = run_demo(out_dir=args.output, grid=args.grid, tol=args.tol)
     if args.json:
         print(json.dumps(summary, indent=1))
         return 0
-    print(f"{'case':18s} {'surface':18s} {'kind':8s} {'deg':5s} {'net':6s} "
-          f"{'us/pt':>6s}  check")
-    for r in summary["surfaces"]:
-        check = ""
-        if "analytic" in r:
-            check = f"{r['analytic']} formula err {r['analytic_max_err']:.1e}"
-        if "uv_inside_fraction" in r:
-            check = f"trimmed: {100 * r['uv_inside_fraction']:.2f}% of UV grid inside"
-        print(f"{r['case']:18s} {r['surface'][:18]:18s} {r['kind']:8s} "
-              f"{r['degree'][0]},{r['degree'][1]:<3d} {r['control_net'][0]}x{r['control_net'][1]:<4d}"
-              f"{r['eval_us_per_point']:6.3f}  {check}")
-    print()
-    print(f"{'case':18s} {'tol':>6s} {'triangles':>9s} {'max dev':>9s} {'area':>12s} "
-          f"{'truth':>12s} {'s':>6s}")
-    for r in summary["surfaces"]:
-        m = r.get("case_mesh")
-        if m:
-            truth = f"{m['area_truth']:12.4f}" if m["area_truth"] else f"{'-':>12s}"
-            print(f"{r['case']:18s} {m['tol']:6.0e} {m['faces']:9d} {m['max_deviation']:9.2e} "
-                  f"{m['area']:12.4f} {truth} {m['seconds']:6.2f}")
-    print(f"{len(summary['surfaces'])} surfaces evaluated on {args.grid}x{args.grid} grids and "
-          f"tessellated in {summary['seconds']:.2f} s")
+    d = summary["deviation"]
+    b = summary["bump"]
+    a = summary["alignment_check"]
+    print(f"geomkit demo: reports in {summary['output']}/")
+    print(f"deviation  {d['points']} scan points of {summary['surface']} "
+          f"(probe r={d['probe_radius']:g}): min {d['min']:.4f} max {d['max']:.4f} "
+          f"rms {d['rms']:.4f}; in tolerance [{d['tolerance'][0]:g}, {d['tolerance'][1]:g}] "
+          f"{d['pct_within']:.1f}%, over {d['pct_over']:.1f}%, under {d['pct_under']:.1f}%")
+    print(f"bump       known height {b['height']:g} at {b['center_xyz']}: found "
+          f"{b['found_max']:.4f} at {b['found_xyz']} ({b['found_distance']:.2f} away)")
+    print(f"alignment  known rigid transform recovered to {a['transform_error']:.1e} in "
+          f"{a['iterations']} iterations (rms {a['rms_before']:.3g} -> {a['rms_after']:.1e})")
+    s = summary["section"]
+    print(f"section    {s['planes']} planes {s['description']}: {s['curves']} curves, "
+          f"max plane residual {s['max_residual']:.1e}")
+    print(f"done in {summary['seconds']:.2f} s; files: {', '.join(summary['files'])}")
+    return 0
+
+
+def _positive_or_zero(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (value >= 0) or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def _tolerance(values):
+    if values is None:
+        return None
+    if len(values) == 1:
+        t = abs(values[0])
+        return (-t, t)
+    if len(values) == 2:
+        lo, hi = values
+        if not lo <= hi:
+            raise InvalidInputError(f"lower {lo:g} > upper {hi:g}", "--tolerance")
+        return (lo, hi)
+    raise InvalidInputError("give T (band -T..T) or LOWER UPPER", "--tolerance")
+
+
+def _load_points(path):
+    from .points_io import read_points
+
+    return read_points(path)
+
+
+def _cmd_deviation(args) -> int:
+    from pathlib import Path
+
+    from .deviation import deviation
+    from .report import (plot_deviation_map, plot_histogram, prepare_outputs,
+                         write_deviation_csv, write_json)
+
+    tol = _tolerance(args.tolerance)
+    out = args.output or f"{Path(args.points).stem}-deviation"
+    names = ["deviation.csv", "summary.json"]
+    if not args.no_plots:
+        names += ["deviation_map.png", "deviation_hist.png"]
+    # inputs are read first (clear errors), then the folder is checked before the work
+    case = _load_input(args.nominal, args.skip_invalid)
+    pts = _load_points(args.points)
+    targets = prepare_outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
+    update, bar = _progress("projecting points")
+    try:
+        rep = deviation(case.surfaces, pts.points, pts.normals, args.probe_radius,
+                        align=args.align, max_distance=args.max_distance, tolerance=tol,
+                        progress=update)
+    finally:
+        if bar is not None:
+            bar.stop()
+    files = [write_deviation_csv(rep, targets["deviation.csv"], args.overwrite)]
+    if not args.no_plots:
+        files.append(plot_deviation_map(rep, case.surfaces, targets["deviation_map.png"],
+                                        args.overwrite))
+        files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite))
+    summary = {"nominal": args.nominal, "points_file": args.points,
+               "surfaces": len(case.surfaces), **rep.summary(),
+               "files": [str(f) for f in files] + [str(targets["summary.json"])]}
+    write_json(summary, targets["summary.json"], args.overwrite)  # last: marks complete
+    if args.json:
+        from .report import _clean
+        print(json.dumps(_clean(summary), indent=1))
+        return 0
+    s = summary
+    print(f"{s['points']} points, {s['valid']} matched ({s['edge']} on edges, "
+          f"{s['beyond']} beyond max distance)")
+    print(f"deviation: min {s['min']:.6g}  max {s['max']:.6g}  mean {s['mean']:.6g}  "
+          f"rms {s['rms']:.6g}  std {s['std']:.6g}")
+    if tol:
+        print(f"tolerance [{tol[0]:g}, {tol[1]:g}]: in {s['pct_within']:.2f}%  "
+              f"over {s['pct_over']:.2f}%  under {s['pct_under']:.2f}%")
+    if s["alignment"]:
+        a = s["alignment"]
+        print(f"alignment: rms {a['rms_before']:.6g} -> {a['rms_after']:.6g} in "
+              f"{a['iterations']} iterations (rank {a['rank']}); transform:")
+        for row in a["transform"]:
+            print("  " + " ".join(f"{x:14.9f}" for x in row))
+    print(f"reports: {Path(out)}/ ({', '.join(Path(f).name for f in s['files'])})")
+    return 0
+
+
+def _cmd_distance(args) -> int:
+    from pathlib import Path
+
+    from . import project_points
+    from .report import _clean, prepare_outputs, write_json
+
+    case = _load_input(args.surface, args.skip_invalid)
+    pts = _load_points(args.points)
+    target = None
+    if args.output:
+        o = Path(args.output)
+        target = prepare_outputs(o.parent if str(o.parent) else ".", [o.name],
+                                 args.overwrite, inputs=[args.surface, args.points])[o.name]
+    update, bar = _progress("projecting points")
+    try:
+        pr = project_points(case.surfaces, pts.points, args.max_distance, progress=update)
+    finally:
+        if bar is not None:
+            bar.stop()
+    if target is not None:
+        from .io import _atomic_write
+        from .results import STATUS_NAMES
+
+        lines = ["index,x,y,z,foot_x,foot_y,foot_z,u,v,surface,distance,signed_distance,"
+                 "lower_bound,status"]
+        f = (lambda x: repr(float(x)) if np.isfinite(x) else "")
+        for i in range(len(pr)):
+            lines.append(",".join([str(i)] + [f(c) for c in pts.points[i]]
+                                  + [f(c) for c in pr.point[i]] + [f(c) for c in pr.uv[i]]
+                                  + [str(int(pr.surface[i])), f(pr.distance[i]),
+                                     f(pr.signed_distance[i]), f(pr.lower_bound[i]),
+                                     STATUS_NAMES[int(pr.status[i])]]))
+        data = ("\n".join(lines) + "\n").encode("utf-8")
+        if target.exists() and not args.overwrite:
+            raise FileExistsError(f"{target}: exists; pass --overwrite to replace it")
+        _atomic_write(target, lambda fh: fh.write(data))
+    ok = np.isfinite(pr.distance)
+    d = pr.distance[ok]
+    info = {"surface_file": args.surface, "points_file": args.points, "points": len(pr),
+            "matched": int(ok.sum()), "counts": pr.counts(),
+            "min": float(d.min()) if d.size else float("nan"),
+            "max": float(d.max()) if d.size else float("nan"),
+            "mean": float(d.mean()) if d.size else float("nan"),
+            "output": str(target) if target else None}
+    if args.json:
+        print(json.dumps(_clean(info), indent=1))
+        return 0
+    print(f"{info['points']} points, {info['matched']} matched: distance min "
+          f"{info['min']:.6g} max {info['max']:.6g} mean {info['mean']:.6g}"
+          + (f"; written {target}" if target else ""))
+    return 0
+
+
+def _cmd_section(args) -> int:
+    from pathlib import Path
+
+    from . import plane_section
+    from .report import _clean, plot_section, prepare_outputs, write_json, write_section
+    from .section import as_plane
+
+    base = as_plane(args.plane)
+    if args.count < 1:
+        raise InvalidInputError(f"must be >= 1, got {args.count}", "--count")
+    if args.count > 1 and not args.step:
+        raise InvalidInputError("a family of planes (--count > 1) needs --step", "--step")
+    planes = [base - np.array([0, 0, 0, k * (args.step or 0.0)]) for k in range(args.count)]
+    kinds = [k.strip().lower() for k in args.formats.split(",") if k.strip()]
+    bad = [k for k in kinds if k not in ("csv", "dxf", "json", "png")]
+    if bad or not kinds:
+        raise InvalidInputError(f"unknown format(s) {bad}; use csv, dxf, json, png",
+                                "--formats")
+    case = _load_input(args.surface, args.skip_invalid)
+    stem = "section" if len(planes) == 1 else "section_{:03d}"
+    names, per = [], []
+    for k in range(len(planes)):
+        st = stem.format(k)
+        t = {kind: f"{st}.{kind}" for kind in kinds if kind != "png"}
+        per.append(t)
+        names += list(t.values())
+    if "png" in kinds:
+        names.append("section.png" if len(planes) == 1 else "sections.png")
+    names.append("section_summary.json")
+    targets = prepare_outputs(args.output, names, args.overwrite, inputs=[args.surface])
+    update, bar = _progress("sectioning")
+    rows, sections, files = [], [], []
+    try:
+        for k, pl in enumerate(planes):
+            sec = plane_section(case.surfaces, pl, args.tol)
+            sections.append(sec)
+            written = write_section(sec, {kind: targets[n] for kind, n in per[k].items()},
+                                    fit_tol=args.fit_tol, overwrite=args.overwrite)
+            files += list(written.values())
+            rows.append({"plane": sec.plane.tolist(), "curves": len(sec.curves),
+                         "closed": int(sum(sec.closed)), "points": int(len(sec.points)),
+                         "curve_points": int(sum(len(c) for c in sec.curves)),
+                         "max_residual": sec.max_residual,
+                         "max_chord_error": sec.max_chord_error})
+            if update:
+                update(k + 1, len(planes))
+    finally:
+        if bar is not None:
+            bar.stop()
+    if "png" in kinds:
+        png = targets["section.png" if len(planes) == 1 else "sections.png"]
+        files.append(str(plot_section(sections, png, args.overwrite)))
+    summary = {"surface_file": args.surface, "surfaces": len(case.surfaces), "tol": args.tol,
+               "planes": rows, "files": files + [str(targets["section_summary.json"])]}
+    write_json(summary, targets["section_summary.json"], args.overwrite)
+    if args.json:
+        print(json.dumps(_clean(summary), indent=1))
+        return 0
+    for r in rows:
+        a, b, c, d = r["plane"]
+        print(f"plane {a:.6g} {b:.6g} {c:.6g} {d:.6g}: {r['curves']} curve(s) "
+              f"({r['closed']} closed), {r['curve_points']} points, {r['points']} contact "
+              f"point(s), max residual {r['max_residual']:.2g}")
+    print(f"reports: {Path(args.output)}/ ({len(summary['files'])} files)")
     return 0
 
 
@@ -149,12 +399,81 @@ def build_parser() -> argparse.ArgumentParser:
                                  epilog=EXAMPLES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("demo", help="run the main job on the bundled samples")
-    p.add_argument("--grid", type=_positive_int, default=200, help="grid size per surface (default 200)")
-    p.add_argument("--tol", type=_positive_float, default=1e-2,
-                   help="tessellation tolerance (default 0.01)")
+    p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section)",
+                       description="Deviation of a synthetic CMM scan of the bundled "
+                                   "freeform surface (with a known bump), a best-fit "
+                                   "alignment check and a family of sections; writes its "
+                                   "reports into ./geomkit-demo/ (replacing the demo's own "
+                                   "report files there) and prints a summary.")
+    p.add_argument("--grid", type=_positive_int, default=40,
+                   help="scan points per side (default 40)")
+    p.add_argument("--tol", type=_positive_float, default=1e-4,
+                   help="section chord tolerance (default 1e-4)")
+    p.add_argument("-o", "--output", default="geomkit-demo",
+                   help="report folder (default ./geomkit-demo)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_demo)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--skip-invalid", action="store_true",
+                        help="IGES/STEP: skip faces that fail validation (counted) "
+                             "instead of stopping")
+    common.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    common.add_argument("--json", action="store_true", help="machine-readable output")
+    p = sub.add_parser("deviation", parents=[common],
+                       help="CMM deviation of measured points from nominal surfaces",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Signed deviation of measured points along the nominal "
+                                   "normal, with optional best-fit alignment, probe-radius "
+                                   "compensation and a tolerance band.  Writes "
+                                   "deviation.csv, deviation_map.png, deviation_hist.png "
+                                   "and summary.json (last) into the output folder.",
+                       epilog="example:\n  geomkit deviation part.igs cmm.csv "
+                              "--probe-radius 1.5 --tolerance -0.05 0.05 --align -o rep")
+    p.add_argument("nominal", help="nominal surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("points", help="measured points: CSV/XYZ (x y z [i j k]) or STL/PLY")
+    p.add_argument("-o", "--output", default=None,
+                   help="report folder (default ./<points name>-deviation)")
+    p.add_argument("--probe-radius", type=_positive_or_zero, default=0.0,
+                   help="probe ball radius: the points are ball centres")
+    p.add_argument("--align", action="store_true",
+                   help="best-fit rigid alignment first (transform reported)")
+    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
+                   help="points whose |deviation| exceeds this are not matched")
+    p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
+                   help="tolerance band: T (meaning -T..T) or LOWER UPPER")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
+    p.set_defaults(func=_cmd_deviation)
+    p = sub.add_parser("distance", parents=[common],
+                       help="exact distances of points to surfaces",
+                       description="Nearest points of measured points on the surfaces "
+                                   "(unsigned and signed distance, foot, uv, status); "
+                                   "prints statistics and writes a CSV with -o.")
+    p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("points", help="points: CSV/XYZ or STL/PLY")
+    p.add_argument("-o", "--output", default=None, help="output CSV")
+    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
+                   help="points farther than this are not matched")
+    p.set_defaults(func=_cmd_distance)
+    p = sub.add_parser("section", parents=[common], help="plane sections as CSV/DXF/JSON/PNG",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Intersect the surfaces with the plane A x + B y + C z "
+                                   "+ D = 0, or with --count parallel planes --step apart "
+                                   "along its normal.",
+                       epilog="example:\n  geomkit section part.json --plane 1 0 0 -20 "
+                              "--step 5 --count 10 -o cuts")
+    p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("--plane", type=float, nargs=4, metavar=("A", "B", "C", "D"), required=True)
+    p.add_argument("--step", type=_positive_float, default=None,
+                   help="distance between parallel planes (model units)")
+    p.add_argument("--count", type=int, default=1, help="number of parallel planes")
+    p.add_argument("--tol", type=_positive_float, default=1e-4,
+                   help="chord tolerance (default 1e-4)")
+    p.add_argument("--fit-tol", type=_positive_float, default=None,
+                   help="also fit B-splines within this tolerance (DXF SPLINEs, JSON)")
+    p.add_argument("--formats", default="csv,dxf,json,png",
+                   help="comma-separated subset of csv,dxf,json,png (default all)")
+    p.add_argument("-o", "--output", default="section", help="output folder")
+    p.set_defaults(func=_cmd_section)
     p = sub.add_parser("info", help="describe the surfaces of a file")
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
@@ -183,15 +502,31 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except GeomkitError as exc:
-        print(f"geomkit: error: {exc}", file=sys.stderr)
-        return 2
-    except FileExistsError as exc:
-        print(f"geomkit: error: {exc}", file=sys.stderr)
+    except (GeomkitError, FileExistsError) as exc:
+        print(f"geomkit: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
+    except OSError as exc:
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        print(f"geomkit: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("geomkit: error: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: still one line, the traceback on request
+        import os
+
+        if os.environ.get("GEOMKIT_DEBUG"):
+            raise
+        print(f"geomkit: error: internal error {type(exc).__name__}: {_one_line(exc)} "
+              "(set GEOMKIT_DEBUG=1 for the traceback)", file=sys.stderr)
+        return 3
+
+
+def _one_line(exc) -> str:
+    return " ".join(str(exc).split())
 
 
 if __name__ == "__main__":

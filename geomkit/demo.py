@@ -1,69 +1,129 @@
-"""The main job on built-in data (grows with each engine).
+"""The main jobs on built-in data: ``geomkit demo``.
 
-Now: load every bundled sample, evaluate a parameter grid exactly, check the analytic
-cases against their formulas, measure the trimmed area fraction of ``plate_with_hole``
-by exact UV classification, time evaluation, and tessellate every sample to a chord
-tolerance (triangle count, measured deviation, area against the analytic truth).
+1. **Deviation**: a synthetic CMM scan of the bundled ``freeform_1`` surface (100 x 100
+   bicubic): ``grid x grid`` probe ball centres (radius 1) placed along the surface
+   normal at the surface plus a known Gaussian bump (height 0.05, at u = 0.62,
+   v = 0.38) plus seeded noise (sigma 0.001); tolerance band +-0.02.  The report finds
+   the bump: its maximum and location are compared with the known ones.
+2. **Alignment check**: the same scan without bump or noise, moved by a known rigid
+   transform; the best fit recovers it (error of the 4x4 matrix reported).
+3. **Section**: five parallel planes x = 10, 30, ..., 90 through the surface.
+
+Reports go to ``out_dir`` (default ``./geomkit-demo``): ``scan.csv`` (the synthetic
+measurement, to try the CLI on), ``deviation.csv``, ``deviation_map.png``,
+``deviation_hist.png``, ``section_000..004.csv/.dxf/.json``, ``sections.png`` and
+``summary.json`` (written last).  The demo replaces its own report files there.
 """
 
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 
 from . import samples
-from .evaluation import evaluate, normals
-from .tessellate import tessellate
-from .trimming import INSIDE, ON_BOUNDARY, classify_uv
+from .deviation import _rodrigues, align_rigid, deviation
+from .io import _atomic_write
+from .report import (plot_deviation_map, plot_histogram, plot_section, prepare_outputs,
+                     write_deviation_csv, write_json, write_section)
+from .section import plane_section
 
-__all__ = ["run_demo"]
+__all__ = ["run_demo", "synthetic_scan"]
+
+BUMP_HEIGHT = 0.05
+BUMP_UV = (0.62, 0.38)
+BUMP_SIGMA = 0.06
+NOISE = 0.001
+PROBE_RADIUS = 1.0
+TOLERANCE = (-0.02, 0.02)
 
 
-def _grid(surface, n):
+def synthetic_scan(surface, grid: int = 40, seed: int = 3, bump: float = BUMP_HEIGHT,
+                   noise: float = NOISE, probe_radius: float = PROBE_RADIUS):
+    """Probe ball centres over ``surface``: a ``grid x grid`` UV grid (margin 2 %),
+    offset along the normal by ``probe_radius`` + a Gaussian bump + noise.
+
+    Returns ``(centres (n, 3), normals (n, 3), true_deviation (n,))``.
+    """
     (u0, u1), (v0, v1) = surface.domain
-    u, v = np.meshgrid(np.linspace(u0, u1, n), np.linspace(v0, v1, n), indexing="ij")
-    return np.stack([u.ravel(), v.ravel()], axis=1)
+    g = np.linspace(0.02, 0.98, grid)
+    uu, vv = np.meshgrid(g, g, indexing="ij")
+    bumpv = bump * np.exp(-((uu - BUMP_UV[0]) ** 2 + (vv - BUMP_UV[1]) ** 2)
+                          / (2 * BUMP_SIGMA ** 2))
+    uv = np.column_stack([u0 + (u1 - u0) * uu.ravel(), v0 + (v1 - v0) * vv.ravel()])
+    S = surface.evaluate(uv)
+    N = surface.normals(uv)
+    rng = np.random.default_rng(seed)
+    true = bumpv.ravel() + noise * rng.standard_normal(uv.shape[0])
+    return S + (true + probe_radius)[:, None] * N, N, true
 
 
-def run_demo(grid: int = 200, tol: float = 1e-2) -> dict:
-    """Run the demo; returns a JSON-ready summary (one row per surface)."""
-    rows = []
+def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4) -> dict:
+    """Run the demo jobs; returns a JSON-ready summary (also written to summary.json)."""
     t_all = time.perf_counter()
-    for name in samples.names():
-        case = samples.load_case(name)
-        for k, s in enumerate(case.surfaces):
-            uv = _grid(s, grid)
-            t0 = time.perf_counter()
-            P = evaluate(s, uv)
-            dt = time.perf_counter() - t0
-            N = normals(s, uv)
-            row = {"case": name, "surface": s.name or f"{name}[{k}]",
-                   "kind": "NURBS" if s.is_rational else "B-spline",
-                   "degree": [s.degree_u, s.degree_v], "control_net": list(s.shape),
-                   "trim_loops": len(s.trim), "points": int(uv.shape[0]),
-                   "eval_us_per_point": 1e6 * dt / uv.shape[0],
-                   "bbox": [P.min(axis=0).round(6).tolist(), P.max(axis=0).round(6).tolist()],
-                   "normals_unit_err": float(np.max(np.abs(np.linalg.norm(N, axis=1) - 1)))}
-            analytic = case.truth.get("analytic")
-            if analytic and len(case.surfaces) == 1:
-                row["analytic"] = analytic["type"]
-                row["analytic_max_err"] = float(np.max(np.abs(
-                    samples.analytic_residual(analytic, P))))
-            if s.trim:
-                # cell-centre sampling of the domain: inside fraction ~ trimmed area share
-                (u0, u1), (v0, v1) = s.domain
-                h = 1.0 / grid
-                c = np.arange(grid) * h + 0.5 * h
-                cu, cv = np.meshgrid(u0 + (u1 - u0) * c, v0 + (v1 - v0) * c, indexing="ij")
-                cls = classify_uv(s, np.stack([cu.ravel(), cv.ravel()], axis=1))
-                row["uv_inside_fraction"] = float(np.mean(cls == INSIDE)
-                                                  + 0.5 * np.mean(cls == ON_BOUNDARY))
-            rows.append(row)
-        t0 = time.perf_counter()
-        mesh = tessellate(case.surfaces, tol)
-        rows[-1]["case_mesh"] = {
-            "tol": tol, "faces": int(mesh.faces.shape[0]), "max_deviation": mesh.max_deviation,
-            "area": mesh.area, "area_truth": case.truth.get("area"),
-            "seconds": time.perf_counter() - t0}
-    return {"surfaces": rows, "seconds": time.perf_counter() - t_all}
+    case = samples.load_case("freeform_1")
+    surf = case.surfaces[0]
+    planes = [np.array([1.0, 0.0, 0.0, -x]) for x in (10, 30, 50, 70, 90)]
+    sec_names = [f"section_{k:03d}.{e}" for k in range(len(planes))
+                 for e in ("csv", "dxf", "json")]
+    names = ["scan.csv", "deviation.csv", "deviation_map.png", "deviation_hist.png",
+             "sections.png", "summary.json"] + sec_names
+    targets = prepare_outputs(out_dir, names, overwrite=True)
+
+    # 1. deviation of the synthetic scan
+    C, N, true = synthetic_scan(surf, grid)
+    text = "x,y,z,i,j,k\n" + "".join(
+        f"{a!r},{b!r},{c!r},{i!r},{j!r},{k!r}\n"
+        for (a, b, c), (i, j, k) in zip(C.tolist(), N.tolist()))
+    _atomic_write(targets["scan.csv"], lambda fh: fh.write(text.encode("utf-8")))
+    rep = deviation(surf, C, N, probe_radius=PROBE_RADIUS, tolerance=TOLERANCE)
+    write_deviation_csv(rep, targets["deviation.csv"], overwrite=True)
+    plot_deviation_map(rep, surf, targets["deviation_map.png"], overwrite=True)
+    plot_histogram(rep, targets["deviation_hist.png"], overwrite=True)
+    err = float(np.nanmax(np.abs(rep.deviation - true)))
+    (u0, u1), (v0, v1) = surf.domain
+    centre = surf.evaluate([[u0 + (u1 - u0) * BUMP_UV[0], v0 + (v1 - v0) * BUMP_UV[1]]])[0]
+    i = int(np.nanargmax(rep.deviation))
+    bump = {"height": BUMP_HEIGHT, "center_xyz": np.round(centre, 3).tolist(),
+            "found_max": float(rep.deviation[i]),
+            "found_xyz": np.round(rep.foot[i], 3).tolist(),
+            "found_distance": float(np.linalg.norm(rep.foot[i] - centre)),
+            "max_error_vs_truth": err}
+
+    # 2. alignment check: a known rigid motion of an exact scan is recovered
+    C0, N0, _ = synthetic_scan(surf, max(6, grid // 2), bump=0.0, noise=0.0,
+                               probe_radius=0.0)
+    T = np.eye(4)
+    T[:3, :3] = _rodrigues(np.array([0.01, -0.02, 0.015]))
+    T[:3, 3] = (0.5, -0.3, 0.8)
+    Ti = np.linalg.inv(T)
+    moved = C0 @ Ti[:3, :3].T + Ti[:3, 3]
+    al = align_rigid(surf, moved)
+    align = {"transform_error": float(np.abs(al["transform"] - T).max()),
+             "iterations": al["iterations"], "rms_before": al["rms_before"],
+             "rms_after": al["rms_after"], "known_transform": T.tolist()}
+
+    # 3. sections
+    sections = []
+    for k, pl in enumerate(planes):
+        sec = plane_section(surf, pl, tol)
+        sections.append(sec)
+        write_section(sec, {e: targets[f"section_{k:03d}.{e}"] for e in ("csv", "dxf", "json")},
+                      overwrite=True)
+    plot_section(sections, targets["sections.png"], overwrite=True)
+    section = {"planes": len(planes), "description": "x = 10, 30, 50, 70, 90",
+               "curves": sum(len(s.curves) for s in sections),
+               "max_residual": max(s.max_residual for s in sections),
+               "tol": tol}
+    st = rep.summary()
+    summary = {"output": str(Path(out_dir)), "surface": "freeform_1",
+               "deviation": {k: st[k] for k in ("points", "valid", "edge", "min", "max",
+                                                 "mean", "rms", "std", "pct_within",
+                                                 "pct_over", "pct_under", "tolerance",
+                                                 "probe_radius")},
+               "bump": bump, "alignment_check": align, "section": section,
+               "files": sorted(names)}
+    summary["seconds"] = time.perf_counter() - t_all
+    write_json(summary, targets["summary.json"], overwrite=True)
+    return summary

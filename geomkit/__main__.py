@@ -1,0 +1,7 @@
+"""``python -m geomkit``: the command line (:mod:`geomkit.cli`)."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())
