@@ -18,15 +18,20 @@ Public API (users' scripts depend on these names):
 
 from . import errors, samples, tolerances
 from .bezier import bezier_patches
+from . import report
 from .collision import Body, Contact, Contacts, Distance, collide, collide_many, min_distance
 from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      InvalidInputError, InvalidSurfaceError, InvalidTrimError,
                      MissingDependencyError)
+from .deviation import DeviationReport, align_rigid, deviation
 from .evaluation import derivatives, evaluate, normals
+from .iges import IgesResult, read_iges
 from .io import Case, load, load_case, save
+from .points_io import PointSet, read_points
 from .projection import Projector, project_points
 from .results import MeshNearest, Projection
 from .section import Section, plane_section
+from .step import read_step
 from .tessellate import tessellate
 from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
 from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
@@ -45,5 +50,7 @@ __all__ = [
     "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
     "MeshNearest",
     "plane_section", "Section",
+    "deviation", "DeviationReport", "align_rigid", "read_points", "PointSet", "read_iges",
+    "IgesResult", "read_step", "report",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
 ]
