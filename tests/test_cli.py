@@ -36,50 +36,7 @@ def assert_one_line_error(rc, out, err, *phrases):
 
 
 # ------------------------------------------------------------------------ demo
-def test_demo_prints_every_sample(capsys):
-    rc, out, err = run(capsys, "demo", "--grid", "12")
-    assert rc == 0 and err == ""
-    lines = out.strip().splitlines()
-    blank = lines.index("")
-    rows = lines[1:blank]
-    mesh_rows = lines[blank + 2:-1]
-    n_surfaces = sum(len(samples.load(n)) for n in samples.names())
-    assert len(rows) == n_surfaces
-    assert sorted({r.split()[0] for r in rows}) == samples.names()
-    assert lines[-1].startswith(f"{n_surfaces} surfaces evaluated on 12x12 grids")
-    # the tessellation table: one row per case, measured deviation within the tolerance
-    assert sorted(r.split()[0] for r in mesh_rows) == samples.names()
-    for r in mesh_rows:
-        tol, faces, dev = float(r.split()[1]), int(r.split()[2]), float(r.split()[3])
-        assert faces > 0 and 0 <= dev <= tol
-    plate = [r for r in rows if r.startswith("plate_with_hole")]
-    assert len(plate) == 1 and "trimmed:" in plate[0]
-    for name in ("sphere", "torus", "cylinder_quarter"):
-        (row,) = [r for r in rows if r.split()[0] == name]
-        assert "formula err" in row
-
-
-def test_demo_json_parses_and_analytic_errors_are_tiny(capsys):
-    rc, out, err = run(capsys, "demo", "--grid", "40", "--json")
-    assert rc == 0 and err == ""
-    summary = json.loads(out)
-    rows = summary["surfaces"]
-    assert {r["case"] for r in rows} == set(samples.names())
-    assert len(rows) == sum(len(samples.load(n)) for n in samples.names())
-    analytic = [r for r in rows if "analytic" in r]
-    assert {r["case"] for r in analytic} >= {"sphere", "torus", "cylinder_quarter",
-                                             "plate_with_hole"}
-    for r in analytic:
-        assert r["analytic_max_err"] < 1e-10, r
-    for r in rows:
-        assert r["points"] == 40 * 40
-        assert r["normals_unit_err"] < 1e-12, r
-        assert np.all(np.asarray(r["bbox"][0]) <= np.asarray(r["bbox"][1]))
-    (plate,) = [r for r in rows if r["case"] == "plate_with_hole"]
-    # cell-centre rule on 40 x 40: error <= 4 (2 r / h + 2) h^2 (cells the circle crosses)
-    h = 1 / 40
-    assert abs(plate["uv_inside_fraction"] - PLATE_TRUTH) <= 4 * (2 * 0.2 / h + 2) * h * h
-    assert summary["seconds"] > 0
+# the demo's deviation / section report is tested in tests/test_jobs.py
 
 
 @pytest.mark.parametrize("grid", ["0", "-3"])
