@@ -165,7 +165,7 @@ class Projector:
                 f"candidate triangles, {self.grid!r}>")
 
     # ------------------------------------------------------------------ one chunk
-    def _chunk(self, P: np.ndarray, max_distance: float) -> Projection:
+    def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float) -> Projection:
         n = P.shape[0]
         K = MAX_STARTS
         fs = np.full((n, K), -1, dtype=np.int64)
@@ -180,7 +180,7 @@ class Projector:
         Pw, U, V, meta, dom = self.packed
         _pk.project_batch(P, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
-                          STEP_TOL * self.size, max_distance, K, fs, fuv, fd, fst, nf, lb,
+                          step_tol, max_distance, K, fs, fuv, fd, fst, nf, lb,
                           flags, work)
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
@@ -207,7 +207,7 @@ class Projector:
             tt = np.empty(rows.size)
             _pk.trim_feet(np.ascontiguousarray(P[rows]), s.homogeneous, s.degree_u,
                           s.degree_v, s.knots_u, s.knots_v, dom[si], td.seg, td.deg,
-                          td.samp_xyz, td.samp_seg, td.samp_t, STEP_TOL * self.size,
+                          td.samp_xyz, td.samp_seg, td.samp_t, step_tol,
                           tuv, td_, tseg, tt)
             better = td_ < extra_d[rows]
             r = rows[better]
@@ -281,9 +281,12 @@ class Projector:
 
     # ------------------------------------------------------------------ public
     def iter_project(self, points, max_distance: float | None = None,
-                     chunk_size: int = CHUNK_SIZE, progress=None):
+                     chunk_size: int = CHUNK_SIZE, progress=None, tol: float | None = None):
         """Project in chunks, yielding one :class:`Projection` per chunk (bounded
         memory for any number of points, e.g. a ``numpy.memmap``)."""
+        step_tol = STEP_TOL * self.size if tol is None else float(tol)
+        if not (math.isfinite(step_tol) and step_tol > 0):
+            raise InvalidInputError(f"must be a finite number > 0, got {tol!r}", "tol")
         arr = points if isinstance(points, np.ndarray) else np.asarray(points, dtype=float)
         if arr.ndim == 0 or arr.shape[-1] != 3:
             raise InvalidInputError(f"expected an array of shape (..., 3), got {arr.shape}",
@@ -305,15 +308,16 @@ class Projector:
                 i = a + int(np.nonzero(bad)[0][0])
                 raise InvalidInputError(f"non-finite coordinates in row {i}: "
                                         f"{arr[i].tolist()}", "points")
-            yield self._chunk(P, md)
+            yield self._chunk(P, md, step_tol)
             if progress is not None:
                 progress(b, n)
 
     def project(self, points, max_distance: float | None = None,
-                chunk_size: int = CHUNK_SIZE, progress=None) -> Projection:
+                chunk_size: int = CHUNK_SIZE, progress=None,
+                tol: float | None = None) -> Projection:
         """Project all points; see :func:`project_points`."""
         t0 = time.perf_counter()
-        parts = list(self.iter_project(points, max_distance, chunk_size, progress))
+        parts = list(self.iter_project(points, max_distance, chunk_size, progress, tol))
         if not parts:
             e2, e3 = np.empty((0, 2)), np.empty((0, 3))
             return Projection(e3, e2, np.empty(0, np.int32), np.empty(0), np.empty(0), e3,
@@ -341,7 +345,7 @@ def _cached_projector(surfaces, mesh_tol) -> Projector:
 
 def project_points(surfaces, points, max_distance: float | None = None, *,
                    mesh_tol: float | None = None, chunk_size: int = CHUNK_SIZE,
-                   progress=None) -> Projection:
+                   progress=None, tol: float | None = None) -> Projection:
     """Nearest points (feet) of points on trimmed NURBS surfaces.
 
     Parameters
@@ -357,6 +361,11 @@ def project_points(surfaces, points, max_distance: float | None = None, *,
         Points per parallel batch (bounds the working memory).
     progress : callable(done, total), optional
         Called after each chunk.
+    tol : float, optional
+        Newton stops when its 3-D step is below ``tol`` (model units); default
+        :data:`STEP_TOL` times the model size.  The distance error is of the order of
+        ``tol**2 / radius of curvature`` at an orthogonal foot, and the foot moves by
+        up to ``tol``.
 
     Returns
     -------
@@ -376,4 +385,4 @@ def project_points(surfaces, points, max_distance: float | None = None, *,
     [3.0, -10.0]
     """
     pr = _cached_projector(surfaces, mesh_tol)
-    return pr.project(points, max_distance, chunk_size, progress)
+    return pr.project(points, max_distance, chunk_size, progress, tol)

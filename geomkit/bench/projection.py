@@ -1,0 +1,151 @@
+"""Point projection against Open CASCADE, same run.
+
+For each case: N random points in the surface's box grown by ``--margin`` (the issue's
+"within +-10"), and N near-surface points (surface samples moved along the normal by
+a N(0, 0.05) offset, the CMM situation).  geomkit ``project_points`` (after JIT
+warm-up; the candidate mesh build is timed separately) against, on a subset,
+``GeomAPI_ProjectPointOnSurf`` (orthogonal feet only, OCC's point projector) and
+``BRepExtrema_DistShapeShape`` on the (trimmed) face (boundary feet too).  Errors
+against the analytic distance where the case has one, otherwise against the best of
+all answers (every answer is a real surface point, so the smallest is the closest to
+the truth).  Then a speed-versus-error sweep over geomkit's Newton tolerance.
+
+Usage: ``python -m geomkit.bench.projection [--n 100000] [--occ-n 1000]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import geomkit
+from geomkit import samples
+
+CASES = ["sphere", "torus", "cylinder_quarter", "plate_with_hole", "saddle", "freeform_1",
+         "heavy_weights", "crease"]
+
+
+def analytic_distance(name, P):
+    """Exact distances where the case has a closed form (None otherwise)."""
+    if name == "sphere":
+        return np.abs(np.linalg.norm(P, axis=1) - 10.0)
+    if name == "torus":
+        return np.abs(np.hypot(np.hypot(P[:, 0], P[:, 1]) - 20.0, P[:, 2]) - 5.0)
+    if name == "plate_with_hole":
+        x, y, z = P.T
+        dx = np.maximum(0, np.maximum(-x, x - 100))
+        dy = np.maximum(0, np.maximum(-y, y - 100))
+        rho = np.hypot(x - 50, y - 50)
+        dxy = np.where(rho < 20, 20 - rho, np.hypot(dx, dy))
+        return np.hypot(dxy, z)
+    return None
+
+
+def _points(s, n, margin, rng):
+    lo, hi = s.bounds
+    box = rng.uniform(lo - margin, hi + margin, (n, 3))
+    (u0, u1), (v0, v1) = s.domain
+    uv = np.c_[rng.uniform(u0, u1, n), rng.uniform(v0, v1, n)]
+    if s.is_trimmed:
+        uv = uv[geomkit.classify_uv(s, uv) == geomkit.INSIDE]
+    X = geomkit.evaluate(s, uv)
+    near = X + geomkit.normals(s, uv) * rng.normal(0, 0.05, (len(uv), 1))
+    return box, near
+
+
+def _occ_run(occ, s, P):
+    face = occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,
+                         s.weights, trim=[[c.to_dict() for c in loop.pieces]
+                                          for loop in s.trim] or None)
+    surf = occ.make_surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,
+                            s.weights)
+    t0 = time.perf_counter()
+    d_orth = np.array([occ.project_point(surf, p, include_boundary=False)[0] for p in P])
+    t_orth = (time.perf_counter() - t0) / len(P)
+    t0 = time.perf_counter()
+    d_face = np.array([occ.project_point(face, p)[0] for p in P])
+    t_face = (time.perf_counter() - t0) / len(P)
+    return d_orth, t_orth, d_face, t_face
+
+
+def run(n=100_000, occ_n=1000, margin=10.0, cases=CASES, seed=0):
+    try:
+        from geomkit.oracles import occ
+        have_occ = occ.HAVE_OCP
+    except ImportError:  # pragma: no cover
+        have_occ = False
+    rng = np.random.default_rng(seed)
+    rows = []
+    print(f"{'case':16s} {'points':7s} {'build s':>7s} {'gk us/pt':>8s} {'gk max err':>10s} "
+          f"{'edge%':>5s} | {'ProjPt us':>9s} {'ratio':>6s} {'ProjPt err':>10s} | "
+          f"{'DistSS us':>9s} {'ratio':>6s} {'DistSS err':>10s} {'gk>best':>8s}")
+    for name in cases:
+        s = samples.load(name)[0]
+        t0 = time.perf_counter()
+        pr = geomkit.Projector(s)
+        build = time.perf_counter() - t0
+        pr.project(np.zeros((8, 3)))  # JIT warm-up
+        for label, P in zip(("box", "near"), _points(s, n, margin, rng)):
+            t0 = time.perf_counter()
+            res = pr.project(P)
+            t_gk = (time.perf_counter() - t0) / len(P)
+            exact = analytic_distance(name, P)
+            row = dict(case=name, points=label, n=len(P), build_s=build, gk_us=t_gk * 1e6,
+                       edge=float(np.mean(res.status != geomkit.results.INTERIOR)))
+            sub = np.arange(min(occ_n, len(P)))
+            ref = exact
+            if have_occ:
+                d_orth, t_orth, d_face, t_face = _occ_run(occ, s, P[sub])
+                row.update(orth_us=t_orth * 1e6, face_us=t_face * 1e6)
+                if ref is None:  # the best answer of all three on the subset
+                    ref = np.full(len(P), np.nan)
+                    ref[sub] = np.minimum(res.distance[sub], np.minimum(d_orth, d_face))
+                row.update(orth_err=float(np.nanmax(np.abs(d_orth - ref[sub]))),
+                           face_err=float(np.nanmax(np.abs(d_face - ref[sub]))))
+                row["gk_above_best"] = float(np.nanmax(res.distance[sub] - ref[sub]))
+            if ref is not None:
+                row["gk_err"] = float(np.nanmax(np.abs(res.distance - ref)))
+            rows.append(row)
+            f = lambda k, fmt: (fmt % row[k]) if k in row else "-"
+            print(f"{name:16s} {label:7s} {build:7.2f} {row['gk_us']:8.2f} "
+                  f"{f('gk_err', '%10.1e'):>10s} {100 * row['edge']:5.1f} | "
+                  f"{f('orth_us', '%9.0f'):>9s} "
+                  f"{(row['orth_us'] / row['gk_us']) if 'orth_us' in row else 0:6.0f} "
+                  f"{f('orth_err', '%10.1e'):>10s} | {f('face_us', '%9.0f'):>9s} "
+                  f"{(row['face_us'] / row['gk_us']) if 'face_us' in row else 0:6.0f} "
+                  f"{f('face_err', '%10.1e'):>10s} {f('gk_above_best', '%8.1e'):>8s}",
+                  flush=True)
+    # speed against error: geomkit's Newton tolerance
+    print("\nspeed vs error (sphere and torus, box points, analytic truth)")
+    print(f"{'tol':>8s} {'sphere us/pt':>12s} {'max err':>9s} {'torus us/pt':>12s} {'max err':>9s}")
+    sweep = []
+    prs = {c: geomkit.Projector(samples.load(c)[0]) for c in ("sphere", "torus")}
+    pts = {c: _points(samples.load(c)[0], n // 2, margin, rng)[0] for c in prs}
+    for tol in (1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12):
+        out = [tol]
+        for c in ("sphere", "torus"):
+            t0 = time.perf_counter()
+            res = prs[c].project(pts[c], tol=tol)
+            dt = (time.perf_counter() - t0) / len(pts[c]) * 1e6
+            err = float(np.max(np.abs(res.distance - analytic_distance(c, pts[c]))))
+            out += [dt, err]
+        sweep.append(out)
+        print(f"{tol:8.0e} {out[1]:12.2f} {out[2]:9.1e} {out[3]:12.2f} {out[4]:9.1e}",
+              flush=True)
+    return rows, sweep
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=100_000)
+    ap.add_argument("--occ-n", type=int, default=1000)
+    ap.add_argument("--margin", type=float, default=10.0)
+    ap.add_argument("--cases", default=",".join(CASES))
+    a = ap.parse_args(argv)
+    run(a.n, a.occ_n, a.margin, a.cases.split(","))
+
+
+if __name__ == "__main__":
+    main()
