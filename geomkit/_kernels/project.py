@@ -54,13 +54,12 @@ def _f(SKL, x):
 @jit
 def _wrap(u, lo, hi, closed):
     """Clamp to [lo, hi], or wrap around when the surface is closed that way."""
-    if closed:
+    if not math.isfinite(u):
+        return 0.5 * (lo + hi)
+    if closed and (u < lo or u > hi):
         per = hi - lo
-        while u < lo:
-            u += per
-        while u > hi:
-            u -= per
-        return u
+        u = lo + (u - lo) % per
+        return min(hi, max(lo, u))
     return min(hi, max(lo, u))
 
 
@@ -162,7 +161,10 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                 s2 = su2 * eu + sv2 * ev
                 ln = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
                 if ln > 0.0:
+                    # a short 3-D step, at most a tenth of the domain in parameters
                     L = max(1e-3 * math.sqrt(f), 1e6 * step_tol) / ln
+                    L = min(L, 0.1 * max(umax - umin, vmax - vmin)
+                            / max(abs(eu), abs(ev)))
                     bu = u
                     bvv = v
                     bf = f
