@@ -44,6 +44,7 @@ import time
 import numpy as np
 
 from ._kernels import distance as _dk
+from ._kernels.bezier import de_casteljau_split
 from .errors import InvalidInputError
 from .projection import _pack
 from .results import SurfaceDistance
@@ -55,6 +56,9 @@ __all__ = ["surface_distance", "MAX_PAIRS", "MAX_NEWTON", "ROUNDING"]
 MAX_PAIRS = 200_000
 """Default cap on examined sub-patch pairs (bounds the time and memory of a curved
 continuum of minima, e.g. concentric spheres)."""
+TRIM_PIECES = 32
+"""Each trim segment's UV box is taken over this many sub-arcs (a sub-patch is
+"crossed by the trim" only when one of these small boxes meets it)."""
 MAX_NEWTON = 256
 """Newton runs at most (one per upper-bound improvement)."""
 ROUNDING = 1e-14
@@ -91,8 +95,8 @@ def _pack_trims(surfaces):
     seg_all = np.ones((max(total, 1), pmax + 1, 3))
     seg_deg = np.ones(max(total, 1), dtype=np.int64)
     seg_loop = np.zeros(max(total, 1), dtype=np.int64)
-    seg_box = np.zeros((max(total, 1), 4))
-    meta = np.zeros((len(surfaces), 3), dtype=np.int64)
+    boxes = []
+    meta = np.zeros((len(surfaces), 5), dtype=np.int64)
     o = 0
     for i, p in enumerate(pieces):
         if p is None:
@@ -102,12 +106,24 @@ def _pack_trims(surfaces):
         seg_all[o:o + S, : seg.shape[1]] = seg
         seg_deg[o:o + S] = deg
         seg_loop[o:o + S] = lp
+        pb = []
         for k in range(S):
             d = deg[k]
-            xy = seg[k, : d + 1, :2] / seg[k, : d + 1, 2:3]
-            seg_box[o + k] = (xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max())
-        meta[i] = (o, S, nl)
+            rest = np.ascontiguousarray(seg[k, : d + 1])
+            for j in range(TRIM_PIECES):  # boxes of TRIM_PIECES sub-arcs (tight)
+                if j < TRIM_PIECES - 1:
+                    left = np.empty_like(rest)
+                    right = np.empty_like(rest)
+                    de_casteljau_split(rest, 1.0 / (TRIM_PIECES - j), left, right)
+                    piece, rest = left, right
+                else:
+                    piece = rest
+                xy = piece[:, :2] / piece[:, 2:3]
+                pb.append((xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max()))
+        meta[i] = (o, S, nl, len(boxes), len(pb))
+        boxes += pb
         o += S
+    seg_box = np.array(boxes) if boxes else np.zeros((1, 4))
     return seg_all, seg_deg, seg_loop, seg_box, meta
 
 

@@ -7,8 +7,8 @@ Data layout (built by :mod:`geomkit.distance`):
   ``V_all``, ``meta``, ``dom``), one index space for the surfaces of both scenes;
 * trims: ``seg_all`` (S, pmax+1, 3) homogeneous Bézier trim segments of every
   surface, ``seg_deg``, ``seg_loop`` (loop index within its surface), ``seg_box``
-  (S, 4) the segments' control-point boxes in UV, and per surface ``trim_meta[s] =
-  (first segment, segment count, loop count)`` (count 0: untrimmed);
+  (P, 4) UV control-point boxes of sub-arcs of the segments, and per surface
+  ``trim_meta[s] = (first segment, segment count, loop count, first box, box count)`` (count 0: untrimmed);
 * sub-patch nodes: control nets in a flat pool ``ctrl`` (row-major (p+1, q+1, 4)
   homogeneous), integer fields ``ni[k] = (offset, p, q, surface, child0, child1,
   state, rep_ok, side, split_dir)`` and float fields ``nf[k] = (u0, u1, v0, v1,
@@ -35,7 +35,7 @@ import math
 import numpy as np
 
 from ._numba import jit, jit_inline
-from .project import _surface
+from .project import _surface, _trim_point, foot_newton, trim_curve_d2
 from .surface import _binomial_table, derivs_scratch, surface_derivs
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
@@ -260,7 +260,7 @@ def _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1, v
     cnt = trim_meta[s, 1]
     if cnt == 0:
         return ST_INSIDE
-    for k in range(first, first + cnt):
+    for k in range(trim_meta[s, 3], trim_meta[s, 3] + trim_meta[s, 4]):
         if (seg_box[k, 0] <= u1 + tol and seg_box[k, 1] >= u0 - tol
                 and seg_box[k, 2] <= v1 + tol and seg_box[k, 3] >= v0 - tol):
             return ST_MIXED
@@ -499,6 +499,141 @@ def newton4(Pw_all, U_all, V_all, meta, dom, sa, sb, x, step_tol, bin_, scra, sc
     return math.sqrt(f)
 
 
+# --------------------------------------------------------------------------- trim edges
+TRIM_STARTS = 5
+ALT_MAX_ITER = 200
+
+
+@jit
+def _trim_foot(Pw, p, q, U, V, dom_s, seg, deg, x, step_tol, bin_, scr, SKL, B, B1, B2, Cd,
+               out):
+    """Nearest point to ``x`` on the trim boundary of one surface (1-D Newton on every
+    segment from TRIM_STARTS starts).  ``out = (u, v, X, Y, Z)``; returns the distance."""
+    best = np.inf
+    for k in range(seg.shape[0]):
+        nd = deg[k]
+        Q = seg[k]
+        for r in range(TRIM_STARTS):
+            t = r / (TRIM_STARTS - 1.0)
+            f, g, hh, sp, u, v = _trim_point(Pw, p, q, U, V, dom_s, Q, nd, t, x, bin_, scr,
+                                             SKL, B, B1, B2, Cd)
+            for _ in range(60):
+                dt = -g / hh if hh > 0.0 else -g / (sp * sp + 1e-300)
+                if (t <= 0.0 and dt < 0.0) or (t >= 1.0 and dt > 0.0):
+                    break
+                alpha = 1.0
+                ok = False
+                tn = t
+                fn = f
+                gn = g
+                hn = hh
+                spn = sp
+                for _ls in range(50):
+                    tn = min(1.0, max(0.0, t + alpha * dt))
+                    fn, gn, hn, spn, un, vn = _trim_point(Pw, p, q, U, V, dom_s, Q, nd, tn, x,
+                                                          bin_, scr, SKL, B, B1, B2, Cd)
+                    if fn <= f:
+                        ok = True
+                        break
+                    alpha *= 0.5
+                if not ok:
+                    break
+                step = abs(tn - t) * sp
+                moved = tn != t
+                t = tn
+                f = fn
+                g = gn
+                hh = hn
+                sp = spn
+                if step <= step_tol or not moved:
+                    break
+            d = math.sqrt(2.0 * f)
+            if d < best:
+                best = d
+                _trim_point(Pw, p, q, U, V, dom_s, Q, nd, t, x, bin_, scr, SKL, B, B1, B2, Cd)
+                out[0] = min(dom_s[1], max(dom_s[0], Cd[0, 0]))
+                out[1] = min(dom_s[3], max(dom_s[2], Cd[0, 1]))
+                out[2] = SKL[0, 0, 0]
+                out[3] = SKL[0, 0, 1]
+                out[4] = SKL[0, 0, 2]
+    return best
+
+
+@jit
+def _face_foot(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, trim_meta, s, x,
+               u, v, uv_tol, step_tol, bin_, scr, SKL, B, B1, B2, Cd, winding, stack, depths,
+               tleft, tright, out):
+    """Nearest point of the trimmed face ``s`` to ``x`` near (u, v): the surface foot if
+    it is inside the face, else the nearest trim-boundary point."""
+    Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, s)
+    u, v, d, it, st = foot_newton(Pw, p, q, U, V, dom[s, 0], dom[s, 1], dom[s, 2], dom[s, 3],
+                                  False, False, x, u, v, step_tol, bin_, scr, SKL)
+    if _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s, u, v, uv_tol, winding, stack,
+                  depths, tleft, tright):
+        out[0] = u
+        out[1] = v
+        out[2] = SKL[0, 0, 0]
+        out[3] = SKL[0, 0, 1]
+        out[4] = SKL[0, 0, 2]
+        return d
+    first = trim_meta[s, 0]
+    cnt = trim_meta[s, 1]
+    return _trim_foot(Pw, p, q, U, V, dom[s], seg_all[first:first + cnt],
+                      seg_deg[first:first + cnt], x, step_tol, bin_, scr, SKL, B, B1, B2, Cd,
+                      out)
+
+
+@jit
+def alternate_feet(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, trim_meta,
+                   sa, sb, x4, uv_tol, step_tol, bin_, scr, SKL, winding, stack, depths, tleft,
+                   tright, res):
+    """Alternating projections between two trimmed faces (the trim-edge cases:
+    trim edge–surface, trim edge–trim edge), from parameters ``x4``.  Converges
+    linearly; ``res = (ua, va, XA, YA, ZA, ub, vb, XB, YB, ZB)``.  Returns the distance
+    of the final pair (a pair of face points: an upper bound)."""
+    pmax1 = seg_all.shape[1]
+    B = np.empty(pmax1)
+    B1 = np.empty(pmax1)
+    B2 = np.empty(pmax1)
+    Cd = np.empty((3, 2))
+    fa = np.empty(5)
+    fb = np.empty(5)
+    xa = np.empty(3)
+    xb = np.empty(3)
+    # start: the point of b at its parameters
+    Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, sb)
+    surface_derivs(Pw, p, q, U, V, min(dom[sb, 1], max(dom[sb, 0], x4[2])),
+                   min(dom[sb, 3], max(dom[sb, 2], x4[3])), 2, bin_, scr, SKL)
+    for c in range(3):
+        xb[c] = SKL[0, 0, c]
+    fb[0] = x4[2]
+    fb[1] = x4[3]
+    fa[0] = x4[0]
+    fa[1] = x4[1]
+    d = np.inf
+    for it in range(ALT_MAX_ITER):
+        _face_foot(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, trim_meta, sa,
+                   xb, fa[0], fa[1], uv_tol, step_tol, bin_, scr, SKL, B, B1, B2, Cd, winding,
+                   stack, depths, tleft, tright, fa)
+        for c in range(3):
+            xa[c] = fa[2 + c]
+        dn = _face_foot(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, trim_meta,
+                        sb, xa, fb[0], fb[1], uv_tol, step_tol, bin_, scr, SKL, B, B1, B2, Cd,
+                        winding, stack, depths, tleft, tright, fb)
+        moved = 0.0
+        for c in range(3):
+            moved += (fb[2 + c] - xb[c]) ** 2
+            xb[c] = fb[2 + c]
+        if dn < d:
+            d = dn
+            for c in range(5):
+                res[c] = fa[c]
+                res[5 + c] = fb[c]
+        if math.sqrt(moved) <= step_tol:
+            break
+    return d
+
+
 # --------------------------------------------------------------------------- B&B
 @jit
 def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_all, meta,
@@ -529,6 +664,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     SA = np.zeros((3, 3, 3))
     SB = np.zeros((3, 3, 3))
     x4 = np.empty(4)
+    alt = np.empty(10)
 
     cap = max(1024, 4 * nodes_a.shape[0] * nodes_b.shape[0])
     hlb = np.empty(cap)
@@ -605,7 +741,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
             nh = _heap_push(hlb, hab, nh, lb, a, b)
             pushed += 1
     peak = nh
-    stop = STOP_EXHAUSTED
+    stop = STOP_CERTIFIED
     ctrl_top = 0
     for k in range(n_nodes):
         ctrl_top = max(ctrl_top, ni[k, I_OFF] + (ni[k, I_P] + 1) * (ni[k, I_Q] + 1) * 4)
@@ -615,7 +751,6 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
         a = hab[0, 0]
         b = hab[0, 1]
         if lb >= upper - tol:
-            stop = STOP_CERTIFIED
             break
         if popped >= max_pairs:
             stop = STOP_MAX_PAIRS
@@ -664,6 +799,27 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                             bx[5 + c] = SB[0, 0, c]
                         for c in range(4):
                             bx[8 + c] = x4[c]
+                    elif trim_meta[sa, 1] > 0 or trim_meta[sb, 1] > 0:
+                        x4[0] = nf[a, F_REPUV]
+                        x4[1] = nf[a, F_REPUV + 1]
+                        x4[2] = nf[b, F_REPUV]
+                        x4[3] = nf[b, F_REPUV + 1]
+                        d = alternate_feet(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg,
+                                           seg_loop, trim_meta, sa, sb, x4, uv_tol, step_tol,
+                                           bin_, scra, SA, winding, stack, depths, tleft,
+                                           tright, alt)
+                        newton_runs += 1
+                        if d < upper:
+                            upper = d
+                            bsa = sa
+                            bsb = sb
+                            for c in range(3):
+                                bx[2 + c] = alt[2 + c]
+                                bx[5 + c] = alt[7 + c]
+                            bx[8] = alt[0]
+                            bx[9] = alt[1]
+                            bx[10] = alt[5]
+                            bx[11] = alt[6]
             if lb >= upper - tol:
                 pruned += 1
                 pruned_min = min(pruned_min, lb)
