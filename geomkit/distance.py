@@ -106,25 +106,34 @@ def _pack_trims(surfaces):
         seg_all[o:o + S, : seg.shape[1]] = seg
         seg_deg[o:o + S] = deg
         seg_loop[o:o + S] = lp
-        pb = []
-        for k in range(S):
-            d = deg[k]
-            rest = np.ascontiguousarray(seg[k, : d + 1])
-            for j in range(TRIM_PIECES):  # boxes of TRIM_PIECES sub-arcs (tight)
-                if j < TRIM_PIECES - 1:
-                    left = np.empty_like(rest)
-                    right = np.empty_like(rest)
-                    de_casteljau_split(rest, 1.0 / (TRIM_PIECES - j), left, right)
-                    piece, rest = left, right
-                else:
-                    piece = rest
-                xy = piece[:, :2] / piece[:, 2:3]
-                pb.append((xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max()))
+        pb = surfaces[i]._cache.get("distance_trim_boxes")
+        if pb is None:
+            pb = _trim_boxes(seg, deg)
+            surfaces[i]._cache["distance_trim_boxes"] = pb
         meta[i] = (o, S, nl, len(boxes), len(pb))
         boxes += pb
         o += S
     seg_box = np.array(boxes) if boxes else np.zeros((1, 4))
     return seg_all, seg_deg, seg_loop, seg_box, meta
+
+
+def _trim_boxes(seg, deg):
+    """UV boxes of TRIM_PIECES sub-arcs of every trim segment (tight boxes)."""
+    pb = []
+    for k in range(seg.shape[0]):
+        d = deg[k]
+        rest = np.ascontiguousarray(seg[k, : d + 1])
+        for j in range(TRIM_PIECES):  # boxes of TRIM_PIECES sub-arcs (tight)
+            if j < TRIM_PIECES - 1:
+                left = np.empty_like(rest)
+                right = np.empty_like(rest)
+                de_casteljau_split(rest, 1.0 / (TRIM_PIECES - j), left, right)
+                piece, rest = left, right
+            else:
+                piece = rest
+            xy = piece[:, :2] / piece[:, 2:3]
+            pb.append((xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max()))
+    return pb
 
 
 def _root_nodes(surfaces, nA):
