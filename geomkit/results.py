@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["MeshNearest", "Projection", "INTERIOR", "DOMAIN_EDGE", "TRIM_EDGE",
-           "BEYOND", "FAILED", "STATUS_NAMES"]
+           "BEYOND", "FAILED", "STATUS_NAMES",
+           "SurfaceDistance"]
 
 INTERIOR = 0
 """The foot lies inside the face: an orthogonal foot (S - x parallel to the normal)."""
@@ -102,3 +103,56 @@ class Projection:
     def __repr__(self) -> str:
         c = ", ".join(f"{k} {v}" for k, v in self.counts().items() if v)
         return f"<Projection of {len(self)} points: {c}>"
+
+
+@dataclass
+class SurfaceDistance:
+    """Minimum distance between two surfaces or two scenes of surfaces
+    (:func:`geomkit.surface_distance`), with a certified interval.
+
+    Attributes
+    ----------
+    distance : float, the distance between ``point_a`` and ``point_b`` (= ``upper``).
+    lower, upper : float, certified bounds: ``lower <= exact <= upper``.  ``upper`` is
+        the distance of a real pair of face points; ``lower`` comes from the convex
+        hulls of Bézier control nets (up to floating-point rounding, see the docs).
+    point_a, point_b : (3,) float, a pair of face points realising ``upper``.
+    uv_a, uv_b : (2,) float, their parameters.
+    surface_a, surface_b : int, index of the surface of each scene holding the points.
+    certified : bool, ``upper - lower <= tol`` was reached (False only when the work
+        cap stopped the search, e.g. a curved continuum of minima).
+    tol : float, the requested interval width.
+    regions_refined : int, sub-patch pairs subdivided (the lazily refined regions).
+    stats : dict, counts (pairs examined / pushed / pruned, nodes, Newton runs, peak
+        heap), memory in bytes and the wall time.
+    """
+
+    distance: float
+    lower: float
+    upper: float
+    point_a: np.ndarray
+    point_b: np.ndarray
+    uv_a: np.ndarray
+    uv_b: np.ndarray
+    surface_a: int
+    surface_b: int
+    certified: bool
+    tol: float
+    regions_refined: int
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """``(lower, upper)``."""
+        return (self.lower, self.upper)
+
+    @property
+    def width(self) -> float:
+        """``upper - lower``."""
+        return self.upper - self.lower
+
+    def __repr__(self) -> str:
+        c = "certified" if self.certified else "NOT certified"
+        return (f"<SurfaceDistance {self.distance:.12g} in [{self.lower:.12g}, "
+                f"{self.upper:.12g}] ({c}, tol {self.tol:.3g}), surfaces "
+                f"{self.surface_a}/{self.surface_b}, {self.regions_refined} regions refined>")
