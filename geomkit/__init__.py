@@ -7,6 +7,8 @@ Public API (users' scripts depend on these names):
 * :func:`tessellate` -> :class:`Mesh` — triangles within a chord tolerance that holds.
 * :func:`project_points` -> :class:`Projection` — exact feet of points (CMM deviation);
   :class:`VoxelGrid`, :func:`nearest_triangles` (Paper 1).
+* :func:`surface_distance` -> :class:`SurfaceDistance` — certified minimum distance
+  between surfaces or scenes (Bézier branch and bound + Newton).
 * :func:`plane_section` -> :class:`Section` — plane sections (Paper 2), exact points,
   fit and CSV / DXF / JSON export.
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
@@ -24,12 +26,13 @@ from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
                      InvalidInputError, InvalidSurfaceError, InvalidTrimError,
                      MissingDependencyError)
 from .deviation import DeviationReport, align_rigid, deviation
+from .distance import surface_distance
 from .evaluation import derivatives, evaluate, normals
 from .iges import IgesResult, read_iges
 from .io import Case, load, load_case, save
 from .points_io import PointSet, read_points
 from .projection import Projector, project_points
-from .results import MeshNearest, Projection
+from .results import MeshNearest, Projection, SurfaceDistance
 from .section import Section, plane_section
 from .step import read_step
 from .tessellate import tessellate
@@ -48,7 +51,7 @@ __all__ = [
     "InvalidTrimError", "DegenerateGeometryError", "FileFormatError",
     "MissingDependencyError",
     "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
-    "MeshNearest",
+    "MeshNearest", "surface_distance", "SurfaceDistance",
     "plane_section", "Section",
     "deviation", "DeviationReport", "align_rigid", "read_points", "PointSet", "read_iges",
     "IgesResult", "read_step", "report",
