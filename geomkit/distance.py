@@ -213,7 +213,8 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
     size = float(np.linalg.norm(hi - lo))
     scale = max(size, float(np.abs(np.concatenate([lo, hi])).max()), 1e-300)
     rounding = ROUNDING * scale
-    tol_eff = tol - rounding if tol > 2 * rounding else 0.5 * tol
+    # both ends carry the allowance: the hull bound below, the evaluated points above
+    tol_eff = tol - 2 * rounding if tol > 4 * rounding else 0.5 * tol
     Pw_all, U_all, V_all, meta, dom = _pack(surfaces)
     seg_all, seg_deg, seg_loop, seg_box, tmeta = _pack_trims(surfaces)
     side = max(float(np.max(dom[:, 1] - dom[:, 0])), float(np.max(dom[:, 3] - dom[:, 2])))
@@ -235,9 +236,10 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
         ctrl, ni, nf, n, nodes_a, nodes_b, Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg,
         seg_loop, seg_box, tmeta, uv_tol, tol_eff, min_size, int(max_pairs), MAX_NEWTON,
         step_tol, out_f, out_i)
-    upper = float(out_f[0])
+    measured = float(out_f[0])
+    upper = measured + rounding  # the points are evaluated with rounding too
     lower = max(0.0, float(out_f[1]) - rounding)
-    if upper <= tol:  # touching / intersecting: 0 is in the interval
+    if measured <= tol:  # touching / intersecting: 0 is in the interval
         lower = 0.0
     nodes = int(out_i[5])
     node_bytes = nodes * (_dk.NI * 8 + _dk.NF * 8)
@@ -251,7 +253,7 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
              "stop": {0: "certified", 1: "max_pairs", 2: "exhausted"}[int(out_i[7])],
              "memory_bytes": node_bytes + ctrl_bytes + heap_bytes,
              "seconds": time.perf_counter() - t0}
-    return SurfaceDistance(distance=upper, lower=lower, upper=upper,
+    return SurfaceDistance(distance=measured, lower=lower, upper=upper,
                            point_a=out_f[2:5].copy(), point_b=out_f[5:8].copy(),
                            uv_a=out_f[8:10].copy(), uv_b=out_f[10:12].copy(),
                            surface_a=int(out_i[0]), surface_b=int(out_i[1]) - nA,
