@@ -203,6 +203,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         vn = v
         # near convergence a failing decrease is rounding: give up after 2 halvings
         tries = 30 if full_step > 1e4 * step_tol else 2
+        full_newton = False
         for _ in range(tries):
             un = _wrap(u + alpha * du, umin, umax, closed_u)
             vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
@@ -210,12 +211,14 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             fn = _f(SKL, x)
             if fn < f:
                 accepted = True
+                full_newton = alpha == 1.0
                 break
             alpha *= 0.5
         if (not accepted or alpha < 1.0 / 64.0) and du != 0.0 and dv != 0.0 \
                 and full_step > 1e4 * step_tol:
             # a kink (a C0 knot line, a crease) or a bound cuts the joint step short:
             # try moving one parameter at a time, keep the best
+            full_newton = accepted and alpha == 1.0
             fbest = fn if accepted else f
             for axis in range(2):
                 if axis == 0:
@@ -245,7 +248,9 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             status = FOOT_OK
             break
         moved = un != u or vn != v
-        stalled = f - fn <= 1e-13 * f and full_step <= 1e4 * step_tol
+        # a stall only in the smooth regime (the full Newton step was taken): at a
+        # kink the distance error is first order in the step, so keep going there
+        stalled = f - fn <= 1e-13 * f and full_step <= 1e4 * step_tol and full_newton
         u = un
         v = vn
         f = fn
