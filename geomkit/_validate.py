@@ -92,3 +92,33 @@ def check_knots(knots, degree, count, field, error) -> np.ndarray:
                 raise error(f"interior knot {float(val)!r} has multiplicity {total} > degree "
                             f"{degree} (the surface would be discontinuous)", field)
     return U
+
+
+def as_mesh_arrays(mesh, field="mesh"):
+    """``(vertices (n, 3) float, faces (m, 3) int64, face tags or None)`` of a
+    geomkit.Mesh, a trimesh.Trimesh or a (vertices, faces) pair, validated."""
+    tags = None
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        V, F = mesh.vertices, mesh.faces
+        tags = getattr(mesh, "face_surface", None)
+    elif isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        V, F = mesh
+    else:
+        raise InvalidInputError("expected a geomkit.Mesh, a trimesh.Trimesh or a "
+                                f"(vertices, faces) pair, got {type(mesh).__name__}", field)
+    V = as_float_array(V, f"{field}.vertices", shape=(None, 3))
+    try:
+        Fa = np.asarray(F)
+    except Exception as exc:  # pragma: no cover - exotic inputs
+        raise InvalidInputError(f"could not read faces ({exc})", f"{field}.faces") from None
+    if Fa.ndim != 2 or Fa.shape[1] != 3 or Fa.shape[0] == 0:
+        raise InvalidInputError(f"expected shape (m, 3) with m >= 1, got {Fa.shape}",
+                                f"{field}.faces")
+    if not np.issubdtype(Fa.dtype, np.integer):
+        raise InvalidInputError(f"expected integer indices, got dtype {Fa.dtype}",
+                                f"{field}.faces")
+    Fa = np.ascontiguousarray(Fa, dtype=np.int64)
+    if Fa.min() < 0 or Fa.max() >= V.shape[0]:
+        raise InvalidInputError(f"indices must be in [0, {V.shape[0]}), got "
+                                f"[{Fa.min()}, {Fa.max()}]", f"{field}.faces")
+    return V, Fa, tags

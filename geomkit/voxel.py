@@ -28,10 +28,9 @@ import math
 import numpy as np
 
 from ._kernels import voxel as _vk
-from ._validate import as_float_array, as_points
+from ._validate import as_mesh_arrays, as_points
 from .errors import InvalidInputError
 from .results import MeshNearest
-from .types import Mesh
 
 __all__ = ["VoxelGrid", "nearest_triangles", "CROSSED", "ENCLOSED", "MAX_VOXELS"]
 
@@ -41,32 +40,8 @@ MAX_VOXELS = 1 << 22
 
 
 def _mesh_arrays(mesh, field="mesh"):
-    """(vertices, faces) of a Mesh, a trimesh.Trimesh or a (vertices, faces) pair."""
-    if isinstance(mesh, Mesh) or hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
-        V, F = mesh.vertices, mesh.faces
-    elif isinstance(mesh, (tuple, list)) and len(mesh) == 2:
-        V, F = mesh
-    else:
-        raise InvalidInputError("expected a geomkit.Mesh, a trimesh.Trimesh or a "
-                                f"(vertices, faces) pair, got {type(mesh).__name__}", field)
-    V = as_float_array(V, f"{field}.vertices", shape=(None, 3))
-    try:
-        Fi = np.asarray(F)
-        if Fi.size and not np.issubdtype(Fi.dtype, np.integer):
-            if not np.all(np.equal(np.mod(Fi, 1), 0)):
-                raise ValueError
-        Fi = np.ascontiguousarray(Fi, dtype=np.int64)
-    except (TypeError, ValueError):
-        raise InvalidInputError("faces must be integer vertex indices", f"{field}.faces") \
-            from None
-    if Fi.ndim != 2 or Fi.shape[1] != 3:
-        raise InvalidInputError(f"expected shape (m, 3), got {Fi.shape}", f"{field}.faces")
-    if Fi.shape[0] == 0:
-        raise InvalidInputError("the mesh has no faces", f"{field}.faces")
-    if Fi.min() < 0 or Fi.max() >= V.shape[0]:
-        raise InvalidInputError(f"vertex index out of range 0..{V.shape[0] - 1}",
-                                f"{field}.faces")
-    return V, Fi
+    V, F, _ = as_mesh_arrays(mesh, field)
+    return V, F
 
 
 class VoxelGrid:
