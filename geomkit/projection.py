@@ -89,6 +89,23 @@ def _pack(surfaces):
             meta, dom)
 
 
+def _c0_breaks(surfaces):
+    """Borders of the C0 pieces of each surface (domain ends and interior knots of
+    multiplicity >= degree): ``brk_all`` and ``brk_off[s] = (u offset, u count, v
+    offset, v count)``."""
+    parts, off, o = [], np.zeros((len(surfaces), 4), dtype=np.int64), 0
+    for i, s in enumerate(surfaces):
+        for k, (U, p) in enumerate(((s.knots_u, s.degree_u), (s.knots_v, s.degree_v))):
+            inner = np.unique(U[p + 1:-p - 1])
+            cuts = [t for t in inner if np.count_nonzero(U == t) >= p]
+            b = np.array([U[p], *cuts, U[-p - 1]], dtype=np.float64)
+            parts.append(b)
+            off[i, 2 * k] = o
+            off[i, 2 * k + 1] = b.size
+            o += b.size
+    return np.ascontiguousarray(np.concatenate(parts)), off
+
+
 class _TrimData:
     """Trim segments of one surface and dense samples on their images."""
 
@@ -144,6 +161,7 @@ class Projector:
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
         self.packed = _pack(self.surfaces)
+        self.breaks = _c0_breaks(self.surfaces)
         # closed directions (seams are crossed) and free edges (only these are edges)
         self.closed = np.zeros((len(self.surfaces), 2), dtype=np.int64)
         self.free_edges = np.ones((len(self.surfaces), 4), dtype=bool)
@@ -180,7 +198,7 @@ class Projector:
         Pw, U, V, meta, dom = self.packed
         _pk.project_batch(P, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
-                          step_tol, max_distance, K, fs, fuv, fd, fst, nf, lb,
+                          *self.breaks, step_tol, max_distance, K, fs, fuv, fd, fst, nf, lb,
                           flags, work)
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf

@@ -64,8 +64,20 @@ def _wrap(u, lo, hi, closed):
 
 
 @jit
+def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
+    """Derivatives at (u, v); on an upper piece bound that is an interior C0 knot the
+    left-sided ones (evaluated ``left_u`` before the knot: the knot itself gives the
+    right-sided derivatives)."""
+    if left_u > 0.0 and u >= umax:
+        u = umax - left_u
+    if left_v > 0.0 and v >= vmax:
+        v = vmax - left_v
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+
+
+@jit
 def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u, v,
-                step_tol, bin_, scr, SKL):
+                step_tol, bin_, scr, SKL, left_u=0.0, left_v=0.0):
     """Local minimiser of |S(u, v) - x| over the domain box, started at (u, v).
 
     On a surface closed in u (or v) the iteration crosses the seam instead of
@@ -76,7 +88,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
     """
     u = min(umax, max(umin, u))
     v = min(vmax, max(vmin, v))
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
     f = _f(SKL, x)
     it = 0
     escapes = 0
@@ -171,14 +183,14 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                     for sgn in (-1.0, 1.0):
                         ut = _wrap(u + sgn * L * eu, umin, umax, closed_u)
                         vt = _wrap(v + sgn * L * ev, vmin, vmax, closed_v)
-                        surface_derivs(Pw, p, q, U, V, ut, vt, 2, bin_, scr, SKL)
+                        _ev(Pw, p, q, U, V, ut, vt, umax, vmax, left_u, left_v, bin_, scr, SKL)
                         ft = _f(SKL, x)
                         if ft < bf:
                             bu = ut
                             bvv = vt
                             bf = ft
                     escapes += 1
-                    surface_derivs(Pw, p, q, U, V, bu, bvv, 2, bin_, scr, SKL)
+                    _ev(Pw, p, q, U, V, bu, bvv, umax, vmax, left_u, left_v, bin_, scr, SKL)
                     if bf < f:
                         u = bu
                         v = bvv
@@ -187,14 +199,14 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         if full_step <= step_tol:
             un = _wrap(u + du, umin, umax, closed_u)
             vn = _wrap(v + dv, vmin, vmax, closed_v)
-            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
+            _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
             fn = _f(SKL, x)
             if fn <= f:
                 u = un
                 v = vn
                 f = fn
             else:
-                surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+                _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
             status = FOOT_OK
             break
         alpha = 1.0
@@ -207,7 +219,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         for _ in range(tries):
             un = _wrap(u + alpha * du, umin, umax, closed_u)
             vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
-            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
+            _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
             fn = _f(SKL, x)
             if fn < f:
                 accepted = True
@@ -231,7 +243,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                 for _ in range(30):
                     ut = _wrap(u + beta * su_, umin, umax, closed_u)
                     vt = _wrap(v + beta * sv_, vmin, vmax, closed_v)
-                    surface_derivs(Pw, p, q, U, V, ut, vt, 2, bin_, scr, SKL)
+                    _ev(Pw, p, q, U, V, ut, vt, umax, vmax, left_u, left_v, bin_, scr, SKL)
                     ft = _f(SKL, x)
                     if ft < fbest:
                         fbest = ft
@@ -241,10 +253,10 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                         accepted = True
                         break
                     beta *= 0.5
-            surface_derivs(Pw, p, q, U, V, un, vn, 2, bin_, scr, SKL)
+            _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
         if not accepted:
             # no decrease along a descent direction: stationary within rounding
-            surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+            _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
             status = FOOT_OK
             break
         moved = un != u or vn != v
@@ -262,10 +274,95 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
     return u, v, math.sqrt(f), it, status
 
 
+@jit
+def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step_tol,
+            bin_, scr, SKL):
+    """:func:`foot_newton` over the C0 pieces of the surface.
+
+    Interior knots of multiplicity >= degree (creases) split the domain into pieces
+    whose borders are bounds of the Newton box, so a foot on a crease is found exactly
+    as a constrained minimum (one-sided derivatives on each side) instead of by
+    backtracking across the kink.  A foot stopped on a piece border moves on to the
+    neighbouring piece when that one descends further.  ``brk_u``/``brk_v``: the
+    piece borders including the domain ends (a closed direction keeps one piece).
+    """
+    npu = brk_u.shape[0] - 1
+    npv = brk_v.shape[0] - 1
+    if closed_u:
+        npu = 1
+    if closed_v:
+        npv = 1
+    iu = 0
+    while iu < npu - 1 and brk_u[iu + 1] <= u:
+        iu += 1
+    iv = 0
+    while iv < npv - 1 and brk_v[iv + 1] <= v:
+        iv += 1
+    d = np.inf
+    it_all = 0
+    st = FOOT_NOT_CONVERGED
+    for _hop in range(16):
+        ua = brk_u[iu] if npu > 1 else dom[0]
+        ub = brk_u[iu + 1] if npu > 1 else dom[1]
+        va = brk_v[iv] if npv > 1 else dom[2]
+        vb = brk_v[iv + 1] if npv > 1 else dom[3]
+        lu = 1e-14 * (dom[1] - dom[0]) if iu < npu - 1 else 0.0
+        lv = 1e-14 * (dom[3] - dom[2]) if iv < npv - 1 else 0.0
+        u, v, d, it, st = foot_newton(Pw, p, q, U, V, ua, ub, va, vb,
+                                      closed_u and npu == 1, closed_v and npv == 1, x, u, v,
+                                      step_tol, bin_, scr, SKL, lu, lv)
+        it_all += it
+        moved = False
+        # on an interior border: does the neighbouring piece descend further?
+        if iu < npu - 1 and u >= ub:
+            surface_derivs(Pw, p, q, U, V, ub, min(vb, max(va, v)), 2, bin_, scr, SKL)
+            g = 0.0
+            for c in range(3):
+                g += (SKL[0, 0, c] - x[c]) * SKL[1, 0, c]
+            if g < 0.0:
+                iu += 1
+                u = ub
+                moved = True
+        elif iu > 0 and u <= ua:
+            surface_derivs(Pw, p, q, U, V, ua - 1e-14 * (dom[1] - dom[0]),
+                           min(vb, max(va, v)), 2, bin_, scr, SKL)
+            g = 0.0
+            for c in range(3):
+                g += (SKL[0, 0, c] - x[c]) * SKL[1, 0, c]
+            if g > 0.0:
+                iu -= 1
+                u = ua
+                moved = True
+        if not moved and iv < npv - 1 and v >= vb:
+            surface_derivs(Pw, p, q, U, V, min(ub, max(ua, u)), vb, 2, bin_, scr, SKL)
+            g = 0.0
+            for c in range(3):
+                g += (SKL[0, 0, c] - x[c]) * SKL[0, 1, c]
+            if g < 0.0:
+                iv += 1
+                v = vb
+                moved = True
+        elif not moved and iv > 0 and v <= va:
+            surface_derivs(Pw, p, q, U, V, min(ub, max(ua, u)),
+                           va - 1e-14 * (dom[3] - dom[2]), 2, bin_, scr, SKL)
+            g = 0.0
+            for c in range(3):
+                g += (SKL[0, 0, c] - x[c]) * SKL[0, 1, c]
+            if g > 0.0:
+                iv -= 1
+                v = va
+                moved = True
+        if not moved:
+            break
+    # leave the derivatives of the returned point in SKL
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    return u, v, d, it_all, st
+
+
 @pjit
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
-                  occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, step_tol,
-                  max_dist,
+                  occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, brk_all,
+                  brk_off, step_tol, max_dist,
                   max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_flags,
                   out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
@@ -356,10 +453,11 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
                 if dup:
                     continue
                 Pw, p, q, U, Vk = _surface(Pw_all, U_all, V_all, meta, s)
-                u, v, d, it, st = foot_newton(Pw, p, q, U, Vk, dom[s, 0], dom[s, 1],
-                                              dom[s, 2], dom[s, 3], closed[s, 0] != 0,
-                                              closed[s, 1] != 0, x, u0, v0, step_tol,
-                                              bin_, scr, SKL)
+                bu = brk_all[brk_off[s, 0]:brk_off[s, 0] + brk_off[s, 1]]
+                bv = brk_all[brk_off[s, 2]:brk_off[s, 2] + brk_off[s, 3]]
+                u, v, d, it, st = foot_c0(Pw, p, q, U, Vk, dom[s], bu, bv,
+                                          closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
+                                          step_tol, bin_, scr, SKL)
                 # insert sorted by distance
                 j = nf
                 while j > 0 and out_d[i, j - 1] > d:
