@@ -88,9 +88,11 @@ class ProbePath:
 
     Attributes
     ----------
-    clearance : (m,) float, minimum distance body–part over the segment, certified
-        within ``tol`` (the true minimum lies in ``[clearance - tol, clearance]``;
-        exactly 0 for a segment that collides).
+    clearance : (m,) float, minimum distance body–part over the segment (exactly 0
+        for a segment that collides); an attained distance, so an upper bound.
+    lower_bound : (m,) float, certified lower bound of that minimum: equal to
+        ``clearance`` for a pure translation (exact method); for a rotating segment
+        ``clearance - lower_bound <= tol`` unless ``max_evaluations`` ran out.
     parameter : (m,) float in [0, 1], where on the segment it occurs.
     point_body, point_part : (m, 3) float, the closest points (world).
     first_contact : (m,) float in [0, 1], the first contact parameter on the
@@ -101,6 +103,7 @@ class ProbePath:
     """
 
     clearance: np.ndarray
+    lower_bound: np.ndarray
     parameter: np.ndarray
     point_body: np.ndarray = field(repr=False)
     point_part: np.ndarray = field(repr=False)
@@ -266,7 +269,7 @@ def _path_poses(poses):
 
 
 def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
-               initial_samples=8) -> ProbePath:
+               initial_samples=8, max_evaluations=4000) -> ProbePath:
     """Clearance of a body moved along a polyline of poses past a fixed part.
 
     Parameters
@@ -280,7 +283,8 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
     margin : float >= 0, required clearance: ``passed = clearance >= margin``.
     tol : float > 0, certification tolerance of the clearance (default 1e-6 of
         the part's bounding-box diagonal).
-    initial_samples : int >= 2, distance samples per segment before refining.
+    initial_samples : int >= 2, rotating segments: distance samples before refining.
+    max_evaluations : int, rotating segments: cap on distance evaluations per segment.
 
     Returns
     -------
@@ -288,7 +292,13 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
 
     Method
     ------
-    Along a segment the distance is Lipschitz in the segment parameter s with
+    Pure translation (exact): the distance of a triangle pair is a convex function
+    of the segment parameter (a point moving on a line against their convex
+    Minkowski difference), so its minimum is found by golden section; a branch
+    and bound over node pairs whose B box is swept along the segment (box grown
+    to contain box + segment) prunes pairs that cannot beat the best.
+
+    With rotation: along a segment the distance is Lipschitz in the segment parameter s with
     ``L = |dt| + theta * r_max`` (translation length, rotation angle, largest
     distance of a body vertex from the body origin): no point of the body moves
     more than ``L ds``.  Between samples s0 < s1 with distances d0, d1 the
@@ -312,9 +322,11 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
     if not (np.isfinite(tol) and tol > 0):
         raise InvalidInputError(f"expected a finite number > 0, got {tol!r}", "tol")
     n0 = as_int(initial_samples, "initial_samples", minimum=2)
+    max_evaluations = as_int(max_evaluations, "max_evaluations", minimum=2)
     r_max = float(np.sqrt((body.vertices ** 2).sum(1).max()))
     m = P.shape[0] - 1
     clear = np.empty(m)
+    lower = np.empty(m)
     where = np.empty(m)
     pb = np.empty((m, 3))
     pp = np.empty((m, 3))
@@ -325,57 +337,82 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
         dt = P1[:3, 3] - P0[:3, 3]
         rv = _rot_log(P0[:3, :3].T @ P1[:3, :3])
         theta = float(np.linalg.norm(rv))
-        L = float(np.linalg.norm(dt)) + theta * r_max
-
-        def pose_at(s, P0=P0, dt=dt, rv=rv, theta=theta):
-            Q = P0.copy()
-            if theta > 0.0:
-                R = P0[:3, :3] @ _rot_exp(s * rv)
-                U, _, Vt = np.linalg.svd(R)     # re-orthonormalise
-                Q[:3, :3] = U @ Vt
-            Q[:3, 3] = P0[:3, 3] + s * dt
-            return Q
-
-        cache = {}
-
-        def dist(s):
-            if s not in cache:
-                cache[s] = min_distance(body, pose_at(s), part, Pp)
-            return cache[s]
-
-        ss = np.linspace(0.0, 1.0, n0)
-        best_s = min(ss, key=lambda s: dist(s).distance)
-        ub = dist(best_s).distance
-        heap = []
-        for s0, s1 in zip(ss[:-1], ss[1:]):
-            lb = 0.5 * (dist(s0).distance + dist(s1).distance - L * (s1 - s0))
-            heapq.heappush(heap, (lb, s0, s1))
-        while heap and ub > 0.0:
-            lb, s0, s1 = heapq.heappop(heap)
-            if lb >= ub - tol:
-                break
-            sm = 0.5 * (s0 + s1)
-            dm = dist(sm).distance
-            if dm < ub:
-                ub, best_s = dm, sm
-            for u0, u1 in ((s0, sm), (sm, s1)):
-                lb2 = 0.5 * (dist(u0).distance + dist(u1).distance - L * (u1 - u0))
-                if lb2 < ub - tol:
-                    heapq.heappush(heap, (lb2, u0, u1))
-        d = dist(best_s)
-        clear[k], where[k] = d.distance, best_s
-        pb[k], pp[k] = d.point_a, d.point_b
-        if d.distance == 0.0:
-            if theta == 0.0 and np.any(dt):
+        if theta <= 1e-15:
+            d, s, p_b, p_p, ev = _sweep_min(body, P0, dt, part, Pp)
+            lo = d
+        else:
+            d, lo, s, p_b, p_p, ev = _lipschitz_min(body, P0, dt, rv, r_max, part, Pp,
+                                                    tol, n0, max_evaluations)
+        clear[k], lower[k], where[k], pb[k], pp[k], evals[k] = d, lo, s, p_b, p_p, ev
+        if d == 0.0:
+            if theta <= 1e-15:
                 f = first_contact(body, P0, dt, part, Pp, np.zeros(3), 1.0)
-                fc[k] = f.time if f.hit else best_s
+                fc[k] = f.time if f.hit else s
             else:
-                s = 0.0
-                while s < 1.0:
-                    ds = dist(s).distance
-                    if ds <= tol:
-                        break
-                    s = min(s + ds / L, 1.0) if L > 0 else 1.0
-                fc[k] = s
-        evals[k] = len(cache)
-    return ProbePath(clear, where, pb, pp, fc, clear >= margin, tol, evals)
+                fc[k] = _advance(body, P0, dt, rv, r_max, part, Pp, tol)
+    return ProbePath(clear, lower, where, pb, pp, fc, clear >= margin, tol, evals)
+
+
+def _interp(P0, dt, rv, s):
+    Q = P0.copy()
+    Q[:3, :3] = P0[:3, :3] @ _rot_exp(s * rv)
+    Q[:3, 3] = P0[:3, 3] + s * dt
+    return Q
+
+
+def _sweep_min(body, P0, dt, part, Pp):
+    """Exact minimum distance of ``body`` translated from P0 by ``s dt`` (s in
+    [0, 1]) to the fixed part: (d, s, point_body, point_part, bv_tests)."""
+    # part is "A" (fixed), the body is "B" (moving)
+    A, B, mov, W = _frames(part, Pp, body, P0)
+    wc = np.ascontiguousarray(Pp[:3, :3].T @ dt) if part.kind != 2 else \
+        np.ascontiguousarray(dt)
+    p, q = np.zeros(3), np.zeros(3)
+    d, s, _, _, tests = km.sweep_distance_trees(part.kind, *A, *B, *mov, wc, p, q)
+    return (float(d), float(s), W[:3, :3] @ q + W[:3, 3], W[:3, :3] @ p + W[:3, 3],
+            int(tests))
+
+
+def _lipschitz_min(body, P0, dt, rv, r_max, part, Pp, tol, n0, max_eval):
+    """Rotating segment: branch and bound on the Lipschitz bound of the distance."""
+    L = float(np.linalg.norm(dt)) + float(np.linalg.norm(rv)) * r_max
+    cache = {}
+
+    def dist(s):
+        if s not in cache:
+            cache[s] = min_distance(body, _interp(P0, dt, rv, s), part, Pp)
+        return cache[s].distance
+
+    ss = np.linspace(0.0, 1.0, n0)
+    best_s = min(ss, key=dist)
+    ub = dist(best_s)
+    heap = []
+    for s0, s1 in zip(ss[:-1], ss[1:]):
+        heapq.heappush(heap, (0.5 * (dist(s0) + dist(s1) - L * (s1 - s0)), s0, s1))
+    lb = ub
+    while heap and ub > 0.0:
+        lb, s0, s1 = heap[0]
+        if lb >= ub - tol or len(cache) >= max_eval:
+            break
+        heapq.heappop(heap)
+        sm = 0.5 * (s0 + s1)
+        dm = dist(sm)
+        if dm < ub:
+            ub, best_s = dm, sm
+        for u0, u1 in ((s0, sm), (sm, s1)):
+            heapq.heappush(heap, (0.5 * (dist(u0) + dist(u1) - L * (u1 - u0)), u0, u1))
+    if not heap or ub == 0.0:
+        lb = ub
+    d = cache[best_s]
+    return (d.distance, max(min(lb, ub), 0.0), best_s, d.point_a, d.point_b, len(cache))
+
+
+def _advance(body, P0, dt, rv, r_max, part, Pp, tol):
+    """First parameter with distance <= tol by conservative advancement."""
+    L = float(np.linalg.norm(dt)) + float(np.linalg.norm(rv)) * r_max
+    s = 0.0
+    while True:
+        d = min_distance(body, _interp(P0, dt, rv, s), part, Pp).distance
+        if d <= tol or s >= 1.0:
+            return s
+        s = min(s + d / L, 1.0)

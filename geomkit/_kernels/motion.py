@@ -30,7 +30,8 @@ import numpy as np
 
 from ._numba import jit
 from .bvh import KDOP_DIRS
-from .bvh_query import SAT_EPS, STACK, _move, _rel_box, _size
+from .bvh_query import LB_SHRINK, SAT_EPS, STACK, _move, _rel_box, _size, box_separation
+from .triangles import triangle_triangle_distance
 
 BARY_EPS = 1e-12
 """Relative slack of the closed-feature tests (a hit on a shared edge is seen by
@@ -380,3 +381,169 @@ def _node_time(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, w, wd, hi, Ra
     for r in range(3):
         wn[r] = RA[i, 0, r] * w[0] + RA[i, 1, r] * w[1] + RA[i, 2, r] * w[2]
     return box_time_window(Rab, T, wn, EA[i], EB[j], 0.0, hi, scr[1])
+
+
+# ------------------------------------------------------------------ swept distance
+GOLDEN_ITERS = 64
+"""Golden-section iterations per triangle pair (interval shrinks to 0.618^64 ~ 4e-14)."""
+
+
+@jit
+def _pair_dist_at(ta, tb, w, s, tbs, p, q):
+    for v in range(3):
+        for c in range(3):
+            tbs[v, c] = tb[v, c] + s * w[c]
+    return triangle_triangle_distance(ta, tbs, p, q)
+
+
+@jit
+def pair_sweep_min(ta, tb, w, best, out_p, out_q):
+    """Minimum over s in [0, 1] of dist(ta, tb + s w), a convex function of s
+    (distance of a moving point to the convex Minkowski difference), by golden
+    section.  Returns ``(d, s)``; closest points at that s to ``out_p``/``out_q``
+    (only written when ``d < best``)."""
+    tbs = np.empty((3, 3))
+    p = np.empty(3)
+    q = np.empty(3)
+    g = 0.6180339887498949
+    lo = 0.0
+    hi = 1.0
+    x1 = hi - g * (hi - lo)
+    x2 = lo + g * (hi - lo)
+    f1 = _pair_dist_at(ta, tb, w, x1, tbs, p, q)
+    f2 = _pair_dist_at(ta, tb, w, x2, tbs, p, q)
+    for _ in range(GOLDEN_ITERS):
+        if f1 <= f2:
+            hi = x2
+            x2 = x1
+            f2 = f1
+            x1 = hi - g * (hi - lo)
+            f1 = _pair_dist_at(ta, tb, w, x1, tbs, p, q)
+        else:
+            lo = x1
+            x1 = x2
+            f1 = f2
+            x2 = lo + g * (hi - lo)
+            f2 = _pair_dist_at(ta, tb, w, x2, tbs, p, q)
+        if f1 == 0.0 or f2 == 0.0:
+            break
+    # compare with the ends (a minimum at s = 0 or 1)
+    s = x1 if f1 <= f2 else x2
+    d = min(f1, f2)
+    for e in (0.0, 1.0):
+        fe = _pair_dist_at(ta, tb, w, e, tbs, p, q)
+        if fe < d:
+            d = fe
+            s = e
+    if d < best:
+        _pair_dist_at(ta, tb, w, s, tbs, out_p, out_q)
+    return d, s
+
+
+@jit
+def _node_sweep_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, w, wd, Rab, T, eb,
+                    scr):
+    """Lower bound of the distance of node i of A and node j of B swept along
+    ``s w``, s in [0, 1]: B's box is grown to contain box + segment (centre moved
+    to the middle, extents + |axis . w| / 2); 14-DOP intervals widened."""
+    if kind == 2:
+        best = -np.inf
+        for q in range(7):
+            d = q
+            lo = KB[j, 2 * d] + min(0.0, wd[d])
+            hi = KB[j, 2 * d + 1] + max(0.0, wd[d])
+            g = max(KA[i, 2 * d] - hi, lo - KA[i, 2 * d + 1])
+            if d >= 3:
+                g *= 0.5773502691896258
+            best = max(best, g)
+        return best
+    _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, scr[0])
+    for r in range(3):
+        # B's axes in the common frame are columns of Rr RB[j]; w . axis
+        ax = 0.0
+        for c in range(3):
+            ax += (Rr[c, 0] * RB[j, 0, r] + Rr[c, 1] * RB[j, 1, r]
+                   + Rr[c, 2] * RB[j, 2, r]) * w[c]
+        eb[r] = EB[j, r] + 0.5 * abs(ax)
+    for r in range(3):
+        T[r] += 0.5 * (RA[i, 0, r] * w[0] + RA[i, 1, r] * w[1] + RA[i, 2, r] * w[2])
+    return box_separation(Rab, T, EA[i], eb, False, scr[1])
+
+
+@jit
+def sweep_distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                         childB, rngB, CB, RB, EB, KB, TB, orderB,
+                         Rr, tr, MA, mA, MB, mB, w, out_p, out_q):
+    """Minimum over s in [0, 1] of the distance between A and B translated by
+    ``s w`` (common frame), by branch and bound on swept node bounds; triangle
+    pairs by :func:`pair_sweep_min`.  Returns ``(d, s, fa, fb, bv_tests)``;
+    closest points (at that s) to ``out_p``, ``out_q``."""
+    st = np.empty((STACK, 2), dtype=np.int64)
+    stlb = np.empty(STACK)
+    Rab = np.empty((3, 3))
+    T = np.empty(3)
+    eb = np.empty(3)
+    scr = np.empty((2, 3, 3))
+    wd = np.empty(7)
+    for d in range(7):
+        wd[d] = KDOP_DIRS[d, 0] * w[0] + KDOP_DIRS[d, 1] * w[1] + KDOP_DIRS[d, 2] * w[2]
+    ta = np.empty((3, 3))
+    tb = np.empty((3, 3))
+    p = np.empty(3)
+    q = np.empty(3)
+    best = np.inf
+    best_s = 0.0
+    fa = -1
+    fb = -1
+    tests = 1
+    st[0, 0] = 0
+    st[0, 1] = 0
+    stlb[0] = _node_sweep_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, w, wd,
+                              Rab, T, eb, scr) * LB_SHRINK
+    top = 1
+    while top > 0:
+        top -= 1
+        if stlb[top] >= best:
+            continue
+        i = st[top, 0]
+        j = st[top, 1]
+        la = childA[i, 0] < 0
+        lb = childB[j, 0] < 0
+        if la and lb:
+            for ra in range(rngA[i, 0], rngA[i, 1]):
+                _move(TA, ra, MA, mA, ta)
+                for rb in range(rngB[j, 0], rngB[j, 1]):
+                    _move(TB, rb, MB, mB, tb)
+                    d, s = pair_sweep_min(ta, tb, w, best, p, q)
+                    if d < best:
+                        best = d
+                        best_s = s
+                        fa = orderA[ra]
+                        fb = orderB[rb]
+                        out_p[:] = p
+                        out_q[:] = q
+                        if d == 0.0:
+                            return best, best_s, fa, fb, tests
+            continue
+        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+            i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
+        else:
+            i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
+        b0 = _node_sweep_sep(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, w, wd,
+                             Rab, T, eb, scr) * LB_SHRINK
+        b1 = _node_sweep_sep(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, w, wd,
+                             Rab, T, eb, scr) * LB_SHRINK
+        tests += 2
+        if b0 > b1:
+            i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
+        if b1 < best:
+            st[top, 0] = i1
+            st[top, 1] = j1
+            stlb[top] = b1
+            top += 1
+        if b0 < best:
+            st[top, 0] = i0
+            st[top, 1] = j0
+            stlb[top] = b0
+            top += 1
+    return best, best_s, fa, fb, tests
