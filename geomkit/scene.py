@@ -35,12 +35,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._collision_types import Body, Contact
+from ._kernels import bvh as kb
+from ._kernels import motion as km
 from ._kernels import sap as ks
 from ._validate import as_float_array, as_int
-from .collision import _poses, collide, min_distance, validate_pose
+from .collision import _body, _frames, _poses, _same_kind, collide, min_distance, validate_pose
 from .errors import InvalidInputError
 
-__all__ = ["Scene", "SceneCollisions", "SceneDistances", "SweepAndPrune", "fit_exclusions"]
+__all__ = ["CoherentPair", "Scene", "SceneCollisions", "SceneDistances", "SweepAndPrune",
+           "fit_exclusions"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,6 +155,75 @@ class SweepAndPrune:
             self._cap = 2 * k
         out = out[:k]
         return out[np.lexsort((out[:, 1], out[:, 0]))]
+
+
+def _parents(child):
+    par = np.full(child.shape[0], -1, dtype=np.int64)
+    inner = child[:, 0] >= 0
+    idx = np.nonzero(inner)[0]
+    par[child[idx, 0]] = idx
+    par[child[idx, 1]] = idx
+    return par
+
+
+class CoherentPair:
+    """Collision queries of one body pair over a sequence of frames, restarting
+    each traversal from the previous frame's front (Paper 4).
+
+    The front is the set of node pairs where the last traversal stopped
+    (separated pairs and leaf pairs).  Each frame tests the front: an entry that
+    now overlaps is descended, one that still separates stays; two separated
+    sibling entries move up to their parent pair.  The answer equals
+    :func:`geomkit.collide` with ``all_pairs=True``.
+
+    Attributes
+    ----------
+    front_size : int, node pairs in the current front.
+    """
+
+    def __init__(self, a, b):
+        self.a, self.b = _body(a, "a"), _body(b, "b")
+        _same_kind(self.a, self.b)
+        self.parentA = _parents(self.a.child)
+        self.parentB = _parents(self.b.child)
+        self.front = np.zeros((1, 2), dtype=np.int64)
+        self._cap = 256
+
+    @property
+    def front_size(self) -> int:
+        return int(self.front.shape[0])
+
+    def reset(self):
+        """Forget the front (the next query starts at the root pair)."""
+        self.front = np.zeros((1, 2), dtype=np.int64)
+
+    def collide(self, pose_a, pose_b) -> Contact:
+        """Every intersecting triangle pair at these poses (as :func:`geomkit.collide`)."""
+        a, b = self.a, self.b
+        Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")
+        A, B, mov, _ = _frames(a, Pa, b, Pb)
+        capp = 64
+        while True:
+            cap = max(self._cap, 2 * self.front.shape[0])
+            out_f = np.empty((cap, 2), dtype=np.int64)
+            out_s = np.empty(cap, dtype=np.bool_)
+            pairs = np.empty((capp, 2), dtype=np.int64)
+            n, nf, tests = km.collide_front(a.kind, *A, *B, *mov, kb.KDOP_ORDER, self.front,
+                                            self.front.shape[0], out_f, out_s, pairs)
+            if nf <= cap and n <= capp:
+                break
+            self._cap = max(self._cap, 2 * nf)
+            capp = max(capp, n)
+        new = np.empty((nf, 2), dtype=np.int64)
+        K_A, K_B = A[5], B[5]
+        m = km.collapse_front(a.kind, a.child, self.parentA, a.E, K_A, b.child,
+                              self.parentB, b.E, K_B, out_f[:nf], out_s[:nf], nf, new)
+        self.front = new[:m]
+        pairs = pairs[:n]
+        if n > 1:
+            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+        tags = np.column_stack([a.face_tags[pairs[:, 0]], b.face_tags[pairs[:, 1]]])
+        return Contact(bool(n > 0), pairs, tags.reshape(-1, 2), int(tests))
 
 
 def fit_exclusions(shaft_faces, hole_faces, shaft_adjacent=(), hole_adjacent=()):

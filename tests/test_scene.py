@@ -176,3 +176,25 @@ def test_false_interference_fit_excluded_real_interference_found():
 def test_fit_exclusions_table():
     ex = fit_exclusions(1, 10, shaft_adjacent=(2,), hole_adjacent=(12,))
     assert ex.tolist() == [[1, 10], [1, 12], [2, 10]]
+
+
+@pytest.mark.parametrize("bv", ["aabb", "obb", "kdop14"])
+def test_coherent_pair_equals_collide_over_a_motion(bv):
+    from geomkit.scene import CoherentPair
+    from scipy.spatial.transform import Rotation
+    a = Body(trimesh.creation.icosphere(3, 1.0), bv=bv)
+    b = Body(trimesh.creation.capsule(height=2.0, radius=0.5, count=[24, 24]), bv=bv)
+    cp = CoherentPair(a, b)
+    rng = np.random.default_rng(0)
+    Pb = _T((1.6, 0, 0))
+    sizes = []
+    for k in range(60):
+        Pb = Pb.copy()
+        Pb[:3, 3] += [-0.01, 0.003, 0.002] if k < 40 else [0.02, 0, 0]
+        Pb[:3, :3] = Rotation.from_rotvec(rng.normal(0, 0.01, 3)).as_matrix() @ Pb[:3, :3]
+        got = cp.collide(np.eye(4), Pb)
+        want = collide(a, np.eye(4), b, Pb)
+        np.testing.assert_array_equal(got.pairs, want.pairs)
+        assert got.colliding == want.colliding
+        sizes.append(cp.front_size)
+    assert max(sizes) > 1
