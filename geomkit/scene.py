@@ -255,11 +255,20 @@ class Scene:
     """Bodies with poses, assembly groups and declared fits; broad phase by sweep
     and prune on world AABBs, narrow phase by the collision core.
 
+    Parameters
+    ----------
+    coherent : bool
+        Keep a :class:`CoherentPair` (cached traversal front) per candidate pair
+        and restart each frame's narrow phase from it; :meth:`collisions` then
+        searches every triangle pair (the front needs the full traversal).
+
     Methods: :meth:`add`, :meth:`update`, :meth:`pairs`, :meth:`collisions`,
     :meth:`min_distances`, :meth:`declare_fit`.
     """
 
-    def __init__(self):
+    def __init__(self, coherent=False):
+        self.coherent = bool(coherent)
+        self._fronts: dict = {}
         self.bodies: list[Body] = []
         self._poses: list[np.ndarray] = []
         self._group: list[int] = []
@@ -380,8 +389,14 @@ class Scene:
         for i, j in cand:
             i, j = int(i), int(j)
             ex = self._fits.get((i, j))
-            c = collide(self.bodies[i], P[i], self.bodies[j], P[j],
-                        all_pairs=all_pairs or ex is not None)
+            if self.coherent:
+                cp = self._fronts.get((i, j))
+                if cp is None:
+                    cp = self._fronts[(i, j)] = CoherentPair(self.bodies[i], self.bodies[j])
+                c = cp.collide(P[i], P[j])
+            else:
+                c = collide(self.bodies[i], P[i], self.bodies[j], P[j],
+                            all_pairs=all_pairs or ex is not None)
             if ex is not None and c.colliding:
                 keep = ~_rows_in(c.tags, ex)
                 excluded += int((~keep).sum())

@@ -229,3 +229,29 @@ def test_probe_path_invalid_input():
         probe_path(b, np.zeros((1, 3)), b)
     with pytest.raises(InvalidInputError, match="margin"):
         probe_path(b, np.zeros((2, 3)) + [[0, 0, 5], [1, 0, 5]], b, margin=-1)
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+_BALL = trimesh.creation.icosphere(1, 0.7)
+_BOX = trimesh.creation.box((1.0, 0.6, 0.8))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=9, max_size=9), st.integers(0, 1000))
+def test_first_contact_symmetry_and_rigid_invariance(v, seed):
+    a, b = Body(_BOX), Body(_BALL)
+    Pa, Pb = _T(v[0:3], _rot(seed)), _T(np.array(v[3:6]) + [4, 0, 0], _rot(seed + 1))
+    va, vb = np.zeros(3), np.array(v[6:9]) - [2, 0, 0]
+    f = first_contact(a, Pa, va, b, Pb, vb, 5.0)
+    g = first_contact(b, Pb, vb, a, Pa, va, 5.0)        # swapped bodies
+    assert f.hit == g.hit
+    if f.hit:
+        assert abs(f.time - g.time) <= 1e-9
+    # a common rigid motion of the world and a common velocity change nothing
+    M = _T((1.5, -2.0, 0.3), _rot(seed + 2))
+    u = np.array([0.3, -0.1, 0.2])
+    h = first_contact(a, M @ Pa, M[:3, :3] @ va + u, b, M @ Pb, M[:3, :3] @ vb + u, 5.0)
+    assert h.hit == f.hit
+    if f.hit:
+        assert abs(h.time - f.time) <= 1e-9

@@ -198,3 +198,21 @@ def test_coherent_pair_equals_collide_over_a_motion(bv):
         assert got.colliding == want.colliding
         sizes.append(cp.front_size)
     assert max(sizes) > 1
+
+
+def test_coherent_scene_matches_plain_scene():
+    ball = Body(trimesh.creation.icosphere(2, 0.6))
+    box = Body(trimesh.creation.box((1, 1, 1)))
+    plain, coh = Scene(), Scene(coherent=True)
+    for s in (plain, coh):
+        s.add(box, _T((0, 0, 0)), static=True)
+        s.add(ball, _T((1.2, 0, 0)))
+        s.add(box, _T((3, 0, 0)), static=True)
+    for k in range(30):
+        P = {1: _T((1.2 + 0.03 * k, 0.01 * k, 0))}
+        plain.update(P)
+        coh.update(P)
+        a, b = plain.collisions(all_pairs=True), coh.collisions()
+        assert a.pairs.tolist() == b.pairs.tolist()
+        for ca, cb in zip(a.contacts, b.contacts):
+            np.testing.assert_array_equal(ca.pairs, cb.pairs)
