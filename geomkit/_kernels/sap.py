@@ -134,6 +134,8 @@ def sweep_pairs(lo, hi, ep_id, axis, group, static, margin, out):
             active[nact] = i
             nact += 1
         return cnt
+    # active boxes with their other-axis bounds in contiguous rows (cache friendly)
+    box = np.empty((n, 4))
     for q in range(ids.shape[0]):
         e = ids[q]
         i = e >> 1
@@ -142,21 +144,27 @@ def sweep_pairs(lo, hi, ep_id, axis, group, static, margin, out):
             nact -= 1
             last = active[nact]
             active[r] = last
+            box[r] = box[nact]
             pos[last] = r
             continue
+        l1, h1, l2, h2 = lo[i, a1], hi[i, a1], lo[i, a2], hi[i, a2]
+        gi = group[i]
+        si = static[i]
         for r in range(nact):
+            if l1 > box[r, 1] or box[r, 0] > h1 or l2 > box[r, 3] or box[r, 2] > h2:
+                continue
             j = active[r]
-            if group[i] == group[j] or (static[i] and static[j]):
-                continue
-            if lo[i, a1] > hi[j, a1] or lo[j, a1] > hi[i, a1]:
-                continue
-            if lo[i, a2] > hi[j, a2] or lo[j, a2] > hi[i, a2]:
+            if gi == group[j] or (si and static[j]):
                 continue
             if cnt < cap:
                 out[cnt, 0] = min(i, j)
                 out[cnt, 1] = max(i, j)
             cnt += 1
         active[nact] = i
+        box[nact, 0] = l1
+        box[nact, 1] = h1
+        box[nact, 2] = l2
+        box[nact, 3] = h2
         pos[i] = nact
         nact += 1
     return cnt
