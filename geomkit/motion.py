@@ -28,11 +28,13 @@ miss contacts shorter than ``sim_step``).
 
 Examples
 --------
->>> import numpy as np, trimesh, geomkit
->>> a = geomkit.Body(trimesh.creation.box((1, 1, 1)))
->>> b = geomkit.Body(trimesh.creation.box((1, 1, 1)))
+>>> import numpy as np, trimesh
+>>> from geomkit.collision import Body
+>>> from geomkit.motion import first_contact
+>>> a = Body(trimesh.creation.box((1, 1, 1)))
+>>> b = Body(trimesh.creation.box((1, 1, 1)))
 >>> pb = np.eye(4); pb[0, 3] = 3.0
->>> fc = geomkit.first_contact(a, np.eye(4), (0, 0, 0), b, pb, (-0.5, 0, 0), 10.0)
+>>> fc = first_contact(a, np.eye(4), (0, 0, 0), b, pb, (-0.5, 0, 0), 10.0)
 >>> fc.hit, fc.time
 (True, 4.0)
 """

@@ -18,9 +18,11 @@ a real interference next to the fit — is still reported.
 
 Examples
 --------
->>> import numpy as np, trimesh, geomkit
->>> s = geomkit.Scene()
->>> box = geomkit.Body(trimesh.creation.box((1, 1, 1)))
+>>> import numpy as np, trimesh
+>>> from geomkit.collision import Body
+>>> from geomkit.scene import Scene
+>>> s = Scene()
+>>> box = Body(trimesh.creation.box((1, 1, 1)))
 >>> i = s.add(box); j = s.add(box, pose=np.eye(4), static=True)
 >>> s.pairs().tolist()
 [[0, 1]]
