@@ -9,6 +9,8 @@ Public API (users' scripts depend on these names):
   :class:`VoxelGrid`, :func:`nearest_triangles` (Paper 1).
 * :func:`surface_distance` -> :class:`SurfaceDistance` — certified minimum distance
   between surfaces or scenes (Bézier branch and bound + Newton).
+* :func:`first_contact`, :func:`probe_path`, :class:`Scene` — motion, probe paths, sweep
+  and prune (Papers 3, 4, 5).
 * :func:`plane_section` -> :class:`Section` — plane sections (Paper 2), exact points,
   fit and CSV / DXF / JSON export.
 * :func:`load`, :func:`save`, :func:`load_case` — ``geomkit-case/1`` and geomdl JSON.
@@ -29,10 +31,13 @@ from .deviation import DeviationReport, align_rigid, deviation
 from .distance import surface_distance
 from .evaluation import derivatives, evaluate, normals
 from .iges import IgesResult, read_iges
+from .motion import FirstContact, ProbePath, first_contact, probe_path
 from .io import Case, load, load_case, save
 from .points_io import PointSet, read_points
 from .projection import Projector, project_points
 from .results import MeshNearest, Projection, SurfaceDistance
+from .scene import (CoherentPair, Scene, SceneCollisions, SceneDistances, SweepAndPrune,
+                    fit_exclusions)
 from .section import Section, plane_section
 from .step import read_step
 from .tessellate import tessellate
@@ -55,5 +60,7 @@ __all__ = [
     "plane_section", "Section",
     "deviation", "DeviationReport", "align_rigid", "read_points", "PointSet", "read_iges",
     "IgesResult", "read_step", "report",
+    "first_contact", "probe_path", "FirstContact", "ProbePath", "Scene", "SceneCollisions",
+    "SceneDistances", "SweepAndPrune", "CoherentPair", "fit_exclusions",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
 ]
