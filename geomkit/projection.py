@@ -32,7 +32,7 @@ import numpy as np
 
 from . import results as R
 from ._kernels import project as _pk
-from ._validate import as_float_array
+from ._kernels import trim_feet as _tf
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
@@ -117,7 +117,7 @@ class _TrimData:
         uv = np.empty((M, 2))
         self.samp_seg = np.empty(M, dtype=np.int64)
         self.samp_t = np.empty(M)
-        _pk.trim_samples(self.seg, deg, TRIM_SAMPLES, uv, self.samp_seg, self.samp_t)
+        _tf.trim_samples(self.seg, deg, TRIM_SAMPLES, uv, self.samp_seg, self.samp_t)
         (u0, u1), (v0, v1) = s.domain
         uv[:, 0] = np.clip(uv[:, 0], u0, u1)
         uv[:, 1] = np.clip(uv[:, 1], v0, v1)
@@ -202,7 +202,6 @@ class Projector:
                           flags, work)
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
-        from_trim = np.zeros((n, K), dtype=bool)
         # trimmed faces: feet outside the face are replaced by the trim-boundary foot
         extra_d = np.full(n, np.inf)
         extra_uv = np.zeros((n, 2))
@@ -223,7 +222,7 @@ class Projector:
             td_ = np.empty(rows.size)
             tseg = np.empty(rows.size, dtype=np.int64)
             tt = np.empty(rows.size)
-            _pk.trim_feet(np.ascontiguousarray(P[rows]), s.homogeneous, s.degree_u,
+            _tf.trim_feet(np.ascontiguousarray(P[rows]), s.homogeneous, s.degree_u,
                           s.degree_v, s.knots_u, s.knots_v, dom[si], td.seg, td.deg,
                           td.samp_xyz, td.samp_seg, td.samp_t, step_tol,
                           tuv, td_, tseg, tt)

@@ -35,7 +35,8 @@ import math
 import numpy as np
 
 from ._numba import jit, jit_inline
-from .project import _surface, _trim_point, foot_newton, trim_curve_d2
+from .project import _surface, foot_newton
+from .trim_feet import _trim_point
 from .surface import _binomial_table, derivs_scratch, surface_derivs
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 

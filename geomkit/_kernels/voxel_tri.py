@@ -9,7 +9,7 @@ import numpy as np
 
 from ._numba import jit, pjit, prange
 from .triangles import triangle_triangle_distance
-from .voxel import _decode, _heap_pop, _heap_push, _push_children, _seed_heap, _tri_aabb
+from .voxel import _decode, _heap_pop, _push_children, _seed_heap, _tri_aabb
 
 CHUNK = 64
 
