@@ -275,6 +275,17 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
 
 
 @jit
+def _slope(Pw, p, q, U, V, u, v, x, along_u, bin_, scr, SKL):
+    """d/du (along_u = 1) or d/dv of |S - x|^2 / 2 at (u, v)."""
+    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    k = 1 if along_u else 0
+    g = 0.0
+    for c in range(3):
+        g += (SKL[0, 0, c] - x[c]) * SKL[k, 1 - k, c]
+    return g
+
+
+@jit
 def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step_tol,
             bin_, scr, SKL):
     """:func:`foot_newton` over the C0 pieces of the surface.
@@ -313,45 +324,33 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
                                       step_tol, bin_, scr, SKL, lu, lv)
         it_all += it
         moved = False
-        # on an interior border: does the neighbouring piece descend further?
-        if iu < npu - 1 and u >= ub:
-            surface_derivs(Pw, p, q, U, V, ub, min(vb, max(va, v)), 2, bin_, scr, SKL)
-            g = 0.0
-            for c in range(3):
-                g += (SKL[0, 0, c] - x[c]) * SKL[1, 0, c]
-            if g < 0.0:
-                iu += 1
-                u = ub
-                moved = True
-        elif iu > 0 and u <= ua:
-            surface_derivs(Pw, p, q, U, V, ua - 1e-14 * (dom[1] - dom[0]),
-                           min(vb, max(va, v)), 2, bin_, scr, SKL)
-            g = 0.0
-            for c in range(3):
-                g += (SKL[0, 0, c] - x[c]) * SKL[1, 0, c]
-            if g > 0.0:
-                iu -= 1
-                u = ua
-                moved = True
-        if not moved and iv < npv - 1 and v >= vb:
-            surface_derivs(Pw, p, q, U, V, min(ub, max(ua, u)), vb, 2, bin_, scr, SKL)
-            g = 0.0
-            for c in range(3):
-                g += (SKL[0, 0, c] - x[c]) * SKL[0, 1, c]
-            if g < 0.0:
-                iv += 1
-                v = vb
-                moved = True
-        elif not moved and iv > 0 and v <= va:
-            surface_derivs(Pw, p, q, U, V, min(ub, max(ua, u)),
-                           va - 1e-14 * (dom[3] - dom[2]), 2, bin_, scr, SKL)
-            g = 0.0
-            for c in range(3):
-                g += (SKL[0, 0, c] - x[c]) * SKL[0, 1, c]
-            if g > 0.0:
-                iv -= 1
-                v = va
-                moved = True
+        # on an interior border: does the neighbouring piece descend further?  (the
+        # slope there is one-sided: at the knot from the right, just before it from the
+        # left)
+        vc = min(vb, max(va, v))
+        uc = min(ub, max(ua, u))
+        eu = 1e-14 * (dom[1] - dom[0])
+        ev = 1e-14 * (dom[3] - dom[2])
+        if iu < npu - 1 and u >= ub and _slope(Pw, p, q, U, V, ub, vc, x, 1, bin_, scr,
+                                              SKL) < 0.0:
+            iu += 1
+            u = ub
+            moved = True
+        elif iu > 0 and u <= ua and _slope(Pw, p, q, U, V, ua - eu, vc, x, 1, bin_, scr,
+                                           SKL) > 0.0:
+            iu -= 1
+            u = ua
+            moved = True
+        elif iv < npv - 1 and v >= vb and _slope(Pw, p, q, U, V, uc, vb, x, 0, bin_, scr,
+                                                SKL) < 0.0:
+            iv += 1
+            v = vb
+            moved = True
+        elif iv > 0 and v <= va and _slope(Pw, p, q, U, V, uc, va - ev, x, 0, bin_, scr,
+                                           SKL) > 0.0:
+            iv -= 1
+            v = va
+            moved = True
         if not moved:
             break
     # leave the derivatives of the returned point in SKL
