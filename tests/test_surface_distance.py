@@ -13,10 +13,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import minimize
-from scipy.spatial import cKDTree
 
 from geomkit import samples
+from geomkit.bench.distance import dense_oracle
+from geomkit.bench.distance import _rand_surface
+from geomkit.bench.distance import rand_pair as _rand_pair
 from geomkit.distance import surface_distance
 from geomkit.errors import InvalidInputError
 from geomkit.types import Surface
@@ -32,42 +33,6 @@ def _moved(s, t, R=None):
     P = s.control_points if R is None else s.control_points @ R.T
     return Surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v, P + np.asarray(t, float),
                    s.weights, trim=list(s.trim) or None)
-
-
-def _rand_surface(rng, shift=(0, 0, 0), R=None, n=5, p=3):
-    g = np.linspace(0, 10, n)
-    X, Y = np.meshgrid(g, g, indexing="ij")
-    P = np.stack([X, Y, rng.uniform(-2, 2, (n, n))], -1) + rng.uniform(-0.5, 0.5, (n, n, 3))
-    if R is not None:
-        P = P @ R.T
-    P = P + np.asarray(shift, float)
-    kn = np.r_[[0.0] * (p + 1), np.linspace(0, 1, n - p + 1)[1:-1], [1.0] * (p + 1)]
-    return Surface(p, p, kn, kn, P, rng.uniform(0.5, 2.0, (n, n)))
-
-
-def _rand_pair(seed):
-    rng = np.random.default_rng(seed)
-    a = _rand_surface(rng)
-    R = np.linalg.qr(rng.normal(size=(3, 3)))[0] if seed % 2 else None
-    b = _rand_surface(rng, shift=np.r_[rng.uniform(-3, 3, 2), rng.uniform(1, 8)], R=R)
-    return a, b
-
-
-def dense_oracle(a, b, m=80, starts=10):
-    """Brute force: m x m samples on each surface, the nearest sample pairs, then
-    L-BFGS-B on the 4 parameters from the `starts` best pairs."""
-    g = np.linspace(0, 1, m)
-    UV = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
-    A, B = a.evaluate(UV), b.evaluate(UV)
-    d, j = cKDTree(B).query(A)
-    best = np.inf
-    for i in np.argsort(d)[:starts]:
-        def f(x):
-            return float(np.sum((a.evaluate(x[None, :2])[0] - b.evaluate(x[None, 2:])[0]) ** 2))
-        res = minimize(f, np.r_[UV[i], UV[j[i]]], method="L-BFGS-B", bounds=[(0, 1)] * 4,
-                       options=dict(ftol=1e-300, gtol=1e-14, maxiter=500))
-        best = min(best, math.sqrt(res.fun))
-    return best
 
 
 # ---------------------------------------------------------------- shared cases

@@ -37,6 +37,7 @@ import numpy as np
 from ._numba import jit, jit_inline
 from .project import _surface, foot_newton
 from .trim_feet import _trim_point
+from .voxel import _heap_pop, _heap_push
 from .surface import _binomial_table, derivs_scratch, surface_derivs
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
@@ -84,60 +85,6 @@ def _grow1(a, need):
     b = np.empty(m, dtype=a.dtype)
     b[:n] = a
     return b
-
-
-# --------------------------------------------------------------------------- heap
-@jit_inline
-def _heap_push(hlb, hab, n, lb, a, b):
-    i = n
-    hlb[i] = lb
-    hab[i, 0] = a
-    hab[i, 1] = b
-    while i > 0:
-        par = (i - 1) >> 1
-        if hlb[par] <= hlb[i]:
-            break
-        t = hlb[par]
-        hlb[par] = hlb[i]
-        hlb[i] = t
-        ta = hab[par, 0]
-        tb = hab[par, 1]
-        hab[par, 0] = hab[i, 0]
-        hab[par, 1] = hab[i, 1]
-        hab[i, 0] = ta
-        hab[i, 1] = tb
-        i = par
-    return n + 1
-
-
-@jit_inline
-def _heap_pop(hlb, hab, n):
-    """Remove the root (caller has read it); returns the new size."""
-    n -= 1
-    hlb[0] = hlb[n]
-    hab[0, 0] = hab[n, 0]
-    hab[0, 1] = hab[n, 1]
-    i = 0
-    while True:
-        l = 2 * i + 1
-        if l >= n:
-            break
-        c = l
-        if l + 1 < n and hlb[l + 1] < hlb[l]:
-            c = l + 1
-        if hlb[i] <= hlb[c]:
-            break
-        t = hlb[c]
-        hlb[c] = hlb[i]
-        hlb[i] = t
-        ta = hab[c, 0]
-        tb = hab[c, 1]
-        hab[c, 0] = hab[i, 0]
-        hab[c, 1] = hab[i, 1]
-        hab[i, 0] = ta
-        hab[i, 1] = tb
-        i = c
-    return n
 
 
 # --------------------------------------------------------------------------- patches
@@ -669,7 +616,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
 
     cap = max(1024, 4 * nodes_a.shape[0] * nodes_b.shape[0])
     hlb = np.empty(cap)
-    hab = np.empty((cap, 2), dtype=np.int64)
+    hab = np.empty(cap, dtype=np.int64)  # a pair (a, b) packed as a << 32 | b
     nh = 0
     upper = np.inf
     best_a = -1
@@ -736,10 +683,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 pruned += 1
                 pruned_min = min(pruned_min, lb)
                 continue
-            if nh + 1 > hlb.shape[0]:
-                hlb = _grow1(hlb, nh + 1)
-                hab = _grow2(hab, nh + 1)
-            nh = _heap_push(hlb, hab, nh, lb, a, b)
+            hlb, hab, nh = _heap_push(hlb, hab, nh, lb, (a << 32) | b)
             pushed += 1
     peak = nh
     stop = STOP_CERTIFIED
@@ -749,8 +693,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     kids = np.empty(2, dtype=np.int64)
     while nh > 0:
         lb = hlb[0]
-        a = hab[0, 0]
-        b = hab[0, 1]
+        a = hab[0] >> 32
+        b = hab[0] & 0xFFFFFFFF
         if lb >= upper - tol:
             break
         if popped >= max_pairs:
@@ -913,10 +857,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 pruned += 1
                 pruned_min = min(pruned_min, lb2)
                 continue
-            if nh + 1 > hlb.shape[0]:
-                hlb = _grow1(hlb, nh + 1)
-                hab = _grow2(hab, nh + 1)
-            nh = _heap_push(hlb, hab, nh, lb2, ca, cb)
+            hlb, hab, nh = _heap_push(hlb, hab, nh, lb2, (ca << 32) | cb)
             pushed += 1
         peak = max(peak, nh)
     lower = upper

@@ -55,6 +55,8 @@ def rand_pair(seed):
 
 
 def dense_oracle(a, b, m=80, starts=10):
+    """Brute force (the tests' oracle): m x m samples on each surface, the nearest
+    sample pairs, then L-BFGS-B on the 4 parameters from the `starts` best pairs."""
     from scipy.optimize import minimize
     from scipy.spatial import cKDTree
 
