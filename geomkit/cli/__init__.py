@@ -1,0 +1,173 @@
+"""The ``geomkit`` command line.  Calls only the public API.
+
+Layout: this module builds the parser and runs a command; :mod:`._common` loads
+inputs and parses argument types; :mod:`.jobs` and :mod:`.clearance` hold the
+commands."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..errors import GeomkitError
+from ._common import _positive_float, _positive_int, _positive_or_zero
+from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
+                   _cmd_samples, _cmd_section)
+
+EXAMPLES = """examples:
+  geomkit demo                              deviation + section on built-in data,
+                                            reports in ./geomkit-demo/
+  geomkit deviation part.igs cmm.csv --probe-radius 1.5 --tolerance -0.05 0.05 --align
+                                            CMM deviation report in ./cmm-deviation/
+  geomkit distance part.json points.xyz -o dist.csv
+                                            exact distances of points to the surfaces
+  geomkit section part.step --plane 1 0 0 -20 --step 5 --count 10 -o cuts
+                                            10 parallel sections as CSV/DXF/JSON/PNG
+  geomkit info part.json                    list the surfaces of a file
+  geomkit mesh part.json --tol 0.01 -o part.stl
+                                            triangulate within 0.01 (STL/PLY/OBJ)
+  geomkit samples                           list the bundled sample cases
+
+Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges: entities 128 and 144),
+STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name.  Points: CSV/XYZ
+(x y z [i j k]) or STL/PLY scans.  Errors: one line on stderr, exit code 2.
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="geomkit",
+                                 description="Exact NURBS surface geometry with stated "
+                                             "error bounds.",
+                                 epilog=EXAMPLES,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section)",
+                       description="Deviation of a synthetic CMM scan of the bundled "
+                                   "freeform surface (with a known bump), a best-fit "
+                                   "alignment check and a family of sections; writes its "
+                                   "reports into ./geomkit-demo/ (replacing the demo's own "
+                                   "report files there) and prints a summary.")
+    p.add_argument("--grid", type=_positive_int, default=40,
+                   help="scan points per side (default 40)")
+    p.add_argument("--tol", type=_positive_float, default=1e-4,
+                   help="section chord tolerance (default 1e-4)")
+    p.add_argument("-o", "--output", default="geomkit-demo",
+                   help="report folder (default ./geomkit-demo)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_demo)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--skip-invalid", action="store_true",
+                        help="IGES/STEP: skip faces that fail validation (counted) "
+                             "instead of stopping")
+    common.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    common.add_argument("--json", action="store_true", help="machine-readable output")
+    p = sub.add_parser("deviation", parents=[common],
+                       help="CMM deviation of measured points from nominal surfaces",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Signed deviation of measured points along the nominal "
+                                   "normal, with optional best-fit alignment, probe-radius "
+                                   "compensation and a tolerance band.  Writes "
+                                   "deviation.csv, deviation_map.png, deviation_hist.png "
+                                   "and summary.json (last) into the output folder.",
+                       epilog="example:\n  geomkit deviation part.igs cmm.csv "
+                              "--probe-radius 1.5 --tolerance -0.05 0.05 --align -o rep")
+    p.add_argument("nominal", help="nominal surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("points", help="measured points: CSV/XYZ (x y z [i j k]) or STL/PLY")
+    p.add_argument("-o", "--output", default=None,
+                   help="report folder (default ./<points name>-deviation)")
+    p.add_argument("--probe-radius", type=_positive_or_zero, default=0.0,
+                   help="probe ball radius: the points are ball centres")
+    p.add_argument("--align", action="store_true",
+                   help="best-fit rigid alignment first (transform reported)")
+    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
+                   help="points whose |deviation| exceeds this are not matched")
+    p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
+                   help="tolerance band: T (meaning -T..T) or LOWER UPPER")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
+    p.set_defaults(func=_cmd_deviation)
+    p = sub.add_parser("distance", parents=[common],
+                       help="exact distances of points to surfaces",
+                       description="Nearest points of measured points on the surfaces "
+                                   "(unsigned and signed distance, foot, uv, status); "
+                                   "prints statistics and writes a CSV with -o.")
+    p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("points", help="points: CSV/XYZ or STL/PLY")
+    p.add_argument("-o", "--output", default=None, help="output CSV")
+    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
+                   help="points farther than this are not matched")
+    p.set_defaults(func=_cmd_distance)
+    p = sub.add_parser("section", parents=[common], help="plane sections as CSV/DXF/JSON/PNG",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Intersect the surfaces with the plane A x + B y + C z "
+                                   "+ D = 0, or with --count parallel planes --step apart "
+                                   "along its normal.",
+                       epilog="example:\n  geomkit section part.json --plane 1 0 0 -20 "
+                              "--step 5 --count 10 -o cuts")
+    p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("--plane", type=float, nargs=4, metavar=("A", "B", "C", "D"), required=True)
+    p.add_argument("--step", type=_positive_float, default=None,
+                   help="distance between parallel planes (model units)")
+    p.add_argument("--count", type=int, default=1, help="number of parallel planes")
+    p.add_argument("--tol", type=_positive_float, default=1e-4,
+                   help="chord tolerance (default 1e-4)")
+    p.add_argument("--fit-tol", type=_positive_float, default=None,
+                   help="also fit B-splines within this tolerance (DXF SPLINEs, JSON)")
+    p.add_argument("--formats", default="csv,dxf,json,png",
+                   help="comma-separated subset of csv,dxf,json,png (default all)")
+    p.add_argument("-o", "--output", default="section", help="output folder")
+    p.set_defaults(func=_cmd_section)
+    p = sub.add_parser("info", help="describe the surfaces of a file")
+    p.add_argument("file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_info)
+    p = sub.add_parser("mesh", help="triangulate surfaces within a chord tolerance",
+                       description="Triangulate every surface of INPUT so that each "
+                                   "triangle is within --tol of its surface (measured), "
+                                   "and write STL, PLY or OBJ by the output's extension.")
+    p.add_argument("input", help="geomkit-case/1 or geomdl JSON file, or a sample name")
+    p.add_argument("--tol", type=_positive_float, required=True,
+                   help="chord tolerance, model units")
+    p.add_argument("-o", "--output", required=True, help="output .stl, .ply or .obj")
+    p.add_argument("--max-angle", type=_positive_float, default=None,
+                   help="largest normal angle across a cell, degrees")
+    p.add_argument("--max-edge", type=_positive_float, default=None,
+                   help="largest cell edge, model units")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_mesh)
+    p = sub.add_parser("samples", help="list the bundled samples")
+    p.set_defaults(func=_cmd_samples)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (GeomkitError, FileExistsError) as exc:
+        print(f"geomkit: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0
+    except OSError as exc:
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        print(f"geomkit: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("geomkit: error: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: still one line, the traceback on request
+        import os
+
+        if os.environ.get("GEOMKIT_DEBUG"):
+            raise
+        print(f"geomkit: error: internal error {type(exc).__name__}: {_one_line(exc)} "
+              "(set GEOMKIT_DEBUG=1 for the traceback)", file=sys.stderr)
+        return 3
+
+
+def _one_line(exc) -> str:
+    return " ".join(str(exc).split())
+
+

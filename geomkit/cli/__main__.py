@@ -1,0 +1,7 @@
+"""``python -m geomkit.cli``."""
+
+import sys
+
+from . import main
+
+sys.exit(main())
