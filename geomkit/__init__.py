@@ -9,6 +9,8 @@ Public API (users' scripts depend on these names):
   :class:`VoxelGrid`, :func:`nearest_triangles` (Paper 1).
 * :func:`surface_distance` -> :class:`SurfaceDistance` — certified minimum distance
   between surfaces or scenes (Bézier branch and bound + Newton).
+* :func:`probe_clearance`, :class:`Stylus` — probe safety: certified stylus clearance
+  along a path past exact NURBS parts
 * :func:`first_contact`, :func:`probe_path`, :class:`Scene` — motion, probe paths, sweep
   and prune (Papers 3, 4, 5).
 * :func:`plane_section` -> :class:`Section` — plane sections (Paper 2), exact points,
@@ -31,6 +33,7 @@ from .deviation import DeviationReport, align_rigid, deviation
 from .distance import surface_distance
 from .evaluation import derivatives, evaluate, normals
 from .iges import IgesResult, read_iges
+from .clearance import Clearance, Stylus, probe_clearance
 from .motion import FirstContact, ProbePath, first_contact, probe_path
 from .io import Case, load, load_case, save
 from .points_io import PointSet, read_points
@@ -61,6 +64,7 @@ __all__ = [
     "deviation", "DeviationReport", "align_rigid", "read_points", "PointSet", "read_iges",
     "IgesResult", "read_step", "report",
     "first_contact", "probe_path", "FirstContact", "ProbePath", "Scene", "SceneCollisions",
+    "probe_clearance", "Stylus", "Clearance",
     "SceneDistances", "SweepAndPrune", "CoherentPair", "fit_exclusions",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
 ]

@@ -1,5 +1,5 @@
 """Report writers for the jobs: deviation CSV, summary JSON, colour-map and histogram
-PNGs, section exports.
+PNGs, section exports, probe-clearance CSV and chart.
 
 Every file is written through a temporary file in the target folder and renamed into
 place (:func:`geomkit.io._atomic_write`), so an interrupted run never leaves a
@@ -25,7 +25,8 @@ from .io import _atomic_write
 from .results import STATUS_NAMES
 
 __all__ = ["prepare_outputs", "write_deviation_csv", "write_json", "plot_deviation_map",
-           "plot_histogram", "plot_section", "write_section"]
+           "plot_histogram", "plot_section", "write_section", "write_clearance_csv",
+           "plot_clearance"]
 
 
 def prepare_outputs(folder, names, overwrite: bool = False, inputs=()) -> dict:
@@ -258,3 +259,53 @@ def write_section(section, targets: dict, fit_tol=None, overwrite: bool = False)
     if "png" in targets:
         out["png"] = str(plot_section([section], targets["png"], overwrite=overwrite))
     return out
+
+
+def write_clearance_csv(res, path_points, path, overwrite: bool = False) -> Path:
+    """One row per path segment of a :class:`geomkit.Clearance`: ``segment``, start and
+    end tip centres, ``motion``, ``clearance``, ``lower_bound``, ``component``,
+    ``parameter``, the closest part point, ``surface``, ``first_contact`` (empty when
+    clear), ``passed``, ``certified`` and each stylus piece's clearance."""
+    p = _check_target(path, overwrite)
+    names = list(res.component_names)
+    head = ["segment", "x0", "y0", "z0", "x1", "y1", "z1", "motion", "clearance",
+            "lower_bound", "component", "parameter", "part_x", "part_y", "part_z",
+            "surface", "first_contact", "passed", "certified"] + [f"clearance_{n}"
+                                                                  for n in names]
+    lines = [",".join(head)]
+    for i in range(len(res)):
+        vals = [str(i)] + [_fmt(c) for c in path_points[i]] + [_fmt(c) for c in
+                                                               path_points[i + 1]]
+        vals += [res.motion[i], _fmt(res.clearance[i]), _fmt(res.lower_bound[i]),
+                 names[int(res.component[i])], _fmt(res.parameter[i])]
+        vals += [_fmt(c) for c in res.point_part[i]]
+        vals += [str(int(res.surface[i])), _fmt(res.first_contact[i]),
+                 str(int(bool(res.passed[i]))), str(int(bool(res.certified[i])))]
+        vals += [_fmt(c) for c in res.per_component[i]]
+        lines.append(",".join(vals))
+    data = ("\n".join(lines) + "\n").encode("utf-8")
+    return _atomic_write(p, lambda fh: fh.write(data))
+
+
+def plot_clearance(res, path, overwrite: bool = False) -> Path:
+    """Bar chart of the certified clearance per segment, the margin as a line, failing
+    segments in red and first-contact segments hatched."""
+    fig = _figure(figsize=(8, 4), layout="constrained")
+    ax = fig.add_subplot(1, 1, 1)
+    k = np.arange(len(res))
+    colours = ["tab:green" if ok else "tab:red" for ok in res.passed]
+    bars = ax.bar(k, res.lower_bound, color=colours, edgecolor="black", linewidth=0.5)
+    for b, fc in zip(bars, res.first_contact):
+        if np.isfinite(fc):
+            b.set_hatch("//")
+    if res.margin > 0:
+        ax.axhline(res.margin, color="black", linestyle="--", linewidth=1,
+                   label=f"margin {res.margin:g}")
+        ax.legend(loc="upper right")
+    ax.set_xlabel("path segment")
+    ax.set_ylabel("certified clearance")
+    ax.set_title(f"probe clearance: {int(np.sum(~res.passed))} of {len(res)} segments "
+                 f"fail; min {float(np.min(res.lower_bound)):.4g}")
+    if len(res) <= 30:
+        ax.set_xticks(k)
+    return _save_fig(fig, path, overwrite)

@@ -5,9 +5,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,14 +19,10 @@ from pyiges import examples  # noqa: E402
 from geomkit.iges import read_iges  # noqa: E402
 from geomkit.oracles.occ import HAVE_OCP  # noqa: E402
 
+from clihelp import cli  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 IMPELLER = Path(examples.impeller)
-
-
-def cli(*argv, cwd=None):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-m", "geomkit", *map(str, argv)], cwd=cwd,
-                          env=env, capture_output=True, text=True, timeout=300)
 
 
 @pytest.fixture(scope="module")

@@ -7,11 +7,8 @@ transform (alignment), and the files themselves (inputs never change).
 from __future__ import annotations
 
 import csv
-import hashlib
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,26 +19,9 @@ from geomkit import samples
 from geomkit.deviation import _rodrigues, align_rigid, deviation
 from geomkit.points_io import read_points
 
+from clihelp import assert_one_line_error, cli, digest  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def cli(*argv, cwd=None, timeout=300):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-m", "geomkit", *map(str, argv)], cwd=cwd,
-                          env=env, capture_output=True, text=True, timeout=timeout)
-
-
-def assert_one_line_error(r, *phrases):
-    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
-    assert r.stderr.startswith("geomkit: error: "), r.stderr
-    assert r.stderr.count("\n") == 1, f"not one line: {r.stderr!r}"
-    assert "Traceback" not in r.stderr
-    for ph in phrases:
-        assert ph in r.stderr, (ph, r.stderr)
-
-
-def digest(*paths):
-    return {str(p): hashlib.sha256(Path(p).read_bytes()).hexdigest() for p in paths}
 
 
 def torus_points(n=400, seed=1, lo=-2.0, hi=2.0):

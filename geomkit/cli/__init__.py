@@ -11,6 +11,7 @@ import sys
 
 from ..errors import GeomkitError
 from ._common import _positive_float, _positive_int, _positive_or_zero
+from . import clearance as _clearance
 from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
                    _cmd_samples, _cmd_section)
 
@@ -23,6 +24,11 @@ EXAMPLES = """examples:
                                             exact distances of points to the surfaces
   geomkit section part.step --plane 1 0 0 -20 --step 5 --count 10 -o cuts
                                             10 parallel sections as CSV/DXF/JSON/PNG
+  geomkit clearance part.igs path.csv --stylus 1.5,0.75,20,3,30 --margin 2
+                                            probe safety: certified stylus clearance
+                                            per path segment, exit 1 if any fails
+  geomkit bench                             speed against error of every engine beside
+                                            Open CASCADE / Coal, table + plot
   geomkit info part.json                    list the surfaces of a file
   geomkit mesh part.json --tol 0.01 -o part.stl
                                             triangulate within 0.01 (STL/PLY/OBJ)
@@ -31,6 +37,7 @@ EXAMPLES = """examples:
 Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges: entities 128 and 144),
 STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name.  Points: CSV/XYZ
 (x y z [i j k]) or STL/PLY scans.  Errors: one line on stderr, exit code 2.
+`geomkit COMMAND --help` shows each command's options and an example.
 """
 
 
@@ -116,6 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="comma-separated subset of csv,dxf,json,png (default all)")
     p.add_argument("-o", "--output", default="section", help="output folder")
     p.set_defaults(func=_cmd_section)
+    _clearance.add_parser(sub, common, _positive_float, _positive_or_zero)
     p = sub.add_parser("info", help="describe the surfaces of a file")
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")

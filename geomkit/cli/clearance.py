@@ -1,0 +1,118 @@
+"""The ``clearance`` command: probe safety of a stylus path past a part."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from ._common import _load_input
+
+STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
+               "optionally extension_radius, extension_length, body_radius, body_length) "
+               "or numbers TIP_R,SHAFT_R,SHAFT_L[,EXT_R,EXT_L[,BODY_R,BODY_L]]")
+
+EPILOG = """example:
+  geomkit clearance part.igs path.csv --stylus 1.5,0.75,20,3,30 --axis 0 0 1 --margin 2
+
+PATH: CSV/XYZ tip-centre points (x y z per row; the stylus axis points along --axis),
+or JSON {"points": [[x, y, z], ...]} or {"poses": [4x4 stylus->world, ...]} (stylus
+frame: tip centre at the origin, axis +z toward the head).  Between consecutive poses the
+stylus translates, or rotates about a fixed line.
+
+Exit code 0: every segment passes; 1: some segment fails (margin or contact); 2: bad
+input.  Writes clearance.csv, clearance.png and clearance_summary.json (last)."""
+
+
+def parse_stylus(text: str):
+    from ..clearance import Stylus
+
+    p = Path(text)
+    if text.lower().endswith(".json") or p.is_file():
+        return Stylus.from_json(p)
+    try:
+        vals = [float(x) for x in text.replace(" ", "").split(",") if x != ""]
+    except ValueError:
+        raise InvalidInputError(f"expected a JSON file or comma-separated numbers, got "
+                                f"{text!r}", "--stylus") from None
+    if len(vals) not in (3, 5, 7):
+        raise InvalidInputError(f"expected 3, 5 or 7 numbers (TIP_R,SHAFT_R,SHAFT_L"
+                                f"[,EXT_R,EXT_L[,BODY_R,BODY_L]]), got {len(vals)}",
+                                "--stylus")
+    keys = ("tip_radius", "shaft_radius", "shaft_length", "extension_radius",
+            "extension_length", "body_radius", "body_length")
+    return Stylus(**dict(zip(keys, vals)))
+
+
+def _cmd_clearance(args) -> int:
+    from ..clearance import probe_clearance, read_path
+    from ..report import _clean, plot_clearance, prepare_outputs, write_clearance_csv, \
+        write_json
+
+    stylus = parse_stylus(args.stylus)
+    case = _load_input(args.part, args.skip_invalid)
+    path = read_path(args.path)
+    out = args.output or f"{Path(args.path).stem}-clearance"
+    names = ["clearance.csv", "clearance_summary.json"]
+    if not args.no_plots:
+        names.append("clearance.png")
+    inputs = [args.part, args.path] + ([args.stylus] if Path(args.stylus).exists() else [])
+    targets = prepare_outputs(out, names, args.overwrite, inputs=inputs)
+    res = probe_clearance(case.surfaces, stylus, path, axis=args.axis, margin=args.margin,
+                          tol=args.tol)
+    tips = path if path.ndim == 2 else path[:, :3, 3]
+    files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite)]
+    if not args.no_plots:
+        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite))
+    summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
+               "stylus": stylus.to_dict(), **res.summary(),
+               "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
+    write_json(summary, targets["clearance_summary.json"], args.overwrite)
+    if args.json:
+        print(json.dumps(_clean(summary), indent=1))
+    else:
+        s = summary
+        print(f"{s['segments']} segment(s): {'PASS' if s['passed'] else 'FAIL'} "
+              f"(margin {s['margin']:g}); min clearance {s['min_clearance']:.6g} "
+              f"(certified >= {s['min_clearance_lower_bound']:.6g}) on segment "
+              f"{s['worst_segment']} at parameter {s['worst_parameter']:.4f} "
+              f"({s['worst_component']})")
+        for i in np.flatnonzero(~res.passed):
+            fc = res.first_contact[i]
+            what = (f"first contact at parameter {fc:.9f}" if np.isfinite(fc)
+                    else f"clearance {res.lower_bound[i]:.6g} < margin")
+            print(f"  segment {i}: FAIL, {what} "
+                  f"({res.component_names[res.component[i]]})")
+        print(f"reports: {Path(out)}/ ({', '.join(Path(f).name for f in s['files'])})")
+    return 0 if res.ok else 1
+
+
+def add_parser(sub, common, positive_float, positive_or_zero):
+    import argparse
+
+    p = sub.add_parser("clearance", parents=[common],
+                       help="probe safety: certified stylus clearance along a path",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Certified minimum clearance between a CMM stylus (tip "
+                                   "sphere + shaft + optional extension and body) moved "
+                                   "along PATH and the exact NURBS part, per segment, with "
+                                   "where it occurs, the first contact parameter and "
+                                   "pass/fail against --margin.",
+                       epilog=EPILOG)
+    p.add_argument("part", help="part surfaces: JSON, IGES, STEP or a sample name")
+    p.add_argument("path", help="probe path: CSV/XYZ tip-centre points or JSON poses")
+    p.add_argument("--stylus", required=True, help=STYLUS_HELP)
+    p.add_argument("--axis", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                   default=(0.0, 0.0, 1.0),
+                   help="stylus direction tip -> head for point paths (default 0 0 1)")
+    p.add_argument("--margin", type=positive_or_zero, default=0.0,
+                   help="required clearance (default 0: no contact)")
+    p.add_argument("--tol", type=positive_float, default=None,
+                   help="certified interval width (default 1e-6 of the part's size)")
+    p.add_argument("-o", "--output", default=None,
+                   help="report folder (default ./<path name>-clearance)")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG chart")
+    p.set_defaults(func=_cmd_clearance)
+    return p
