@@ -415,8 +415,8 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
             if best[i] is None or gap[i, j] < gap[i, best[i][0]]:
                 best[i] = (j, res, A, B, r)
             if res.lower - r <= 0.0:  # contact possible: find when it starts
-                s, q, n = _first_contact(mo, A, B, r, surfaces, tol, max_pairs, contact_tol,
-                                         min(first_i, 1.0))
+                s, q, n = _first_contact(mo, A, B, r, surfaces, min(tol, 1e-10 * scale),
+                                         max_pairs, contact_tol, min(first_i, 1.0))
                 calls += n
                 if s < first_i or (s == first_i and contact_at[i] is None):
                     first_i, contact_at[i] = s, (j, q)

@@ -8,10 +8,17 @@
 2. **Alignment check**: the same scan without bump or noise, moved by a known rigid
    transform; the best fit recovers it (error of the 4x4 matrix reported).
 3. **Section**: five parallel planes x = 10, 30, ..., 90 through the surface.
+4. **Probe safety**: a stylus (tip r 1, shaft r 0.5 x 20, extension r 2 x 30) travels
+   8 above the surface through four waypoints (margin 2), then plunges along the
+   normal through the surface; the clearance check certifies each travel move (one
+   straight move between safe waypoints dips over a ridge) and finds the plunge's
+   first contact, cross-checked with ``project_points`` (the tip centre
+   at first contact is one tip radius from the surface).
 
 Reports go to ``out_dir`` (default ``./geomkit-demo``): ``scan.csv`` (the synthetic
 measurement, to try the CLI on), ``deviation.csv``, ``deviation_map.png``,
-``deviation_hist.png``, ``section_000..004.csv/.dxf/.json``, ``sections.png`` and
+``deviation_hist.png``, ``section_000..004.csv/.dxf/.json``, ``sections.png``,
+``probe_path.csv`` (the stylus path), ``clearance.csv``, ``clearance.png`` and
 ``summary.json`` (written last).  The demo replaces its own report files there.
 """
 
@@ -23,10 +30,13 @@ from pathlib import Path
 import numpy as np
 
 from . import samples
+from .clearance import Stylus, probe_clearance
 from .deviation import _rodrigues, align_rigid, deviation
 from .io import _atomic_write
-from .report import (plot_deviation_map, plot_histogram, plot_section, prepare_outputs,
-                     write_deviation_csv, write_json, write_section)
+from .projection import project_points
+from .report import (plot_clearance, plot_deviation_map, plot_histogram, plot_section,
+                     prepare_outputs, write_clearance_csv, write_deviation_csv, write_json,
+                     write_section)
 from .section import plane_section
 
 __all__ = ["run_demo", "synthetic_scan"]
@@ -37,6 +47,12 @@ BUMP_SIGMA = 0.06
 NOISE = 0.001
 PROBE_RADIUS = 1.0
 TOLERANCE = (-0.02, 0.02)
+STYLUS = Stylus(tip_radius=PROBE_RADIUS, shaft_radius=0.5, shaft_length=20.0,
+                extension_radius=2.0, extension_length=30.0)
+TRAVEL_HEIGHT = 8.0
+PLUNGE_DEPTH = 2.0
+SAFETY_MARGIN = 2.0
+WAYPOINTS_UV = [(0.15, 0.2), (0.4, 0.75), (0.8, 0.6), (0.62, 0.38)]
 
 
 def synthetic_scan(surface, grid: int = 40, seed: int = 3, bump: float = BUMP_HEIGHT,
@@ -68,7 +84,8 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4) -> dict:
     sec_names = [f"section_{k:03d}.{e}" for k in range(len(planes))
                  for e in ("csv", "dxf", "json")]
     names = ["scan.csv", "deviation.csv", "deviation_map.png", "deviation_hist.png",
-             "sections.png", "summary.json"] + sec_names
+             "sections.png", "probe_path.csv", "clearance.csv", "clearance.png",
+             "summary.json"] + sec_names
     targets = prepare_outputs(out_dir, names, overwrite=True)
 
     # 1. deviation of the synthetic scan
@@ -116,6 +133,32 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4) -> dict:
                "curves": sum(len(s.curves) for s in sections),
                "max_residual": max(s.max_residual for s in sections),
                "tol": tol}
+    # 4. probe safety: travel above the surface, then plunge along the normal
+    uvw = np.array(WAYPOINTS_UV)
+    uvw = np.column_stack([u0 + (u1 - u0) * uvw[:, 0], v0 + (v1 - v0) * uvw[:, 1]])
+    Sw, Nw = surf.evaluate(uvw), surf.normals(uvw)
+    path = np.vstack([Sw + TRAVEL_HEIGHT * Nw, Sw[-1:] - PLUNGE_DEPTH * Nw[-1:]])
+    axis = Nw.mean(axis=0)
+    text = "x,y,z\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in path.tolist())
+    _atomic_write(targets["probe_path.csv"], lambda fh: fh.write(text.encode("utf-8")))
+    cl = probe_clearance(surf, STYLUS, path, axis=axis, margin=SAFETY_MARGIN)
+    write_clearance_csv(cl, path, targets["clearance.csv"], overwrite=True)
+    plot_clearance(cl, targets["clearance.png"], overwrite=True)
+    k = len(cl) - 1
+    fc = float(cl.first_contact[k])
+    tip = path[k] + fc * (path[k + 1] - path[k]) if np.isfinite(fc) else path[k]
+    check = float(project_points(surf, tip[None]).distance[0])
+    travel = slice(0, k)
+    clearance = {"segments": len(cl), "margin": SAFETY_MARGIN, "stylus": STYLUS.to_dict(),
+                 "travel_moves": k, "travel_moves_passed": int(np.sum(cl.passed[travel])),
+                 "travel_worst_move": int(np.argmin(cl.lower_bound[travel])),
+                 "travel_min_clearance": float(cl.clearance[travel].min()),
+                 "travel_min_lower_bound": float(cl.lower_bound[travel].min()),
+                 "plunge_first_contact": fc,
+                 "plunge_contact_component": cl.component_names[cl.component[k]],
+                 "tip_distance_at_contact": check,
+                 "certified": bool(np.all(cl.certified)),
+                 "seconds": cl.stats["seconds"]}
     st = rep.summary()
     summary = {"output": str(Path(out_dir)), "surface": "freeform_1",
                "deviation": {k: st[k] for k in ("points", "valid", "edge", "min", "max",
@@ -123,6 +166,7 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4) -> dict:
                                                  "pct_over", "pct_under", "tolerance",
                                                  "probe_radius")},
                "bump": bump, "alignment_check": align, "section": section,
+               "clearance": clearance,
                "files": sorted(names)}
     summary["seconds"] = time.perf_counter() - t_all
     write_json(summary, targets["summary.json"], overwrite=True)

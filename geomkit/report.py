@@ -295,9 +295,14 @@ def plot_clearance(res, path, overwrite: bool = False) -> Path:
     k = np.arange(len(res))
     colours = ["tab:green" if ok else "tab:red" for ok in res.passed]
     bars = ax.bar(k, res.lower_bound, color=colours, edgecolor="black", linewidth=0.5)
-    for b, fc in zip(bars, res.first_contact):
+    top = float(np.max(res.lower_bound)) if len(res) else 1.0
+    for i, (b, fc) in enumerate(zip(bars, res.first_contact)):
         if np.isfinite(fc):
             b.set_hatch("//")
+            ax.plot([i], [0.0], marker="x", color="tab:red", markersize=10, mew=2)
+            ax.annotate(f"contact\ns = {fc:.4f}", (i, 0.0), xytext=(0, 8),
+                        textcoords="offset points", ha="center", color="tab:red")
+    ax.set_ylim(0.0, 1.15 * max(top, res.margin, 1e-12))
     if res.margin > 0:
         ax.axhline(res.margin, color="black", linestyle="--", linewidth=1,
                    label=f"margin {res.margin:g}")

@@ -228,6 +228,13 @@ def test_cli_demo(tmp_path):
     assert s["alignment_check"]["transform_error"] < 1e-9
     assert s["section"]["curves"] == 5
     assert 0 < s["deviation"]["pct_over"] < 10
+    c = s["clearance"]
+    assert c["certified"] and c["travel_moves"] == 3
+    assert c["travel_min_lower_bound"] <= c["travel_min_clearance"]
+    # the tip centre at the reported first contact is one tip radius from the surface
+    # (checked by project_points, another engine)
+    assert abs(c["tip_distance_at_contact"] - 1.0) < 1e-6
+    assert c["plunge_contact_component"] == "tip"
     r = cli("demo", cwd=tmp_path)                      # reruns replace its own reports
     assert r.returncode == 0 and "bump" in r.stdout and r.stderr == ""
 

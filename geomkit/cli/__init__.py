@@ -16,7 +16,7 @@ from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mes
                    _cmd_samples, _cmd_section)
 
 EXAMPLES = """examples:
-  geomkit demo                              deviation + section on built-in data,
+  geomkit demo                              deviation, section, clearance on built-in data,
                                             reports in ./geomkit-demo/
   geomkit deviation part.igs cmm.csv --probe-radius 1.5 --tolerance -0.05 0.05 --align
                                             CMM deviation report in ./cmm-deviation/
@@ -48,10 +48,12 @@ def build_parser() -> argparse.ArgumentParser:
                                  epilog=EXAMPLES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section)",
+    p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section, "
+                                    "clearance)",
                        description="Deviation of a synthetic CMM scan of the bundled "
                                    "freeform surface (with a known bump), a best-fit "
-                                   "alignment check and a family of sections; writes its "
+                                   "alignment check, a family of sections and a probe "
+                                   "clearance check; writes its "
                                    "reports into ./geomkit-demo/ (replacing the demo's own "
                                    "report files there) and prints a summary.")
     p.add_argument("--grid", type=_positive_int, default=40,

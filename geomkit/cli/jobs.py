@@ -32,6 +32,14 @@ def _cmd_demo(args) -> int:
     s = summary["section"]
     print(f"section    {s['planes']} planes {s['description']}: {s['curves']} curves, "
           f"max plane residual {s['max_residual']:.1e}")
+    c = summary["clearance"]
+    print(f"clearance  stylus travel: {c['travel_moves_passed']} of {c['travel_moves']} moves "
+          f"keep the margin {c['margin']:g}; closest: move {c['travel_worst_move']} at "
+          f"{c['travel_min_clearance']:.4f} (certified >= {c['travel_min_lower_bound']:.4f})")
+    print(f"           plunge first contact at "
+          f"parameter {c['plunge_first_contact']:.6f} ({c['plunge_contact_component']}; tip "
+          f"centre {c['tip_distance_at_contact']:.6f} from the surface, radius "
+          f"{c['stylus']['tip_radius']:g})")
     print(f"done in {summary['seconds']:.2f} s; files: {', '.join(summary['files'])}")
     return 0
 
