@@ -353,7 +353,8 @@ class _Motion:
 
 
 def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=0.0,
-                    tol=None, max_pairs=50_000, contact_tol=1e-9) -> Clearance:
+                    tol=None, max_pairs=50_000, contact_tol=1e-9,
+                    progress=None) -> Clearance:
     """Certified clearance of ``stylus`` moved along ``path`` past the NURBS ``part``.
 
     Parameters
@@ -370,6 +371,7 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
         part's bounding-box diagonal).
     max_pairs : work cap of each :func:`surface_distance` call.
     contact_tol : first-contact parameter accuracy (segment parameter units).
+    progress : callable ``progress(done, total)`` called after each move, or None.
 
     Returns
     -------
@@ -421,6 +423,8 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
                 if s < first_i or (s == first_i and contact_at[i] is None):
                     first_i, contact_at[i] = s, (j, q)
         first[i] = first_i if np.isfinite(first_i) else np.nan
+        if progress is not None:
+            progress(i + 1, m)
     clearance = np.array([gap[i, best[i][0]] for i in range(m)])
     lower = glo.min(axis=1)
     comp = np.array([b[0] for b in best], dtype=np.int64)

@@ -46,7 +46,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._kernels import bvh as kb
 from ._kernels import motion as km
 from ._validate import as_float_array, as_int
 from .collision import (_body, _frames, _poses, _same_kind, collide, collide_many,

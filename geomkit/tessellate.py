@@ -176,7 +176,6 @@ def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     c = cells[inside]
     counts = index.counts(c)
     has = counts > 0
-    nh = has.sum(axis=1)
     # the measured better diagonal; a cell whose pieces failed: centre fan
     diag = (M[inside, 1] < M[inside, 0]).astype(np.int64)
     diag = np.where(centre[inside], 2, diag)

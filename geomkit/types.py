@@ -8,7 +8,6 @@ methods hand off to the domain modules (:mod:`geomkit.evaluation`,
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Sequence
 
 import numpy as np
 

@@ -335,6 +335,15 @@ def mesh_distance_candidates(tri, centroids_tree, X, own=None, k=6, exact_above=
     return best
 
 
+def _span_grid(knots, m):
+    """Parameters: ``m`` over the domain plus up to ``m`` in every non-empty knot span
+    (capped at 4 m in all)."""
+    k = np.unique(np.asarray(knots, float))
+    per = max(3, min(m, (4 * m) // max(1, len(k) - 1)))
+    parts = [np.linspace(k[0], k[-1], m)] + [np.linspace(a, b, per) for a, b in zip(k[:-1], k[1:])]
+    return np.unique(np.concatenate(parts))
+
+
 def bounded_distance_to_surface(surface, X, uv0, again_above=0.0, grid=129):
     """Upper bound of the distance of X (n, 3) to the (trimmed) surface.
 
@@ -365,9 +374,10 @@ def bounded_distance_to_surface(surface, X, uv0, again_above=0.0, grid=129):
     d = checked(X, uv, d)
     again = np.nonzero(d > again_above)[0]
     if len(again):
-        (u0, u1), (v0, v1) = surface.domain
-        g = np.stack(np.meshgrid(np.linspace(u0, u1, grid), np.linspace(v0, v1, grid),
-                                 indexing="ij"), axis=-1).reshape(-1, 2)
+        # per knot span: a tiny span (knots 0, 0.001, 1) can hold half the surface
+        gu = _span_grid(surface.knots_u, grid)
+        gv = _span_grid(surface.knots_v, grid)
+        g = np.stack(np.meshgrid(gu, gv, indexing="ij"), axis=-1).reshape(-1, 2)
         P = X[again]
         _, near = cKDTree(surface.evaluate(g)).query(P, k=3)
         for j in range(near.shape[1]):

@@ -270,6 +270,8 @@ def test_cli_bad_inputs_give_one_line_and_change_nothing(tmp_path, torus_scan):
         (("section", "torus", "--plane", "0", "0", "0", "1"), ("plane",)),
         (("section", "torus", "--plane", "0", "0", "1", "0", "--count", "3"), ("--step",)),
     ]
+    # a folder that cannot be created (its parent is a file): fails for root too
+    cases.append((("deviation", "torus", good, "-o", good / "out"), ("cannot write",)))
     if os.geteuid() != 0:  # root writes anywhere
         cases.append((("deviation", "torus", good, "-o", ro / "out"), ("cannot write",)))
         cases.append((("section", "torus", "--plane", "0", "0", "1", "0", "-o", ro),

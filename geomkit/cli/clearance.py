@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._common import _load_input
+from ._common import _load_input, _progress
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
                "optionally extension_radius, extension_length, body_radius, body_length) "
@@ -60,8 +60,13 @@ def _cmd_clearance(args) -> int:
         names.append("clearance.png")
     inputs = [args.part, args.path] + ([args.stylus] if Path(args.stylus).exists() else [])
     targets = prepare_outputs(out, names, args.overwrite, inputs=inputs)
-    res = probe_clearance(case.surfaces, stylus, path, axis=args.axis, margin=args.margin,
-                          tol=args.tol)
+    update, bar = _progress("checking moves")
+    try:
+        res = probe_clearance(case.surfaces, stylus, path, axis=args.axis, margin=args.margin,
+                              tol=args.tol, progress=update)
+    finally:
+        if bar is not None:
+            bar.stop()
     tips = path if path.ndim == 2 else path[:, :3, 3]
     files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite)]
     if not args.no_plots:
