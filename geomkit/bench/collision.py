@@ -146,9 +146,12 @@ def obb_volumes(meshes):
 
 def _sweep_poses(pair, n, seed):
     """Random poses of body b (body a, the sample sphere, stays at the origin) and the
-    exact distance of the two *surfaces* at each pose: two radius-10 spheres, or the
-    radius-10 sphere and the torus (R 20, r 5): the shells meet iff the sphere's
-    centre is within 15 of the torus core circle."""
+    exact signed contact margin of the two *surfaces* at each pose: two radius-10
+    spheres meet iff their centres are within 20, the radius-10 sphere and the torus
+    (R 20, r 5) iff the sphere's centre is within 15 of the torus core circle.  The
+    margin (centre distance minus 20, resp. core distance minus 15) is the surfaces'
+    distance when positive, and its size is how far the centre must move to change
+    the answer."""
     from scipy.spatial.transform import Rotation
 
     rng = np.random.default_rng(seed)
@@ -159,12 +162,12 @@ def _sweep_poses(pair, n, seed):
         u = rng.normal(size=(n, 3))
         t = u / np.linalg.norm(u, axis=1)[:, None] * rng.uniform(12, 28, (n, 1))
         P[:, :3, 3] = t
-        return P, np.maximum(0.0, np.linalg.norm(t, axis=1) - 20.0)
+        return P, np.linalg.norm(t, axis=1) - 20.0
     t = rng.uniform(-35, 35, (n, 3))
     P[:, :3, 3] = t
     y = np.einsum("nji,nj->ni", R, -t)              # the sphere's centre in the torus frame
     core = np.hypot(np.hypot(y[:, 0], y[:, 1]) - 20.0, y[:, 2])
-    return P, np.maximum(0.0, core - 15.0)
+    return P, core - 15.0
 
 
 SWEEP_PAIRS = ("sphere-sphere", "sphere-torus")
@@ -179,9 +182,9 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
 
     * ``min_distance`` vs ``coal.distance``: error = largest |mesh distance - exact
       distance of the surfaces| over the poses;
-    * ``collide`` (first hit) vs ``coal.collide``: error = largest exact surface
-      distance at a pose the answer got wrong (0 when every pose is right), i.e. how
-      far from contact a wrong answer can be.
+    * ``collide`` (first hit) vs ``coal.collide``: error = largest |exact contact
+      margin| (:func:`_sweep_poses`) at a pose the answer got wrong (0 when every
+      pose is right), i.e. how far from the contact boundary a wrong answer can be.
     """
     from ._common import MISSING_COAL, coal_or_none, make_row
 
@@ -189,8 +192,9 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
     rows = []
     eye = np.eye(4)
     for pair in pairs:
-        PB, exact = _sweep_poses(pair, poses, seed)
-        touching = exact == 0.0
+        PB, margin = _sweep_poses(pair, poses, seed)
+        touching = margin <= 0.0
+        exact = np.maximum(0.0, margin)
         for tol in tols:
             ma = geomkit.tessellate(geomkit.samples.load("sphere"), tol)
             mb = geomkit.tessellate(geomkit.samples.load(pair.split("-")[1]), tol)
@@ -209,7 +213,7 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
             t_hit = _median_time(gk_hit, poses)
             t_dist = _median_time(gk_dist, poses)
             size = f"{len(meshes[0][1])} + {len(meshes[1][1])} triangles"
-            out = {"collide": [t_hit, _wrong(hit, touching, exact)],
+            out = {"collide": [t_hit, _wrong(hit, touching, margin)],
                    "min_distance": [t_dist, float(np.max(np.abs(dist - exact)))]}
             refs = {k: dict(note=f"{size}; {MISSING_COAL}") for k in out}
             if coal is not None:
@@ -233,7 +237,7 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
                 c_dist(0)
                 refs["collide"] = dict(reference_name="coal collide (OBBRSS)",
                                        reference_seconds=_median_time(c_hit, poses),
-                                       reference_error=_wrong(chit, touching, exact),
+                                       reference_error=_wrong(chit, touching, margin),
                                        note=f"{size}; {int(touching.sum())}/{poses} poses "
                                             f"touch; wrong: geomkit {int((hit != touching).sum())}"
                                             f", coal {int((chit != touching).sum())}")
@@ -247,10 +251,11 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
     return rows
 
 
-def _wrong(answer, truth, exact):
-    """Largest exact surface distance among the poses answered wrongly (0 if none)."""
+def _wrong(answer, truth, margin):
+    """Largest |contact margin| among the poses answered wrongly (0 if none): how far
+    from the exact contact boundary a wrong answer was given."""
     bad = answer != truth
-    return float(exact[bad].max()) if bad.any() else 0.0
+    return float(np.abs(margin[bad]).max()) if bad.any() else 0.0
 
 
 def main(argv=None):
