@@ -111,3 +111,19 @@ def test_main_writes(tmp_path, capsys, monkeypatch):
     with pytest.raises(FileExistsError):
         suite.main(["--engines", "evaluation", "-o", str(tmp_path)])
     assert suite.main(["--engines", "evaluation", "-o", str(tmp_path), "--overwrite"]) == 0
+
+
+def test_missing_references_are_skipped_with_a_note(monkeypatch):
+    from geomkit.bench import _common
+
+    monkeypatch.setattr(_common, "occ_or_none", lambda: None)
+    monkeypatch.setattr(_common, "coal_or_none", lambda: None)
+    res = suite.run_suite(["evaluation", "collision"], config=TINY)
+    assert res["files"] == {}
+    for r in res["rows"]:
+        assert r["reference_name"] is None and r["reference_seconds"] is None
+        assert r["speedup"] is None and "reference skipped" in r["note"]
+        assert math.isfinite(r["geomkit_error"])
+    assert res["engines"]["evaluation"]["notes"] == [_common.MISSING_OCC]
+    assert res["engines"]["collision"]["notes"] == [_common.MISSING_COAL]
+    assert "| - |" in suite.format_table(res["rows"])
