@@ -144,6 +144,120 @@ def obb_volumes(meshes):
     return rows
 
 
+def _sweep_poses(pair, n, seed):
+    """Random poses of body b (body a, the sample sphere, stays at the origin) and the
+    exact signed contact margin of the two *surfaces* at each pose: two radius-10
+    spheres meet iff their centres are within 20, the radius-10 sphere and the torus
+    (R 20, r 5) iff the sphere's centre is within 15 of the torus core circle.  The
+    margin (centre distance minus 20, resp. core distance minus 15) is the surfaces'
+    distance when positive, and its size is how far the centre must move to change
+    the answer."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed)
+    P = np.tile(np.eye(4), (n, 1, 1))
+    R = Rotation.random(n, random_state=seed).as_matrix()
+    P[:, :3, :3] = R
+    if pair == "sphere-sphere":
+        u = rng.normal(size=(n, 3))
+        t = u / np.linalg.norm(u, axis=1)[:, None] * rng.uniform(12, 28, (n, 1))
+        P[:, :3, 3] = t
+        return P, np.linalg.norm(t, axis=1) - 20.0
+    t = rng.uniform(-35, 35, (n, 3))
+    P[:, :3, 3] = t
+    y = np.einsum("nji,nj->ni", R, -t)              # the sphere's centre in the torus frame
+    core = np.hypot(np.hypot(y[:, 0], y[:, 1]) - 20.0, y[:, 2])
+    return P, core - 15.0
+
+
+SWEEP_PAIRS = ("sphere-sphere", "sphere-torus")
+
+
+def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=0):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): the sample sphere
+    against a second sphere or the torus, both tessellated at each mesh tolerance
+    (the size sweep), ``poses`` random poses.  Per pair and tolerance two rows, times
+    per query (median over the poses, after warm-up), against coal (``BVHModelOBBRSS``,
+    same meshes and poses):
+
+    * ``min_distance`` vs ``coal.distance``: error = largest |mesh distance - exact
+      distance of the surfaces| over the poses;
+    * ``collide`` (first hit) vs ``coal.collide``: error = largest |exact contact
+      margin| (:func:`_sweep_poses`) at a pose the answer got wrong (0 when every
+      pose is right), i.e. how far from the contact boundary a wrong answer can be.
+    """
+    from ._common import MISSING_COAL, coal_or_none, make_row
+
+    coal = coal_or_none()
+    rows = []
+    eye = np.eye(4)
+    for pair in pairs:
+        PB, margin = _sweep_poses(pair, poses, seed)
+        touching = margin <= 0.0
+        exact = np.maximum(0.0, margin)
+        for tol in tols:
+            ma = geomkit.tessellate(geomkit.samples.load("sphere"), tol)
+            mb = geomkit.tessellate(geomkit.samples.load(pair.split("-")[1]), tol)
+            meshes = [(np.ascontiguousarray(m.vertices), np.ascontiguousarray(m.faces, np.int64))
+                      for m in (ma, mb)]
+            a, b = Body(meshes[0], bv=bv), Body(meshes[1], bv=bv)
+            collide(a, eye, b, PB[0], all_pairs=False)        # JIT warm-up
+            min_distance(a, eye, b, PB[0])
+            hit, dist = np.empty(poses, bool), np.empty(poses)
+
+            def gk_hit(k):
+                hit[k] = collide(a, eye, b, PB[k], all_pairs=False).colliding
+
+            def gk_dist(k):
+                dist[k] = min_distance(a, eye, b, PB[k]).distance
+            t_hit = _median_time(gk_hit, poses)
+            t_dist = _median_time(gk_dist, poses)
+            size = f"{len(meshes[0][1])} + {len(meshes[1][1])} triangles"
+            out = {"collide": [t_hit, _wrong(hit, touching, margin)],
+                   "min_distance": [t_dist, float(np.max(np.abs(dist - exact)))]}
+            refs = {k: dict(note=f"{size}; {MISSING_COAL}") for k in out}
+            if coal is not None:
+                ca = _coal(coal, *meshes[0], coal.BVHModelOBBRSS)
+                cb = _coal(coal, *meshes[1], coal.BVHModelOBBRSS)
+                ta = coal.Transform3s(np.eye(3), np.zeros(3))
+                tb = [coal.Transform3s(P[:3, :3].copy(), P[:3, 3].copy()) for P in PB]
+                creq, dreq = coal.CollisionRequest(), coal.DistanceRequest()
+                chit, cdist = np.empty(poses, bool), np.empty(poses)
+
+                def c_hit(k):
+                    r = coal.CollisionResult()
+                    coal.collide(ca, ta, cb, tb[k], creq, r)
+                    chit[k] = r.isCollision()
+
+                def c_dist(k):
+                    r = coal.DistanceResult()
+                    coal.distance(ca, ta, cb, tb[k], dreq, r)
+                    cdist[k] = max(0.0, r.min_distance)
+                c_hit(0)
+                c_dist(0)
+                refs["collide"] = dict(reference_name="coal collide (OBBRSS)",
+                                       reference_seconds=_median_time(c_hit, poses),
+                                       reference_error=_wrong(chit, touching, margin),
+                                       note=f"{size}; {int(touching.sum())}/{poses} poses "
+                                            f"touch; wrong: geomkit {int((hit != touching).sum())}"
+                                            f", coal {int((chit != touching).sum())}")
+                refs["min_distance"] = dict(
+                    reference_name="coal distance (OBBRSS)",
+                    reference_seconds=_median_time(c_dist, poses),
+                    reference_error=float(np.max(np.abs(cdist - exact))), note=size)
+            for what, (t, err) in out.items():
+                rows.append(make_row("collision", f"{pair} {what}", "mesh tol", tol, t, err,
+                                     per="query", repeats=poses, **refs[what]))
+    return rows
+
+
+def _wrong(answer, truth, margin):
+    """Largest |contact margin| among the poses answered wrongly (0 if none): how far
+    from the exact contact boundary a wrong answer was given."""
+    bad = answer != truth
+    return float(np.abs(margin[bad]).max()) if bad.any() else 0.0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--poses", type=int, default=200)

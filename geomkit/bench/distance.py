@@ -89,6 +89,9 @@ def cases():
     return out
 
 
+cases_ = cases
+
+
 def _time(fn, repeat):
     ts = []
     for _ in range(repeat):
@@ -102,6 +105,48 @@ def _face(occ, s):
     trim = [[c.to_dict() for c in loop.pieces] for loop in s.trim] or None
     return occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,
                          s.weights, trim=trim)
+
+
+SWEEP_CASES = ("sphere_pair", "random_0")
+
+
+def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=3):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): for each case and
+    tolerance, the median time of ``surface_distance`` (after warm-up) and of
+    ``BRepExtrema_DistShapeShape.Perform`` with ``SetDeflection(tol)``; errors are
+    |distance - truth| against the case's analytic truth, or the dense-sampling +
+    L-BFGS-B oracle (:func:`dense_oracle`) for the random pairs."""
+    from ._common import MISSING_OCC, make_row, median_time, occ_or_none
+
+    occ = occ_or_none()
+    a, b = samples.load("sphere_pair")
+    surface_distance(a, b)                                    # JIT warm-up
+    by_name = {c[0]: c for c in cases_()}
+    rows = []
+    for name in cases:
+        _, sa, sb, truth = by_name[name]
+        oracle = "analytic truth"
+        if truth is None:
+            truth, oracle = dense_oracle(sa, sb), "dense oracle"
+        surface_distance(sa, sb, tol=tols[0])                 # warm-up of this case
+        fa = fb = None
+        if occ is not None:
+            fa, fb = _face(occ, sa), _face(occ, sb)
+        for tol in tols:
+            t, r, k = median_time(lambda: surface_distance(sa, sb, tol=tol), repeat, 1.0)
+            ref = dict(note=MISSING_OCC)
+            if fa is not None:
+                ts = []
+                for _ in range(k):
+                    d_occ, _, _, sec = occ.distance_shapes(fa, fb, deflection=tol)
+                    ts.append(sec)
+                ref = dict(reference_name="OCC BRepExtrema_DistShapeShape",
+                           reference_seconds=float(np.median(ts)),
+                           reference_error=abs(d_occ - truth),
+                           note=f"error vs {oracle}")
+            rows.append(make_row("distance", name, "tol", tol, t, abs(r.distance - truth),
+                                 repeats=k, **ref))
+    return rows
 
 
 def main(argv=None):

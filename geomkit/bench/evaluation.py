@@ -117,6 +117,42 @@ def run(points=100_000, geomdl_points=None, occ_points=20_000, cases=CASES, out=
     return {"rows": rows, "jit_cold": cold, "jit_warm": warm}
 
 
+SWEEP_CASES = ("sphere", "torus")
+
+
+def sweep(sizes=(1_000, 10_000), cases=SWEEP_CASES, repeat=5, seed=1):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): for each case with an
+    analytic truth and each batch size, the time of one ``evaluate`` call on that many
+    random parameters (geomkit after warm-up; OCC ``Geom_BSplineSurface`` in a Python
+    loop) and the error of the points: the largest |analytic residual| (distance of
+    the returned point from the exact sphere / torus)."""
+    from ._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
+
+    occ = occ_or_none()
+    rng = np.random.default_rng(seed)
+    rows = []
+    for name in cases:
+        case = samples.load_case(name)
+        s, analytic = case.surfaces[0], case.truth["analytic"]
+        s.evaluate(np.full((4, 2), 0.5))                      # JIT warm-up
+        surf = occ_surface(occ, s) if occ is not None else None
+        (u0, u1), (v0, v1) = s.domain
+        for n in sizes:
+            uv = np.column_stack([rng.uniform(u0, u1, n), rng.uniform(v0, v1, n)])
+            t_gk, P, _ = median_time(lambda: s.evaluate(uv), repeat)
+            e_gk = np.max(np.abs(samples.analytic_residual(analytic, P)))
+            ref = dict(note=MISSING_OCC)
+            if surf is not None:
+                t_occ, O, _ = median_time(lambda: occ.evaluate(surf, uv), repeat)
+                ref = dict(reference_name="OCC Geom_Surface.Value (Python loop)",
+                           reference_seconds=t_occ,
+                           reference_error=np.max(np.abs(samples.analytic_residual(analytic, O))),
+                           note="OCC time is mostly the per-point Python call")
+            rows.append(make_row("evaluation", name, "points", int(n), t_gk, e_gk,
+                                 repeats=repeat, **ref))
+    return rows
+
+
 def geomkit_threads() -> int:
     import numba
     return numba.get_num_threads()

@@ -155,6 +155,65 @@ def run(n=100_000, occ_n=1000, margin=10.0, cases=CASES, seed=0):
     return rows, sweep
 
 
+def _occ_orth(surf, P, tol):
+    """Distances by ``GeomAPI_ProjectPointOnSurf`` with Extrema tolerance ``tol``
+    (orthogonal feet over the whole patch; one Python call per point)."""
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+    from OCP.gp import gp_Pnt
+
+    u0, u1, v0, v1 = surf.Bounds()
+    out = np.full(len(P), np.nan)
+    for i, p in enumerate(P):
+        pr = GeomAPI_ProjectPointOnSurf(gp_Pnt(*map(float, p)), surf, u0, u1, v0, v1,
+                                        float(tol))
+        if pr.IsDone() and pr.NbPoints() > 0:
+            out[i] = pr.LowerDistance()
+    return out
+
+
+SWEEP_CASES = ("sphere", "torus")
+
+
+def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), n=4_000, occ_n=100,
+          margin=10.0, repeat=3, seed=0):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): for each case with a
+    closed-form distance and each Newton tolerance, seconds per point of
+    ``Projector.project`` (``n`` random points in the box grown by ``margin``, after
+    warm-up; the candidate mesh build is not timed) and of ``GeomAPI_ProjectPointOnSurf``
+    at the same Extrema tolerance on the first ``occ_n`` points; errors are the
+    largest |distance - analytic distance| (geomkit over all ``n`` points, OCC over
+    its subset)."""
+    from ._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
+
+    occ = occ_or_none()
+    rng = np.random.default_rng(seed)
+    rows = []
+    for name in cases:
+        s = samples.load(name)[0]
+        pr = geomkit.Projector(s)
+        pr.project(np.zeros((8, 3)))                          # JIT warm-up
+        P = _points(s, n, margin, rng)[0]
+        exact = analytic_distance(name, P)
+        surf = occ_surface(occ, s) if occ is not None else None
+        if surf is not None:
+            _occ_orth(surf, P[:2], 1e-6)
+        for tol in tols:
+            t, res, _ = median_time(lambda: pr.project(P, tol=tol), repeat)
+            err = np.max(np.abs(res.distance - exact))
+            ref = dict(note=MISSING_OCC)
+            if surf is not None:
+                sub = P[:occ_n]
+                t_occ, d, k = median_time(lambda: _occ_orth(surf, sub, tol), repeat, 2.0)
+                ref = dict(reference_name="OCC GeomAPI_ProjectPointOnSurf",
+                           reference_seconds=t_occ / len(sub),
+                           reference_error=np.nanmax(np.abs(d - exact[:occ_n])),
+                           note=f"OCC on {len(sub)} of the {len(P)} points (Python loop), "
+                                f"{k} runs; {int(np.isnan(d).sum())} without answer")
+            rows.append(make_row("projection", name, "tol", tol, t / len(P), err,
+                                 per="point", repeats=repeat, **ref))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=100_000)

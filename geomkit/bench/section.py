@@ -111,6 +111,78 @@ def run(repeat=5, tol=1e-6, out=print):
     return rows
 
 
+def _unit_plane(plane):
+    n = np.asarray(plane[:3], float)
+    return n / np.linalg.norm(n), float(plane[3]) / np.linalg.norm(n)
+
+
+def exact_circles(name, plane):
+    """The exact section of the sphere (radius 10 at the origin) with any plane, and of
+    the torus (R 20, r 5 about z) with the plane x = 0: a list of (centre, radius)."""
+    n, d = _unit_plane(plane)
+    if name == "sphere":
+        return [(-d * n, float(np.sqrt(100.0 - d * d)))]
+    if name == "torus" and np.allclose(n, [1, 0, 0]) and d == 0:
+        return [(np.array([0.0, 20.0, 0.0]), 5.0), (np.array([0.0, -20.0, 0.0]), 5.0)]
+    raise ValueError(f"no exact section for {name} with plane {plane}")
+
+
+def circle_error(polys, plane, circles):
+    """Largest distance of a polyline set from the exact section circles (all in
+    ``plane``), over the vertices and the segment midpoints (a chord's largest
+    deviation from its arc is at its midpoint); inf when nothing was found."""
+    if not polys:
+        return float("inf")
+    n, d = _unit_plane(plane)
+    X = np.concatenate([np.concatenate([P, 0.5 * (P[1:] + P[:-1])]) for P in polys])
+    h = X @ n + d
+    best = np.full(len(X), np.inf)
+    for c, r in circles:
+        Y = X - c - np.outer(X @ n + d, n)
+        best = np.minimum(best, np.hypot(h, np.linalg.norm(Y, axis=1) - r))
+    return float(best.max())
+
+
+SWEEP_CASES = (("sphere", [0.3, -0.5, 0.8, -2.0]), ("torus", [1.0, 0.0, 0.0, 0.0]))
+
+
+def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-5, 1e-7), repeat=5):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): for each case with an
+    exact section (circles) and each chord tolerance, the median time of
+    ``plane_section`` (after warm-up) and of ``BRepAlgoAPI_Section`` with its edges
+    discretised at the same deflection (:func:`geomkit.oracles.occ.section`, whole
+    call, so it includes reading the points back into Python); errors are the largest
+    distances of the polylines from the exact circles (:func:`circle_error`)."""
+    from ._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
+
+    occ = occ_or_none()
+    plane_section(samples.load("sphere"), [0, 0, 1, -3], 1e-3)   # JIT warm-up
+    rows = []
+    for name, plane in cases:
+        s = samples.load(name)[0]
+        circles = exact_circles(name, plane)
+        face = occ_face(occ, s) if occ is not None else None
+        plane_section(s, plane, tols[0])                      # warm-up of this case
+        if face is not None:
+            occ.section(face, plane, deflection=tols[0])
+        for tol in tols:
+            t, sec, k = median_time(lambda: plane_section(s, plane, tol), repeat, 1.0)
+            err = circle_error(sec.curves, plane, circles)
+            note = f"{sum(len(c) for c in sec.curves)} points"
+            ref = {}
+            if face is not None:
+                tb, (bp, _), _ = median_time(lambda: occ.section(face, plane, deflection=tol),
+                                             k)
+                ref = dict(reference_name="OCC BRepAlgoAPI_Section",
+                           reference_seconds=tb, reference_error=circle_error(bp, plane, circles))
+                note += f" vs OCC {sum(len(c) for c in bp)}"
+            else:
+                note += "; " + MISSING_OCC
+            rows.append(make_row("section", f"{name} {np.round(plane, 2).tolist()}", "tol",
+                                 tol, t, err, repeats=k, note=note, **ref))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)

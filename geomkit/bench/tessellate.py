@@ -22,14 +22,17 @@ CASES = ["sphere", "torus", "cylinder_quarter", "freeform_1", "crease", "wave_se
          "heavy_weights", "saddle", "plate_with_hole"]
 
 
-def sampled_deviation(surface, V, F, FUV, per_face=12, max_faces=40_000, seed=0):
+def sampled_deviation(surface, V, F, FUV, per_face=12, max_faces=40_000, seed=0,
+                      distance=None):
     """Largest two-sided deviation of a mesh from its surface at random samples.
 
     For random barycentric points of (a subset of) the faces: the triangle point
     ``X`` and the surface point ``P = S(uv)`` at the interpolated UV.  The value is
     ``max(dist(P, triangle plane), dist(X, surface))`` where ``dist(X, surface)`` is
     taken from above by ``|X - S(uv*)|`` after 4 Gauss–Newton steps from ``uv``.
-    ``FUV`` (m, 3, 2) are the UVs of each face's corners.
+    ``FUV`` (m, 3, 2) are the UVs of each face's corners.  ``distance``, when given,
+    maps (n, 3) points to their exact distances from the surface (an analytic
+    truth) and replaces the Gauss–Newton estimate of ``dist(X, surface)``.
     """
     rng = np.random.default_rng(seed)
     m = len(F)
@@ -51,6 +54,9 @@ def sampled_deviation(surface, V, F, FUV, per_face=12, max_faces=40_000, seed=0)
     good = ln > 0
     plane = np.where(good, np.abs(np.einsum("ij,ij->i", P - Tx[:, 0], n) / np.where(good, ln, 1)),
                      np.linalg.norm(P - X, axis=1))
+    if distance is not None:
+        best = np.asarray(distance(X), float)
+        return float(np.max(np.maximum(plane, best))) if len(best) else 0.0
     # dist(X, surface) from above
     w = uv.copy()
     best = np.linalg.norm(X - P, axis=1)
@@ -123,6 +129,59 @@ def run(cases=CASES, tols=(1e-2, 1e-3), out=print):
             f"{np.median(tr):.2f}; OCC meshes over tol: "
             f"{sum(r['occ_dev'] > r['tol'] for r in rows)}/{len(rows)}, geomkit: "
             f"{sum(r['gk_dev'] > r['tol'] for r in rows)}/{len(rows)}")
+    return rows
+
+
+SWEEP_CASES = ("sphere", "torus")
+
+
+def _truth(name):
+    """Exact point-to-surface distance of a case with an analytic truth, else None."""
+    truth = samples.load_case(name).truth or {}
+    if "analytic" not in truth:
+        return None
+    return lambda X: np.abs(samples.analytic_residual(truth["analytic"], X))
+
+
+def sweep(cases=SWEEP_CASES, tols=(1e-1, 3e-2, 1e-2), repeat=3, angle=0.5, budget=0.5):
+    """Rows of the common schema (:mod:`geomkit.bench._common`): for each case and
+    absolute tolerance, the wall time of one tessellation (geomkit after warm-up;
+    OCC ``BRepMesh_IncrementalMesh`` at the same deflection, angular ``angle``) and
+    the achieved deviation of each mesh by the same sampler
+    (:func:`sampled_deviation`), exact for cases with an analytic truth.  Timed
+    ``repeat`` times, fewer once geomkit's runs exceed ``budget`` seconds (OCC gets
+    as many runs as geomkit; its time is ``BRepMesh_IncrementalMesh`` alone, without
+    reading the triangulation back into Python)."""
+    from ._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
+
+    occ = occ_or_none()
+    tessellate(samples.load("sphere"), 1e-1)                  # JIT warm-up
+    tessellate(samples.load("plate_with_hole"), 1e-1)
+    rows = []
+    for name in cases:
+        s = samples.load(name)[0]
+        exact = _truth(name)
+        face = occ_face(occ, s) if occ is not None else None
+        for tol in tols:
+            t_gk, m, n_gk = median_time(lambda: tessellate(s, tol), repeat, budget)
+            dev = sampled_deviation(s, m.vertices, m.faces, m.face_uv, distance=exact)
+            note = f"{len(m.faces)} triangles"
+            ref = {}
+            if face is not None:
+                ts = []
+                for _ in range(n_gk):                  # as many runs as geomkit had
+                    oV, oF, oUV, odt = occ.mesh(face, tol, angle=angle)
+                    ts.append(odt)
+                odev = sampled_deviation(s, oV, oF, oUV[oF], distance=exact)
+                ref = dict(reference_name="OCC BRepMesh_IncrementalMesh",
+                           reference_seconds=float(np.median(ts)), reference_error=odev)
+                note += f" vs OCC {len(oF)}"
+            else:
+                note += "; " + MISSING_OCC
+            note += "; error " + ("exact (analytic) at samples" if exact else
+                                  "by the shared Gauss-Newton sampler")
+            rows.append(make_row("tessellate", name, "tol", tol, t_gk, dev, repeats=n_gk,
+                                 note=note, **ref))
     return rows
 
 

@@ -1,0 +1,129 @@
+"""geomkit.bench.suite: one tiny run (seconds) — schema, measured errors, files."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from geomkit.bench import suite
+from geomkit.bench._common import FIELDS, coal_or_none, occ_or_none
+
+TINY = {
+    "evaluation": {"sizes": (200,), "cases": ("sphere",), "repeat": 2},
+    "distance": {"cases": ("sphere_pair",), "tols": (1e-3, 1e-9), "repeat": 1},
+    "collision": {"pairs": ("sphere-sphere",), "tols": (0.5,), "poses": 6},
+}
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    res = suite.run_suite(["evaluation", "distance", "collision"], out_dir=out, config=TINY)
+    return res, out
+
+
+def test_schema_and_measured_errors(tiny):
+    res, _ = tiny
+    rows = res["rows"]
+    assert {r["engine"] for r in rows} == {"evaluation", "distance", "collision"}
+    # 1 evaluation row, 2 distance rows, collide + min_distance for the one tolerance
+    assert len(rows) == 1 + 2 + 2
+    for r in rows:
+        assert tuple(r) == FIELDS
+        assert r["geomkit_seconds"] > 0 and math.isfinite(r["geomkit_seconds"])
+        assert r["geomkit_error"] is not None and math.isfinite(r["geomkit_error"])
+        assert r["geomkit_error"] >= 0
+    ev = [r for r in rows if r["engine"] == "evaluation"][0]
+    assert ev["setting"] == 200 and ev["geomkit_error"] < 1e-12      # analytic residual
+    for r in rows:
+        if r["engine"] == "distance":
+            assert r["geomkit_error"] < 1e-8                          # vs the analytic 5.0
+    md = [r for r in rows if r["case"].endswith("min_distance")][0]
+    # a mesh at tolerance 0.5 is measurably off the exact sphere distance, so the
+    # error is measured (not self-reported zero) and of the order of the tolerance
+    assert 1e-3 < md["geomkit_error"] < 2.0
+    m = res["machine"]
+    assert m["cpu_count"] >= 1 and m["numba_threads"] >= 1 and m["numpy"]
+    assert set(res["engines"]) == {"evaluation", "distance", "collision"}
+
+
+def test_occ_reference(tiny):
+    pytest.importorskip("OCP")
+    assert occ_or_none() is not None
+    for r in tiny[0]["rows"]:
+        if r["engine"] in ("evaluation", "distance"):
+            assert r["reference_name"].startswith("OCC")
+            assert r["reference_seconds"] > 0
+            assert math.isfinite(r["reference_error"])
+            assert r["speedup"] == pytest.approx(r["reference_seconds"] / r["geomkit_seconds"])
+
+
+def test_coal_reference(tiny):
+    pytest.importorskip("coal")
+    assert coal_or_none() is not None
+    for r in tiny[0]["rows"]:
+        if r["engine"] == "collision":
+            assert r["reference_name"].startswith("coal") and r["reference_seconds"] > 0
+            assert math.isfinite(r["reference_error"])
+
+
+def test_files_written_and_not_overwritten(tiny, tmp_path):
+    res, out = tiny
+    names = {p.name for p in out.iterdir()}
+    assert names == set(suite.FILES)                   # no temporary files left behind
+    doc = json.loads((out / "bench.json").read_text())
+    assert len(doc["rows"]) == len(res["rows"]) and doc["machine"]["cpu_count"] >= 1
+    assert (out / "bench.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    md = (out / "bench.md").read_text()
+    assert suite.format_table(res["rows"]) in md
+    # existing files are kept without overwrite (checked before any work) ...
+    before = (out / "bench.json").read_bytes()
+    with pytest.raises(FileExistsError):
+        suite.run_suite(["evaluation"], out_dir=out, config=TINY)
+    assert (out / "bench.json").read_bytes() == before
+    # ... and replaced with it
+    (tmp_path / "bench.md").write_text("old")
+    res2 = suite.run_suite(["evaluation"], out_dir=tmp_path, config=TINY, overwrite=True)
+    assert (tmp_path / "bench.md").read_text() != "old"
+    assert set(res2["files"]) == set(suite.FILES)
+
+
+def test_format_table_and_errors():
+    row = {k: None for k in FIELDS}
+    row.update(engine="x", case="c", setting_name="tol", setting=1e-3, per="call",
+               geomkit_seconds=2e-3, geomkit_error=0.0, repeats=1, note="n")
+    txt = suite.format_table([row])
+    lines = txt.splitlines()
+    assert len(lines) == 3 and lines[2].count("|") == lines[0].count("|")
+    assert "2 ms" in lines[2] and "tol 1e-03" in lines[2]
+    with pytest.raises(ValueError):
+        suite.run_suite(["nope"])
+
+
+def test_main_writes(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(suite.CONFIG, "evaluation",
+                        ("evaluation", TINY["evaluation"], TINY["evaluation"]))
+    assert suite.main(["--engines", "evaluation", "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "| evaluation | sphere |" in out and "wrote" in out
+    with pytest.raises(FileExistsError):
+        suite.main(["--engines", "evaluation", "-o", str(tmp_path)])
+    assert suite.main(["--engines", "evaluation", "-o", str(tmp_path), "--overwrite"]) == 0
+
+
+def test_missing_references_are_skipped_with_a_note(monkeypatch):
+    from geomkit.bench import _common
+
+    monkeypatch.setattr(_common, "occ_or_none", lambda: None)
+    monkeypatch.setattr(_common, "coal_or_none", lambda: None)
+    res = suite.run_suite(["evaluation", "collision"], config=TINY)
+    assert res["files"] == {}
+    for r in res["rows"]:
+        assert r["reference_name"] is None and r["reference_seconds"] is None
+        assert r["speedup"] is None and "reference skipped" in r["note"]
+        assert math.isfinite(r["geomkit_error"])
+    assert res["engines"]["evaluation"]["notes"] == [_common.MISSING_OCC]
+    assert res["engines"]["collision"]["notes"] == [_common.MISSING_COAL]
+    assert "| - |" in suite.format_table(res["rows"])
