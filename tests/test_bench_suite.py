@@ -127,3 +127,19 @@ def test_missing_references_are_skipped_with_a_note(monkeypatch):
     assert res["engines"]["evaluation"]["notes"] == [_common.MISSING_OCC]
     assert res["engines"]["collision"]["notes"] == [_common.MISSING_COAL]
     assert "| - |" in suite.format_table(res["rows"])
+
+
+def test_cli_bench_end_to_end(tmp_path):
+    from clihelp import assert_one_line_error, cli
+
+    r = cli("bench", "--engines", "evaluation", "-o", tmp_path / "b", "--json")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["rows"] and all(row["engine"] == "evaluation" for row in s["rows"])
+    assert all(row["geomkit_error"] < 1e-12 for row in s["rows"])
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == ["bench.json", "bench.md",
+                                                                 "bench.png"]
+    r = cli("bench", "--engines", "evaluation", "-o", tmp_path / "b")
+    assert_one_line_error(r, "exists", "--overwrite")
+    r = cli("bench", "--engines", "nope", "-o", tmp_path / "c")
+    assert_one_line_error(r, "--engines", "unknown engine")

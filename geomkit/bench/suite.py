@@ -20,6 +20,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import InvalidInputError
 from ._common import FIELDS
 
 ENGINES = ("evaluation", "tessellate", "projection", "section", "distance", "collision")
@@ -121,7 +122,8 @@ def run_suite(engines=None, quick=True, out_dir=None, progress=None, overwrite=F
     engines = list(ENGINES if engines is None else engines)
     unknown = [e for e in engines if e not in CONFIG]
     if unknown:
-        raise ValueError(f"unknown engine(s) {unknown}; choose from {', '.join(ENGINES)}")
+        raise InvalidInputError(f"unknown engine(s) {unknown}; choose from "
+                                f"{', '.join(ENGINES)}", "engines")
     paths = _targets(out_dir, overwrite) if out_dir is not None else None
     say = progress or (lambda msg: None)
     config = config or {}

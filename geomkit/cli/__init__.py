@@ -1,8 +1,8 @@
 """The ``geomkit`` command line.  Calls only the public API.
 
 Layout: this module builds the parser and runs a command; :mod:`._common` loads
-inputs and parses argument types; :mod:`.jobs` and :mod:`.clearance` hold the
-commands."""
+inputs and parses argument types; :mod:`.jobs`, :mod:`.clearance` and :mod:`.bench`
+hold the commands."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import sys
 
 from ..errors import GeomkitError
 from ._common import _positive_float, _positive_int, _positive_or_zero
+from . import bench as _bench
 from . import clearance as _clearance
 from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
                    _cmd_samples, _cmd_section)
@@ -126,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="section", help="output folder")
     p.set_defaults(func=_cmd_section)
     _clearance.add_parser(sub, common, _positive_float, _positive_or_zero)
+    _bench.add_parser(sub)
     p = sub.add_parser("info", help="describe the surfaces of a file")
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
