@@ -101,6 +101,8 @@ class _TrimPolylines:
 
     def _loop_polyline(self, loop, chord_tol: float) -> np.ndarray:
         s = self.surface
+        (u0, u1), (v0, v1) = s.domain
+        lo, hi = np.array([u0, v0]), np.array([u1, v1])
         out = []
         for c in loop.pieces:
             p = c.degree
@@ -110,8 +112,10 @@ class _TrimPolylines:
             for _ in range(60):
                 mids = np.array([0.25, 0.5, 0.75])
                 tm = t[:-1, None] + (t[1:] - t[:-1])[:, None] * mids[None, :]
-                C = evaluate_trim_curve(c, t)[:, 0, :]
-                Cm = evaluate_trim_curve(c, tm.ravel())[:, 0, :].reshape(-1, 3, 2)
+                # trim curves may stray outside the domain by the validation tolerance:
+                # the mesh boundary follows them clipped to it (S is not defined outside)
+                C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
+                Cm = np.clip(evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, 3, 2)
                 P = evaluate(s, C)
                 dev = np.empty(len(t) - 1)
                 chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,

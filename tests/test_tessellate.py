@@ -778,3 +778,17 @@ def test_random_surfaces_deviation_manifold_no_degenerate_faces(s, rel):
     r = naive.sample_mesh_deviation(mesh, [s], n_faces=2000, n_worst=300, exact_above=tol)
     assert r["to_surface"] <= tol * REL, r
     assert r["to_mesh"] <= tol * REL, r
+
+
+def test_trim_loop_straying_outside_the_domain_within_tolerance():
+    """A trim loop may lie outside the domain by the validation tolerance (IGES files
+    do this): the mesh boundary follows it clipped to the domain instead of failing."""
+    P = np.array([[[0, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0.0]]])
+    e = 1e-9
+    loop = [[-e, -e], [1 + e, -e], [1 + e, 1 + e], [-e, 1 + e], [-e, -e]]
+    s = Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], P, trim=[loop])
+    mesh = tessellate(s, 1e-3)
+    assert np.isfinite(mesh.vertices).all() and mesh.max_deviation <= 1e-3
+    assert np.allclose(mesh.vertices.min(axis=0), 0) and np.allclose(mesh.vertices.max(axis=0),
+                                                                     [1, 1, 0])
+    assert abs(mesh.area - 1.0) < 1e-12
