@@ -24,6 +24,7 @@ prefix [0, s] (its clearance decreases with s), each step decided by certified b
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -395,6 +396,7 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
         raise InvalidInputError("must be > 0", "tol" if tol <= 0 else "contact_tol")
     scale = max(diag, float(np.abs(poses[:, :3, 3]).max()), stylus.length, 1e-300)
     comps = stylus.components()
+    part_boxes = np.array([s.bounds for s in surfaces])  # control-net boxes (n, 2, 3)
     m, c = len(poses) - 1, len(comps)
     gap = np.full((m, c), np.nan)
     glo = np.full((m, c), np.nan)
@@ -410,14 +412,15 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
         first_i = np.inf
         for j, (name, a, b, r) in enumerate(comps):
             A, B = R @ a + p, R @ b + p
-            res = surface_distance(mo.sweep(A, B), surfaces, tol=tol, max_pairs=max_pairs)
+            res = _distance(mo.sweep(A, B), part_boxes, surfaces, tol, max_pairs)
             calls += 1
             gap[i, j] = max(res.upper - r, 0.0)
             glo[i, j] = max(res.lower - r, 0.0)
             if best[i] is None or gap[i, j] < gap[i, best[i][0]]:
                 best[i] = (j, res, A, B, r)
             if res.lower - r <= 0.0:  # contact possible: find when it starts
-                s, q, n = _first_contact(mo, A, B, r, surfaces, min(tol, 1e-10 * scale),
+                s, q, n = _first_contact(mo, A, B, r, part_boxes, surfaces,
+                                         min(tol, 1e-10 * scale),
                                          max_pairs, contact_tol, min(first_i, 1.0))
                 calls += n
                 if s < first_i or (s == first_i and contact_at[i] is None):
@@ -463,7 +466,7 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
                      stats={"distance_calls": calls, "seconds": time.perf_counter() - t_start})
 
 
-def _first_contact(mo, A, B, r, surfaces, tol, max_pairs, contact_tol, s_hi):
+def _first_contact(mo, A, B, r, part_boxes, surfaces, tol, max_pairs, contact_tol, s_hi):
     """Smallest s in [0, s_hi] at which the capsule (A-B, r) touches the part.
 
     The prefix sweep [0, s] grows with s, so its distance decreases: bisection with
@@ -475,7 +478,7 @@ def _first_contact(mo, A, B, r, surfaces, tol, max_pairs, contact_tol, s_hi):
         nonlocal calls
         calls += 1
         sweep = _segment_surface(A, B) if s <= 0.0 else mo.sweep(A, B, s)
-        d = surface_distance(sweep, surfaces, tol=tol, max_pairs=max_pairs)
+        d = _distance(sweep, part_boxes, surfaces, tol, max_pairs)
         if d.lower - r <= 0.0:
             hit[0] = d.point_b
             return True
@@ -496,6 +499,33 @@ def _first_contact(mo, A, B, r, surfaces, tol, max_pairs, contact_tol, s_hi):
             lo = mid
     touches(hi)  # the contact point at the reported parameter
     return hi, hit[0], calls
+
+
+FIRST_FACES = 4
+"""Faces whose boxes are nearest a sweep, measured first; their distance then bounds
+which other faces can still matter."""
+
+
+def _distance(sweep: Surface, boxes, surfaces, tol, max_pairs):
+    """surface_distance(sweep, surfaces) on only the faces that can hold the minimum.
+
+    A face's control-net box contains it, so the box gap is a lower bound of its
+    distance: the nearest few faces by box give an attained distance ``d``; faces whose
+    box gap exceeds ``d`` cannot be closer and are never subdivided."""
+    b = sweep.bounds
+    gap = np.linalg.norm(np.maximum(0.0, np.maximum(boxes[:, 0] - b[1], b[0] - boxes[:, 1])),
+                         axis=1)
+    n = len(surfaces)
+    if n <= FIRST_FACES:
+        return surface_distance(sweep, surfaces, tol=tol, max_pairs=max_pairs)
+    kth = np.partition(gap, FIRST_FACES - 1)[FIRST_FACES - 1]
+    first = np.flatnonzero(gap <= kth)
+    res = surface_distance(sweep, [surfaces[i] for i in first], tol=tol, max_pairs=max_pairs)
+    cand = np.flatnonzero(gap <= res.upper)
+    if np.isin(cand, first).all():
+        return dataclasses.replace(res, surface_b=int(first[res.surface_b]))
+    res = surface_distance(sweep, [surfaces[i] for i in cand], tol=tol, max_pairs=max_pairs)
+    return dataclasses.replace(res, surface_b=int(cand[res.surface_b]))
 
 
 def _end_segment(sweep: Surface):
