@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.tess import cell_deviation, cell_errors, fill_rings
+from ._kernels.tess import cell_deviation, cell_errors
+from ._kernels.tess_lattice import fill_rings
 
 LEVELS = 24
 UNIT = 1 << LEVELS

@@ -34,6 +34,7 @@ def bezier_patches(surface: Surface) -> BezierPatches:
     rows = Qu.reshape(nsu * (p + 1), nv, 4)
     # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
     cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
+    cols.setflags(write=False)  # read-only like the first call's: one compiled decompose
     Qv, vb = decompose(cols, q, surface.knots_v)
     nsv = Qv.shape[0]
     H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)

@@ -85,8 +85,12 @@ def _pack(surfaces):
         o += nu * nv
         uo += s.knots_u.size
         vo += s.knots_v.size
-    return (np.ascontiguousarray(np.concatenate(Pw)), np.concatenate(U), np.concatenate(V),
-            meta, dom)
+    out = (np.ascontiguousarray(np.concatenate(Pw)), np.concatenate(U), np.concatenate(V))
+    for a in out:
+        # read-only like every Surface array, so the kernels share one compiled
+        # signature of the evaluation chain (numba types read-only arrays apart)
+        a.setflags(write=False)
+    return out + (meta, dom)
 
 
 def _c0_breaks(surfaces):

@@ -37,7 +37,8 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
-from ._kernels.tess import cell_triangles, chord_deviation, triangle_deviation
+from ._kernels.tess import chord_deviation, triangle_deviation
+from ._kernels.tess_lattice import cell_triangles
 from ._validate import as_int
 from .errors import InvalidInputError
 from .evaluation import evaluate

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
+from ._numba import jit, prun
+
+CURVE_CHUNK = 256
 from .basis import ders_basis_funs, ders_scratch, find_span
 
 
@@ -53,8 +55,10 @@ def decompose(Pw, p, U):
     b = p + 1
     nb = 0
     breaks[0] = U[p]
+    # element loops, not slice expressions: no shape-check raise path to compile
     for i in range(p + 1):
-        Q[0, i, :] = Pw[i, :]
+        for c in range(dim):
+            Q[0, i, c] = Pw[i, c]
     while b < m:
         i = b
         while b < m and U[b + 1] == U[b]:
@@ -70,14 +74,17 @@ def decompose(Pw, p, U):
                 s = mult + j
                 for k in range(p, s - 1, -1):
                     alpha = alphas[k - s]
-                    Q[nb, k, :] = alpha * Q[nb, k, :] + (1.0 - alpha) * Q[nb, k - 1, :]
+                    for c in range(dim):
+                        Q[nb, k, c] = alpha * Q[nb, k, c] + (1.0 - alpha) * Q[nb, k - 1, c]
                 if b < m and nb + 1 < nseg:
-                    Q[nb + 1, save, :] = Q[nb, p, :]
+                    for c in range(dim):
+                        Q[nb + 1, save, c] = Q[nb, p, c]
         breaks[nb + 1] = U[b]
         nb += 1
         if b < m and nb < nseg:
             for k in range(p - mult, p + 1):
-                Q[nb, k, :] = Pw[b - p + k, :]
+                for c in range(dim):
+                    Q[nb, k, c] = Pw[b - p + k, c]
             a = b
             b += 1
     return Q, breaks
@@ -130,12 +137,20 @@ def insert_knot(Pw, p, U, u, r):
 def de_casteljau_split(Q, t, left, right):
     """Split the Bézier segment ``Q`` (p+1, dim) at ``t`` into ``left`` and ``right``."""
     p = Q.shape[0] - 1
-    right[:, :] = Q[:, :]
-    left[0, :] = Q[0, :]
+    dim = Q.shape[1]
+    # element loops, not slice expressions: no temporaries and no shape-check raise
+    # path (its string formatting alone costs seconds of compile)
+    for i in range(p + 1):
+        for c in range(dim):
+            right[i, c] = Q[i, c]
+    for c in range(dim):
+        left[0, c] = Q[0, c]
     for r in range(1, p + 1):
         for i in range(p - r + 1):
-            right[i, :] = (1.0 - t) * right[i, :] + t * right[i + 1, :]
-        left[r, :] = right[0, :]
+            for c in range(dim):
+                right[i, c] = (1.0 - t) * right[i, c] + t * right[i + 1, c]
+        for c in range(dim):
+            left[r, c] = right[0, c]
 
 
 @jit
@@ -165,10 +180,13 @@ def curve_derivs(Pw, p, U, t, d, dN, out):
             out[j, c] = val / Aw[0, k]
 
 
-@pjit
-def curve_points(Pw, p, U, t, d, out):
-    """Batch curve points and derivatives: ``out`` (m, d+1, k), parallel over ``t``."""
-    m = t.shape[0]
-    for i in prange(m):
+@jit
+def _curve_points_range(i0, i1, Pw, p, U, t, d, out):
+    for i in range(i0, i1):
         dN = np.empty((d + 1, p + 1))
         curve_derivs(Pw, p, U, t[i], d, dN, out[i])
+
+
+def curve_points(Pw, p, U, t, d, out):
+    """Batch curve points and derivatives: ``out`` (m, d+1, k), parallel over ``t``."""
+    prun(_curve_points_range, t.shape[0], CURVE_CHUNK, Pw, p, U, t, d, out)

@@ -38,7 +38,7 @@ from ._numba import jit, jit_inline
 from .project import _surface, foot_newton
 from .trim_feet import _trim_point
 from .voxel import _heap_pop, _heap_push
-from .surface import _binomial_table, derivs_scratch, surface_derivs
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
 NI = 10
@@ -65,26 +65,38 @@ STOP_EXHAUSTED = 2
 
 
 # --------------------------------------------------------------------------- growth
-@jit
+@jit_inline
 def _grow2(a, need):
     n = a.shape[0]
     if need <= n:
         return a
     m = max(need, 2 * n)
     b = np.empty((m, a.shape[1]), dtype=a.dtype)
-    b[:n] = a
+    for i in range(n):
+        for j in range(a.shape[1]):
+            b[i, j] = a[i, j]
     return b
 
 
-@jit
+@jit_inline
 def _grow1(a, need):
     n = a.shape[0]
     if need <= n:
         return a
     m = max(need, 2 * n)
     b = np.empty(m, dtype=a.dtype)
-    b[:n] = a
+    for i in range(n):
+        b[i] = a[i]
     return b
+
+
+@jit_inline
+def _max_loops(trim_meta):
+    """``max(1, trim_meta[:, 2].max())`` without numpy's max (slow to compile)."""
+    m = 1
+    for s in range(trim_meta.shape[0]):
+        m = max(m, trim_meta[s, 2])
+    return m
 
 
 # --------------------------------------------------------------------------- patches
@@ -222,7 +234,7 @@ def _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1, v
     return ST_MIXED
 
 
-@jit
+@jit_inline
 def _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s, u, v, tol, winding, stack,
                depths, left, right):
     first = trim_meta[s, 0]
@@ -325,7 +337,7 @@ def _chol_solve(H, g, free, n, x):
 @jit
 def _eval2(Pw_all, U_all, V_all, meta, s, u, v, bin_, scr, SKL):
     Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, s)
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
 
 
 @jit
@@ -551,7 +563,7 @@ def alternate_feet(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, 
     # start: the point of b at its parameters
     Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, sb)
     surface_derivs(Pw, p, q, U, V, min(dom[sb, 1], max(dom[sb, 0], x4[2])),
-                   min(dom[sb, 3], max(dom[sb, 2], x4[3])), 2, bin_, scr, SKL)
+                   min(dom[sb, 3], max(dom[sb, 2], x4[3])), D2, bin_, scr, SKL)
     for c in range(3):
         xb[c] = SKL[0, 0, c]
     fb[0] = x4[2]
@@ -597,18 +609,18 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     Returns the final pools (for inspection and memory accounting).
     """
     pmax1 = seg_all.shape[1]
-    winding = np.zeros(max(1, trim_meta[:, 2].max()), dtype=np.int64)
+    winding = np.zeros(_max_loops(trim_meta), dtype=np.int64)
     stack = np.empty((MAX_DEPTH + 2, pmax1, 3))
     depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
     tleft = np.empty((pmax1, 3))
     tright = np.empty((pmax1, 3))
-    maxdeg = 1
+    maxdeg = np.int64(1)  # not a literal: one compile of derivs_scratch
     for s in range(meta.shape[0]):
         maxdeg = max(maxdeg, max(meta[s, 3], meta[s, 4]))
     tmp = np.empty((2 * maxdeg + 3, 4))
     bin_ = _binomial_table(2 * maxdeg + 2)
-    scra = derivs_scratch(maxdeg, maxdeg, 2)
-    scrb = derivs_scratch(maxdeg, maxdeg, 2)
+    scra = derivs_scratch(maxdeg, maxdeg, D2)
+    scrb = derivs_scratch(maxdeg, maxdeg, D2)
     SA = np.zeros((3, 3, 3))
     SB = np.zeros((3, 3, 3))
     x4 = np.empty(4)
@@ -687,7 +699,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
             pushed += 1
     peak = nh
     stop = STOP_CERTIFIED
-    ctrl_top = 0
+    ctrl_top = np.int64(0)  # not a literal: one compile of _split_into
     for k in range(n_nodes):
         ctrl_top = max(ctrl_top, ni[k, I_OFF] + (ni[k, I_P] + 1) * (ni[k, I_Q] + 1) * 4)
     kids = np.empty(2, dtype=np.int64)
@@ -888,7 +900,7 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
     """Fill boxes, trim states and representative points of the root nodes ``0..n-1``
     (offset, degrees, surface and UV box already set)."""
     pmax1 = seg_all.shape[1]
-    winding = np.zeros(max(1, trim_meta[:, 2].max()), dtype=np.int64)
+    winding = np.zeros(_max_loops(trim_meta), dtype=np.int64)
     stack = np.empty((MAX_DEPTH + 2, pmax1, 3))
     depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
     tleft = np.empty((pmax1, 3))

@@ -23,17 +23,20 @@ import math
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
-from .surface import _binomial_table, derivs_scratch, surface_derivs
+from ._numba import jit, jit_inline, prun
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
 from .voxel import point_candidates
 
 MAX_ITER = 100
 FLAT_RATIO = 0.1
 FOOT_OK = 0
 FOOT_NOT_CONVERGED = 1
+PROJECT_CHUNK = 64
+_ALONG_U = np.int64(1)  # non-literal: one compile of _slope for both directions
+_ALONG_V = np.int64(0)
 
 
-@jit
+@jit_inline
 def _surface(Pw_all, U_all, V_all, meta, s):
     o, nu, nv, p, q, uo, vo = (meta[s, 0], meta[s, 1], meta[s, 2], meta[s, 3], meta[s, 4],
                                meta[s, 5], meta[s, 6])
@@ -72,7 +75,7 @@ def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
         u = umax - left_u
     if left_v > 0.0 and v >= vmax:
         v = vmax - left_v
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
 
 
 @jit
@@ -277,7 +280,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
 @jit
 def _slope(Pw, p, q, U, V, u, v, x, along_u, bin_, scr, SKL):
     """d/du (along_u = 1) or d/dv of |S - x|^2 / 2 at (u, v)."""
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
     k = 1 if along_u else 0
     g = 0.0
     for c in range(3):
@@ -331,34 +334,140 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
         uc = min(ub, max(ua, u))
         eu = 1e-14 * (dom[1] - dom[0])
         ev = 1e-14 * (dom[3] - dom[2])
-        if iu < npu - 1 and u >= ub and _slope(Pw, p, q, U, V, ub, vc, x, 1, bin_, scr,
-                                              SKL) < 0.0:
+        if iu < npu - 1 and u >= ub and _slope(Pw, p, q, U, V, ub, vc, x, _ALONG_U,
+                                              bin_, scr, SKL) < 0.0:
             iu += 1
             u = ub
             moved = True
-        elif iu > 0 and u <= ua and _slope(Pw, p, q, U, V, ua - eu, vc, x, 1, bin_, scr,
-                                           SKL) > 0.0:
+        elif iu > 0 and u <= ua and _slope(Pw, p, q, U, V, ua - eu, vc, x, _ALONG_U,
+                                           bin_, scr, SKL) > 0.0:
             iu -= 1
             u = ua
             moved = True
-        elif iv < npv - 1 and v >= vb and _slope(Pw, p, q, U, V, uc, vb, x, 0, bin_, scr,
-                                                SKL) < 0.0:
+        elif iv < npv - 1 and v >= vb and _slope(Pw, p, q, U, V, uc, vb, x, _ALONG_V,
+                                                bin_, scr, SKL) < 0.0:
             iv += 1
             v = vb
             moved = True
-        elif iv > 0 and v <= va and _slope(Pw, p, q, U, V, uc, va - ev, x, 0, bin_, scr,
-                                           SKL) > 0.0:
+        elif iv > 0 and v <= va and _slope(Pw, p, q, U, V, uc, va - ev, x, _ALONG_V,
+                                           bin_, scr, SKL) > 0.0:
             iv -= 1
             v = va
             moved = True
         if not moved:
             break
     # leave the derivatives of the returned point in SKL
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
     return u, v, d, it_all, st
 
 
-@pjit
+@jit
+def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
+                   lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
+                   brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
+                   out_st, out_nf, out_lb, out_flags, out_work):
+    """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
+    m = F.shape[0]
+    bin_ = _binomial_table(D2)
+    K = out_s.shape[1]
+    stamp = np.full(m, -1, dtype=np.int64)
+    hk = np.empty(256)
+    hv = np.empty(256, dtype=np.int64)
+    cap = 64
+    ct = np.empty(cap, dtype=np.int64)
+    cd = np.empty(cap)
+    cs = np.empty(cap)
+    cw = np.empty(cap)
+    SKL = np.empty((3, 3, 3))
+    pmax = np.int64(1)  # not a literal 1: one compile of derivs_scratch
+    qmax = np.int64(1)
+    for s in range(meta.shape[0]):
+        pmax = max(pmax, meta[s, 3])
+        qmax = max(qmax, meta[s, 4])
+    scr = derivs_scratch(pmax, qmax, D2)
+    x = np.empty(3)
+    for i in range(i0, i1):
+        x[0] = P[i, 0]
+        x[1] = P[i, 1]
+        x[2] = P[i, 2]
+        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+            x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+            start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+        out_lb[i] = LB
+        out_work[i, 0] = pops
+        out_work[i, 1] = tested
+        flags = 1 if ovf else 0
+        nf = 0
+        best = np.inf
+        if k == 0:
+            flags |= 2
+        for c in range(k):
+            if nf >= K or nf >= max_starts:
+                break
+            t = ct[c]
+            if cd[c] - fdev[t] >= best:
+                break  # sorted by distance: no later candidate can win either
+            s = face_surf[t]
+            sw = cs[c]
+            ww = cw[c]
+            u0 = face_uv[t, 0, 0] + sw * (face_uv[t, 1, 0] - face_uv[t, 0, 0]) \
+                + ww * (face_uv[t, 2, 0] - face_uv[t, 0, 0])
+            v0 = face_uv[t, 0, 1] + sw * (face_uv[t, 1, 1] - face_uv[t, 0, 1]) \
+                + ww * (face_uv[t, 2, 1] - face_uv[t, 0, 1])
+            # a start inside the basin of a foot already found is skipped: within
+            # two UV diameters of its triangle from that foot
+            du0 = max(abs(face_uv[t, 1, 0] - face_uv[t, 0, 0]),
+                      max(abs(face_uv[t, 2, 0] - face_uv[t, 0, 0]),
+                          abs(face_uv[t, 2, 0] - face_uv[t, 1, 0])))
+            dv0 = max(abs(face_uv[t, 1, 1] - face_uv[t, 0, 1]),
+                      max(abs(face_uv[t, 2, 1] - face_uv[t, 0, 1]),
+                          abs(face_uv[t, 2, 1] - face_uv[t, 1, 1])))
+            # ... but only on a nearly flat triangle (deviation <= FLAT_RATIO x its
+            # 3-D diameter): a curved piece may hold a second basin
+            diam = 0.0
+            for e0 in range(3):
+                e1 = (e0 + 1) % 3
+                ex = V[F[t, e0], 0] - V[F[t, e1], 0]
+                ey = V[F[t, e0], 1] - V[F[t, e1], 1]
+                ez = V[F[t, e0], 2] - V[F[t, e1], 2]
+                diam = max(diam, ex * ex + ey * ey + ez * ez)
+            flat = fdev[t] <= FLAT_RATIO * math.sqrt(diam)
+            dup = False
+            for j in range(nf):
+                if not flat:
+                    break
+                if out_s[i, j] == s and abs(out_uv[i, j, 0] - u0) <= 2.0 * du0 \
+                        and abs(out_uv[i, j, 1] - v0) <= 2.0 * dv0:
+                    dup = True
+                    break
+            if dup:
+                continue
+            Pw, p, q, U, Vk = _surface(Pw_all, U_all, V_all, meta, s)
+            bu = brk_all[brk_off[s, 0]:brk_off[s, 0] + brk_off[s, 1]]
+            bv = brk_all[brk_off[s, 2]:brk_off[s, 2] + brk_off[s, 3]]
+            u, v, d, it, st = foot_c0(Pw, p, q, U, Vk, dom[s], bu, bv,
+                                      closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
+                                      step_tol, bin_, scr, SKL)
+            # insert sorted by distance
+            j = nf
+            while j > 0 and out_d[i, j - 1] > d:
+                out_s[i, j] = out_s[i, j - 1]
+                out_uv[i, j, 0] = out_uv[i, j - 1, 0]
+                out_uv[i, j, 1] = out_uv[i, j - 1, 1]
+                out_d[i, j] = out_d[i, j - 1]
+                out_st[i, j] = out_st[i, j - 1]
+                j -= 1
+            out_s[i, j] = s
+            out_uv[i, j, 0] = u
+            out_uv[i, j, 1] = v
+            out_d[i, j] = d
+            out_st[i, j] = st
+            nf += 1
+            best = min(best, d)
+        out_nf[i] = nf
+        out_flags[i] = flags
+
+
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, brk_all,
                   brk_off, step_tol, max_dist,
@@ -371,107 +480,9 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     nearest first.  ``out_lb[i]`` is the mesh lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``out_flags[i]`` bit 0:
     more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
+    Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
-    n = P.shape[0]
-    m = F.shape[0]
-    CH = 64
-    nch = (n + CH - 1) // CH
-    bin_ = _binomial_table(2)
-    K = out_s.shape[1]
-    for ch in prange(nch):
-        stamp = np.full(m, -1, dtype=np.int64)
-        hk = np.empty(256)
-        hv = np.empty(256, dtype=np.int64)
-        cap = 64
-        ct = np.empty(cap, dtype=np.int64)
-        cd = np.empty(cap)
-        cs = np.empty(cap)
-        cw = np.empty(cap)
-        SKL = np.empty((3, 3, 3))
-        pmax = 1
-        qmax = 1
-        for s in range(meta.shape[0]):
-            pmax = max(pmax, meta[s, 3])
-            qmax = max(qmax, meta[s, 4])
-        scr = derivs_scratch(pmax, qmax, 2)
-        x = np.empty(3)
-        for i in range(ch * CH, min(n, (ch + 1) * CH)):
-            x[0] = P[i, 0]
-            x[1] = P[i, 1]
-            x[2] = P[i, 2]
-            k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
-                x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
-                start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
-            out_lb[i] = LB
-            out_work[i, 0] = pops
-            out_work[i, 1] = tested
-            flags = 1 if ovf else 0
-            nf = 0
-            best = np.inf
-            if k == 0:
-                flags |= 2
-            for c in range(k):
-                if nf >= K or nf >= max_starts:
-                    break
-                t = ct[c]
-                if cd[c] - fdev[t] >= best:
-                    break  # sorted by distance: no later candidate can win either
-                s = face_surf[t]
-                sw = cs[c]
-                ww = cw[c]
-                u0 = face_uv[t, 0, 0] + sw * (face_uv[t, 1, 0] - face_uv[t, 0, 0]) \
-                    + ww * (face_uv[t, 2, 0] - face_uv[t, 0, 0])
-                v0 = face_uv[t, 0, 1] + sw * (face_uv[t, 1, 1] - face_uv[t, 0, 1]) \
-                    + ww * (face_uv[t, 2, 1] - face_uv[t, 0, 1])
-                # a start inside the basin of a foot already found is skipped: within
-                # two UV diameters of its triangle from that foot
-                du0 = max(abs(face_uv[t, 1, 0] - face_uv[t, 0, 0]),
-                          max(abs(face_uv[t, 2, 0] - face_uv[t, 0, 0]),
-                              abs(face_uv[t, 2, 0] - face_uv[t, 1, 0])))
-                dv0 = max(abs(face_uv[t, 1, 1] - face_uv[t, 0, 1]),
-                          max(abs(face_uv[t, 2, 1] - face_uv[t, 0, 1]),
-                              abs(face_uv[t, 2, 1] - face_uv[t, 1, 1])))
-                # ... but only on a nearly flat triangle (deviation <= FLAT_RATIO x its
-                # 3-D diameter): a curved piece may hold a second basin
-                diam = 0.0
-                for e0 in range(3):
-                    e1 = (e0 + 1) % 3
-                    ex = V[F[t, e0], 0] - V[F[t, e1], 0]
-                    ey = V[F[t, e0], 1] - V[F[t, e1], 1]
-                    ez = V[F[t, e0], 2] - V[F[t, e1], 2]
-                    diam = max(diam, ex * ex + ey * ey + ez * ez)
-                flat = fdev[t] <= FLAT_RATIO * math.sqrt(diam)
-                dup = False
-                for j in range(nf):
-                    if not flat:
-                        break
-                    if out_s[i, j] == s and abs(out_uv[i, j, 0] - u0) <= 2.0 * du0 \
-                            and abs(out_uv[i, j, 1] - v0) <= 2.0 * dv0:
-                        dup = True
-                        break
-                if dup:
-                    continue
-                Pw, p, q, U, Vk = _surface(Pw_all, U_all, V_all, meta, s)
-                bu = brk_all[brk_off[s, 0]:brk_off[s, 0] + brk_off[s, 1]]
-                bv = brk_all[brk_off[s, 2]:brk_off[s, 2] + brk_off[s, 3]]
-                u, v, d, it, st = foot_c0(Pw, p, q, U, Vk, dom[s], bu, bv,
-                                          closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
-                                          step_tol, bin_, scr, SKL)
-                # insert sorted by distance
-                j = nf
-                while j > 0 and out_d[i, j - 1] > d:
-                    out_s[i, j] = out_s[i, j - 1]
-                    out_uv[i, j, 0] = out_uv[i, j - 1, 0]
-                    out_uv[i, j, 1] = out_uv[i, j - 1, 1]
-                    out_d[i, j] = out_d[i, j - 1]
-                    out_st[i, j] = out_st[i, j - 1]
-                    j -= 1
-                out_s[i, j] = s
-                out_uv[i, j, 0] = u
-                out_uv[i, j, 1] = v
-                out_d[i, j] = d
-                out_st[i, j] = st
-                nf += 1
-                best = min(best, d)
-            out_nf[i] = nf
-            out_flags[i] = flags
+    prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
+         origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
+         closed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
+         out_st, out_nf, out_lb, out_flags, out_work)

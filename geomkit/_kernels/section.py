@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
-from .surface import _binomial_table, derivs_scratch, surface_derivs, surface_point
+from ._numba import jit, jit_inline
+from .surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
 
 PRUNE = 0
 MONO_U = 1
@@ -58,7 +58,7 @@ def _split(Q, axis, L, R):
                     L[i, r, c] = R[i, 0, c]
 
 
-@jit
+@jit_inline
 def _variations(h, zsnap):
     """Sign changes of a control polygon, zeros (|h| <= zsnap) counted as positive."""
     count = 0
@@ -189,7 +189,10 @@ def subdivide(H, ub, vb, plane, zsnap, min_diam, max_depth):
             if ub[a + 1] <= ub[a] or vb[b + 1] <= vb[b]:
                 continue
             top = 0
-            stack[0] = H[a, b]
+            for i in range(m):  # element loops, not slice copies: no shape-check raise
+                for j in range(n):
+                    for c in range(4):
+                        stack[0, i, j, c] = H[a, b, i, j, c]
             boxes[0, 0] = ub[a]
             boxes[0, 1] = ub[a + 1]
             boxes[0, 2] = vb[b]
@@ -214,7 +217,9 @@ def subdivide(H, ub, vb, plane, zsnap, min_diam, max_depth):
                 if state != SPLIT:
                     if nout == out.shape[0]:
                         bigger = np.empty((2 * nout, 5))
-                        bigger[:nout] = out
+                        for i in range(nout):
+                            for c in range(5):
+                                bigger[i, c] = out[i, c]
                         out = bigger
                     out[nout, 0] = u0
                     out[nout, 1] = u1
@@ -335,15 +340,15 @@ def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f)
     the start limited to ``maxstep[i]`` and the iterate clamped to ``box`` (u0, u1,
     v0, v1).  Stops when ``|f| <= ftol``.  Writes the final parameters and ``f``.
     """
-    bin_ = _binomial_table(1)
-    scr = derivs_scratch(p, q, 1)
+    bin_ = _binomial_table(D1)
+    scr = derivs_scratch(p, q, D1)
     SKL = np.empty((2, 2, 3))
     for i in range(uv.shape[0]):
         u = uv[i, 0]
         v = uv[i, 1]
         f = 0.0
         for it in range(maxit + 1):
-            surface_derivs(Pw, p, q, U, V, u, v, 1, bin_, scr, SKL)
+            surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
             f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
                  + plane[3])
             if abs(f) <= ftol or it == maxit:
@@ -381,8 +386,8 @@ def critical_points(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f):
     parameters and ``f`` there; the caller accepts the point as a contact when ``|f|``
     is within its contact tolerance.
     """
-    bin_ = _binomial_table(2)
-    scr = derivs_scratch(p, q, 2)
+    bin_ = _binomial_table(D2)
+    scr = derivs_scratch(p, q, D2)
     SKL = np.empty((3, 3, 3))
     for i in range(boxes.shape[0]):
         u0 = boxes[i, 0]
@@ -395,7 +400,7 @@ def critical_points(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f):
         best_v = v
         best = np.inf
         for it in range(maxit):
-            surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+            surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
             f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
                  + plane[3])
             if abs(f) < best:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
+from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
@@ -19,6 +19,12 @@ POLE_RATIO = 1e-7
 """A point where ``min(|Su|, |Sv|) <= POLE_RATIO * max(|Su|, |Sv|)`` is treated as next
 to a collapsed row: its normal comes from the mixed derivative (error O(h) instead of
 the cross product's O(eps / h))."""
+D1 = np.int64(1)
+D2 = np.int64(2)
+"""Derivative orders passed to :func:`surface_derivs` / :func:`derivs_scratch` as
+non-literal int64: a literal ``2`` or ``1`` makes numba compile a separate
+specialisation of the whole evaluation chain per value (measured: 3 compiles of
+surface_derivs in one demo run)."""
 
 
 @jit
@@ -55,21 +61,21 @@ def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
     out[2] = tmp[2] / tmp[3]
 
 
-@pjit
+@jit
+def _surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
+    m = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(m)
+    right = np.empty(m)
+    tmp = np.empty(4)
+    for i in range(i0, i1):
+        surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, out[i])
+
+
 def surface_points(Pw, p, q, U, V, uv, out):
     """Batch S(u, v) for ``uv`` (n, 2) into ``out`` (n, 3), parallel over points."""
-    n = uv.shape[0]
-    nchunks = (n + CHUNK - 1) // CHUNK
-    m = max(p, q) + 1
-    for c in prange(nchunks):
-        Nu = np.empty(p + 1)
-        Nv = np.empty(q + 1)
-        left = np.empty(m)
-        right = np.empty(m)
-        tmp = np.empty(4)
-        stop = min(n, (c + 1) * CHUNK)
-        for i in range(c * CHUNK, stop):
-            surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, out[i])
+    prun(_surface_points_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, out)
 
 
 @jit
@@ -149,27 +155,27 @@ def surface_derivs(Pw, p, q, U, V, u, v, d, bin_, scr, SKL):
                 SKL[k, l, c] = val / w0
 
 
-@pjit
+@jit
+def _surface_derivatives_range(i0, i1, Pw, p, q, U, V, uv, d, out):
+    bin_ = _binomial_table(d)
+    scr = derivs_scratch(p, q, d)
+    for i in range(i0, i1):
+        surface_derivs(Pw, p, q, U, V, uv[i, 0], uv[i, 1], d, bin_, scr, out[i])
+
+
 def surface_derivatives(Pw, p, q, U, V, uv, d, out):
     """Batch derivatives: ``out`` (n, d+1, d+1, 3), parallel over points."""
-    n = uv.shape[0]
-    nchunks = (n + CHUNK - 1) // CHUNK
-    bin_ = _binomial_table(d)
-    for c in prange(nchunks):
-        scr = derivs_scratch(p, q, d)
-        stop = min(n, (c + 1) * CHUNK)
-        for i in range(c * CHUNK, stop):
-            surface_derivs(Pw, p, q, U, V, uv[i, 0], uv[i, 1], d, bin_, scr, out[i])
+    prun(_surface_derivatives_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, d, out)
 
 
-@jit
+@jit_inline
 def _cross_into(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
 
 
-@jit
+@jit_inline
 def _norm3(a):
     return np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
 
@@ -186,7 +192,7 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     the normal is taken at parameters nudged toward the domain centre.  Returns 0 for a
     regular point, 1 for a limit normal, 2 for a nudged normal, 3 if no normal exists.
     """
-    surface_derivs(Pw, p, q, U, V, u, v, 1, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
     su = SKL[1, 0]
     sv = SKL[0, 1]
     _cross_into(su, sv, out)
@@ -204,7 +210,7 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     r0 = out[0]
     r1 = out[1]
     r2 = out[2]
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
     su = SKL[1, 0]
     sv = SKL[0, 1]
     if lu <= lv:
@@ -233,7 +239,7 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     for _ in range(10):  # h up to 1: never leave the domain
         uu = u + h * (cu - u)
         vv = v + h * (cv - v)
-        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
+        surface_derivs(Pw, p, q, U, V, uu, vv, D1, bin_, scr, SKL)
         _cross_into(SKL[1, 0], SKL[0, 1], out)
         ln = _norm3(out)
         scale = max(_norm3(SKL[1, 0]), _norm3(SKL[0, 1]))
@@ -247,16 +253,18 @@ def surface_normal(Pw, p, q, U, V, u, v, umin, umax, vmin, vmax, degen_rel,
     return 3
 
 
-@pjit
+@jit
+def _surface_normals_range(i0, i1, Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel,
+                           out, status):
+    bin_ = _binomial_table(D2)
+    scr = derivs_scratch(p, q, D2)
+    SKL = np.empty((3, 3, 3))
+    for i in range(i0, i1):
+        status[i] = surface_normal(Pw, p, q, U, V, uv[i, 0], uv[i, 1], umin, umax,
+                                   vmin, vmax, degen_rel, bin_, scr, SKL, out[i])
+
+
 def surface_normals(Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel, out, status):
     """Batch unit normals ``out`` (n, 3) with per-point ``status`` (n,) int8."""
-    n = uv.shape[0]
-    nchunks = (n + CHUNK - 1) // CHUNK
-    bin_ = _binomial_table(2)
-    for c in prange(nchunks):
-        scr = derivs_scratch(p, q, 2)
-        SKL = np.empty((3, 3, 3))
-        stop = min(n, (c + 1) * CHUNK)
-        for i in range(c * CHUNK, stop):
-            status[i] = surface_normal(Pw, p, q, U, V, uv[i, 0], uv[i, 1], umin, umax,
-                                       vmin, vmax, degen_rel, bin_, scr, SKL, out[i])
+    prun(_surface_normals_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, umin, umax, vmin,
+         vmax, degen_rel, out, status)

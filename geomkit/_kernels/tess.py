@@ -13,11 +13,15 @@ import math
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
-from .surface import derivs_scratch, surface_derivs, surface_point
+from ._numba import jit, jit_inline, prun
+from .surface import D1, derivs_scratch, surface_derivs, surface_point
+
+CELL_CHUNK = 8
+"""Cells per parallel task range step (:func:`prun`)."""
+TRI_CHUNK = 32
 
 
-@jit
+@jit_inline
 def _dist3(a0, a1, a2, b0, b1, b2):
     d0 = a0 - b0
     d1 = a1 - b1
@@ -53,7 +57,7 @@ def _grid_normals(G, Nrm):
                 Nrm[i, j, 0] = np.nan
 
 
-@jit
+@jit_inline
 def _normal_gap(Nrm, G, i, j, x0, x1, x2):
     """|n . (G[i,j] - x)|: distance of x to the tangent plane at the grid sample."""
     d0 = G[i, j, 0] - x0
@@ -64,28 +68,10 @@ def _normal_gap(Nrm, G, i, j, x0, x1, x2):
     return abs(Nrm[i, j, 0] * d0 + Nrm[i, j, 1] * d1 + Nrm[i, j, 2] * d2)
 
 
-@pjit
-def cell_errors(Pw, p, q, U, V, cells, m, out):
-    """Error estimates for axis-aligned UV cells (parallel over cells).
-
-    The surface is sampled on an m x m grid per cell; each error is the largest
-    normal-direction gap ``|n . (S(uv) - X(uv))|`` (the first-order distance between
-    the surface and the approximating point, free of parametric sliding).
-
-    Parameters
-    ----------
-    cells : (N, 4) float, ``u0, u1, v0, v1`` per cell.
-    m : samples per side (>= 3).
-    out : (N, 5) float, filled with
-        0: gap of the two triangles split along (u0,v0)-(u1,v1);
-        1: the same for the other diagonal (u1,v0)-(u0,v1);
-        2: gap of u-line chords (v fixed) across the cell (need to split u);
-        3: gap of v-line chords (u fixed) across the cell (need to split v);
-        4: largest 3-D edge length of the cell's corners (for ``max_edge``).
-    """
-    N = cells.shape[0]
+@jit
+def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
     mm = max(p, q) + 1
-    for c in prange(N):
+    for c in range(i0, i1):
         Nu = np.empty(p + 1)
         Nv = np.empty(q + 1)
         left = np.empty(mm)
@@ -148,6 +134,27 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         out[c, 2] = e_u
         out[c, 3] = e_v
         out[c, 4] = edge
+
+
+def cell_errors(Pw, p, q, U, V, cells, m, out):
+    """Error estimates for axis-aligned UV cells (parallel over cells).
+
+    The surface is sampled on an m x m grid per cell; each error is the largest
+    normal-direction gap ``|n . (S(uv) - X(uv))|`` (the first-order distance between
+    the surface and the approximating point, free of parametric sliding).
+
+    Parameters
+    ----------
+    cells : (N, 4) float, ``u0, u1, v0, v1`` per cell.
+    m : samples per side (>= 3).
+    out : (N, 5) float, filled with
+        0: gap of the two triangles split along (u0,v0)-(u1,v1);
+        1: the same for the other diagonal (u1,v0)-(u0,v1);
+        2: gap of u-line chords (v fixed) across the cell (need to split u);
+        3: gap of v-line chords (u fixed) across the cell (need to split v);
+        4: largest 3-D edge length of the cell's corners (for ``max_edge``).
+    """
+    prun(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
 
 
 @jit
@@ -221,14 +228,14 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
                    az + abz * s + acz * w), s, w)
 
 
-@jit
+@jit_inline
 def point_triangle_distance(px, py, pz, T):
     """Euclidean distance from a point to the 3-D triangle T (3, 3)."""
     return closest_on_triangle(px, py, pz, T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1],
                                T[1, 2], T[2, 0], T[2, 1], T[2, 2])[0]
 
 
-@jit
+@jit_inline
 def point_triangle_closest(px, py, pz, V, a, b, c):
     """:func:`closest_on_triangle` for the triangle ``V[a], V[b], V[c]``."""
     return closest_on_triangle(px, py, pz, V[a, 0], V[a, 1], V[a, 2], V[b, 0], V[b, 1],
@@ -263,7 +270,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                 uu = u
                 vv = v
                 for _ in range(2):
-                    surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, scr, SKL)
+                    surface_derivs(Pw, p, q, U, V, uu, vv, D1, bin_, scr, SKL)
                     r0 = x - SKL[0, 0, 0]
                     r1 = y - SKL[0, 0, 1]
                     r2 = z - SKL[0, 0, 2]
@@ -285,15 +292,24 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
     return worst
 
 
-@jit
+@jit_inline
 def _dev_scratch(p, q):
     mm = max(p, q) + 1
     return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
-            np.empty(3), np.empty(3), derivs_scratch(p, q, 1), np.empty((2, 2, 3)),
+            np.empty(3), np.empty(3), derivs_scratch(p, q, D1), np.empty((2, 2, 3)),
             np.ones((2, 2)))
 
 
-@pjit
+@jit
+def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin,
+                              vmax, exact_above, out):
+    for t in range(i0, i1):
+        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+        out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
+                          tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
+                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_)
+
+
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
                        exact_above, out):
     """Measured deviation of flat triangles from the surface (parallel over triangles).
@@ -311,26 +327,14 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
     value of triangle t.
     """
-    M = tri_uv.shape[0]
-    for t in prange(M):
-        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
-        out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
-                          tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_)
+    prun(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
+         tri_xyz, k, umin, umax, vmin, vmax, exact_above, out)
 
 
-@pjit
-def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exact_above,
-                   target, out):
-    """Measured deviation of the two-triangle splits of UV cells (parallel).
-
-    ``cells`` (N, 4) ``u0, u1, v0, v1``; ``out`` (N, 2): column 0 for the diagonal
-    (u0,v0)-(u1,v1), column 1 for (u1,v0)-(u0,v1), each the larger of its two
-    triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
-    when it is within ``target`` the other is not measured (+inf).
-    """
-    N = cells.shape[0]
-    for c in prange(N):
+@jit
+def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
+                          exact_above, target, out):
+    for c in range(i0, i1):
         Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
         UVc = np.empty((4, 2))
         X = np.empty((4, 3))
@@ -357,27 +361,34 @@ def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exac
                     a, b, cc = (0, 1, 2) if half == 0 else (0, 2, 3)
                 else:
                     a, b, cc = (0, 1, 3) if half == 0 else (1, 2, 3)
-                T[0] = X[a]
-                T[1] = X[b]
-                T[2] = X[cc]
+                for r in range(3):
+                    T[0, r] = X[a, r]
+                    T[1, r] = X[b, r]
+                    T[2, r] = X[cc, r]
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
                                             left, right, tmp, P, Q, scr, SKL, bin_))
             out[c, diag] = worst
 
 
-@pjit
-def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
-    """Deviation of 3-D chords from the surface curve through given UV samples.
+def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exact_above,
+                   target, out):
+    """Measured deviation of the two-triangle splits of UV cells (parallel).
 
-    For each chord i, ``mid_uv[i, s]`` are UV points of the exact curve between its
-    ends (e.g. a trim curve at interior parameters); ``out[i]`` is the largest
-    distance from ``S(mid_uv[i, s])`` to the 3-D segment ``xyz_a[i]``–``xyz_b[i]``.
+    ``cells`` (N, 4) ``u0, u1, v0, v1``; ``out`` (N, 2): column 0 for the diagonal
+    (u0,v0)-(u1,v1), column 1 for (u1,v0)-(u0,v1), each the larger of its two
+    triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
+    when it is within ``target`` the other is not measured (+inf).
     """
-    n = mid_uv.shape[0]
+    prun(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
+         umin, umax, vmin, vmax, exact_above, target, out)
+
+
+@jit
+def _chord_deviation_range(i0, i1, Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
     ns = mid_uv.shape[1]
     mm = max(p, q) + 1
-    for i in prange(n):
+    for i in range(i0, i1):
         Nu = np.empty(p + 1)
         Nv = np.empty(q + 1)
         left = np.empty(mm)
@@ -403,190 +414,12 @@ def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
         out[i] = worst
 
 
-@jit
-def _range(keys, major, lo, hi, key):
-    a = np.searchsorted(keys, major * key + lo, side="right")
-    b = np.searchsorted(keys, major * key + hi, side="left")
-    return a, b
+def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
+    """Deviation of 3-D chords from the surface curve through given UV samples.
 
-
-@jit
-def fill_rings(hkeys, vkeys, key, cells, starts, out):
-    """Lattice points around each cell, counter-clockwise from (iu0, iv0).
-
-    ``hkeys`` are sorted ``gv * key + gu`` of all lattice points, ``vkeys`` sorted
-    ``gu * key + gv``; ``starts`` (N+1,) are the ring offsets into ``out`` (K, 2).
+    For each chord i, ``mid_uv[i, s]`` are UV points of the exact curve between its
+    ends (e.g. a trim curve at interior parameters); ``out[i]`` is the largest
+    distance from ``S(mid_uv[i, s])`` to the 3-D segment ``xyz_a[i]``–``xyz_b[i]``.
     """
-    for c in range(cells.shape[0]):
-        iu0 = cells[c, 0]
-        iu1 = cells[c, 1]
-        iv0 = cells[c, 2]
-        iv1 = cells[c, 3]
-        w = starts[c]
-        out[w, 0] = iu0
-        out[w, 1] = iv0
-        w += 1
-        a, b = _range(hkeys, iv0, iu0, iu1, key)
-        for r in range(a, b):
-            out[w, 0] = hkeys[r] % key
-            out[w, 1] = iv0
-            w += 1
-        out[w, 0] = iu1
-        out[w, 1] = iv0
-        w += 1
-        a, b = _range(vkeys, iu1, iv0, iv1, key)
-        for r in range(a, b):
-            out[w, 0] = iu1
-            out[w, 1] = vkeys[r] % key
-            w += 1
-        out[w, 0] = iu1
-        out[w, 1] = iv1
-        w += 1
-        a, b = _range(hkeys, iv1, iu0, iu1, key)
-        for r in range(b - 1, a - 1, -1):
-            out[w, 0] = hkeys[r] % key
-            out[w, 1] = iv1
-            w += 1
-        out[w, 0] = iu0
-        out[w, 1] = iv1
-        w += 1
-        a, b = _range(vkeys, iu0, iv0, iv1, key)
-        for r in range(b - 1, a - 1, -1):
-            out[w, 0] = iu0
-            out[w, 1] = vkeys[r] % key
-            w += 1
-
-
-@jit
-def _edge_nodes(hkeys, vkeys, key, edge, iu0, iu1, iv0, iv1, buf):
-    """Hanging nodes of a cell edge in counter-clockwise order; returns their count.
-
-    ``edge``: 0 bottom (A->B), 1 right (B->C), 2 top (C->D), 3 left (D->A).
-    """
-    n = 0
-    if edge == 0 or edge == 2:
-        vv = iv0 if edge == 0 else iv1
-        a, b = _range(hkeys, vv, iu0, iu1, key)
-        for r in range(a, b):
-            rr = r if edge == 0 else a + b - 1 - r
-            buf[n, 0] = hkeys[rr] % key
-            buf[n, 1] = vv
-            n += 1
-    else:
-        uu = iu1 if edge == 1 else iu0
-        a, b = _range(vkeys, uu, iv0, iv1, key)
-        for r in range(a, b):
-            rr = r if edge == 1 else a + b - 1 - r
-            buf[n, 0] = uu
-            buf[n, 1] = vkeys[rr] % key
-            n += 1
-    return n
-
-
-@jit
-def _put(out, kind, w, ax, ay, bx, by, cx, cy, k):
-    """Write lattice triangle (a, b, c) of kind ``k`` at row ``w``."""
-    out[w, 0, 0] = ax
-    out[w, 0, 1] = ay
-    out[w, 1, 0] = bx
-    out[w, 1, 1] = by
-    out[w, 2, 0] = cx
-    out[w, 2, 1] = cy
-    kind[w] = k
-
-
-@jit
-def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
-    """Triangles of cells whose edges may carry hanging nodes (lattice corners).
-
-    Cell corners A=(iu0,iv0), B=(iu1,iv0), C=(iu1,iv1), D=(iu0,iv1).  ``diag[c]`` 0
-    splits along AC, 1 along BD.  A half-triangle (P0, P1, P2) owning cell edges
-    P0P1 (hanging nodes a_i) and P1P2 (hanging nodes b_j) is fanned from P2 over
-    P0, a_1..a_k and then from a_k over P1, b_1..b_m, P2: every piece is
-    non-degenerate and the pieces conform to the finer neighbours.  ``diag[c] == 2``
-    fans the whole ring around the cell centre instead.
-    ``starts`` (N+1,) are the output offsets (see :func:`count_cell_triangles`);
-    ``out`` (T, 3, 2) lattice triangles, counter-clockwise; ``kind[t]`` 0 for a
-    plain half of a cell, 1 for a fan piece.
-    """
-    buf = np.empty((counts.max() + 2 if counts.size else 2, 2), dtype=np.int64)
-    buf2 = np.empty_like(buf)
-    corners = np.empty((4, 2), dtype=np.int64)
-    for c in range(cells.shape[0]):
-        iu0 = cells[c, 0]
-        iu1 = cells[c, 1]
-        iv0 = cells[c, 2]
-        iv1 = cells[c, 3]
-        corners[0, 0] = iu0
-        corners[0, 1] = iv0
-        corners[1, 0] = iu1
-        corners[1, 1] = iv0
-        corners[2, 0] = iu1
-        corners[2, 1] = iv1
-        corners[3, 0] = iu0
-        corners[3, 1] = iv1
-        w = starts[c]
-        if diag[c] == 2:
-            cu = (iu0 + iu1) // 2
-            cv = (iv0 + iv1) // 2
-            for e in range(4):
-                n = _edge_nodes(hkeys, vkeys, key, e, iu0, iu1, iv0, iv1, buf)
-                px = corners[e, 0]
-                py = corners[e, 1]
-                for r in range(n + 1):
-                    if r < n:
-                        qx = buf[r, 0]
-                        qy = buf[r, 1]
-                    else:
-                        qx = corners[(e + 1) % 4, 0]
-                        qy = corners[(e + 1) % 4, 1]
-                    _put(out, kind, w, cu, cv, px, py, qx, qy,
-                         1)
-                    w += 1
-                    px = qx
-                    py = qy
-            continue
-        for half in range(2):
-            # the half-triangle (P0, P1, P2), counter-clockwise, owning the cell edges
-            # P0 -> P1 (e1) and P1 -> P2 (e2); its third side is the diagonal
-            if diag[c] == 0:
-                c0, c1, c2 = (0, 1, 2) if half == 0 else (2, 3, 0)
-            else:
-                c0, c1, c2 = (3, 0, 1) if half == 0 else (1, 2, 3)
-            k1 = _edge_nodes(hkeys, vkeys, key, c0, iu0, iu1, iv0, iv1, buf)
-            k2 = _edge_nodes(hkeys, vkeys, key, c1, iu0, iu1, iv0, iv1, buf2)
-            # fan from P2 over P0, a_1..a_k1 (, P1 when k2 == 0)
-            px = corners[c0, 0]
-            py = corners[c0, 1]
-            last = k1 if k2 > 0 else k1 + 1
-            for r in range(last):
-                if r < k1:
-                    qx = buf[r, 0]
-                    qy = buf[r, 1]
-                else:
-                    qx = corners[c1, 0]
-                    qy = corners[c1, 1]
-                _put(out, kind, w, corners[c2, 0], corners[c2, 1], px, py, qx, qy,
-                     0 if (k1 == 0 and k2 == 0) else 1)
-                w += 1
-                px = qx
-                py = qy
-            if k2 == 0:
-                continue
-            # then fan from a_k1 (or P0) over P1, b_1..b_k2, P2
-            ax = px
-            ay = py
-            px = corners[c1, 0]
-            py = corners[c1, 1]
-            for r in range(k2 + 1):
-                if r < k2:
-                    qx = buf2[r, 0]
-                    qy = buf2[r, 1]
-                else:
-                    qx = corners[c2, 0]
-                    qy = corners[c2, 1]
-                _put(out, kind, w, ax, ay, px, py, qx, qy,
-                     1)
-                w += 1
-                px = qx
-                py = qy
+    prun(_chord_deviation_range, mid_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, uv_a, uv_b, xyz_a,
+         xyz_b, mid_uv, out)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
+from ._numba import jit, jit_inline, prun
 from .bezier import de_casteljau_split
 
 OUTSIDE = 0
@@ -31,9 +31,10 @@ INSIDE = 1
 BOUNDARY = 2
 
 MAX_DEPTH = 64
+CLASSIFY_CHUNK = 64
 
 
-@jit
+@jit_inline
 def _line_crossing(x1, y1, x2, y2, px, py, tol):
     """Signed crossing of segment with the ray to +u; returns (crossing, on_boundary)."""
     # distance from the point to the segment
@@ -70,7 +71,9 @@ def _segment_winding(Q, deg, px, py, tol, stack, depths, left, right):
                               Q[1, 0] / Q[1, 2], Q[1, 1] / Q[1, 2], px, py, tol)
     wind = 0
     grow = 0.25 * tol
-    stack[0, : deg + 1, :] = Q[: deg + 1, :]
+    for i in range(deg + 1):  # element loops, not slice copies: no shape-check raise
+        for c in range(3):
+            stack[0, i, c] = Q[i, c]
     depths[0] = 0
     top = 1
     while top > 0:
@@ -101,9 +104,11 @@ def _segment_winding(Q, deg, px, py, tol, stack, depths, left, right):
         if max(xmax - xmin, ymax - ymin) <= grow or depth >= MAX_DEPTH:
             return 0, True
         de_casteljau_split(piece, 0.5, left[: deg + 1], right[: deg + 1])
-        stack[top, : deg + 1, :] = right[: deg + 1]
+        for i in range(deg + 1):
+            for c in range(3):
+                stack[top, i, c] = right[i, c]
+                stack[top + 1, i, c] = left[i, c]
         depths[top] = depth + 1
-        stack[top + 1, : deg + 1, :] = left[: deg + 1]
         depths[top + 1] = depth + 1
         top += 2
     return wind, False
@@ -127,19 +132,20 @@ def classify_point(seg, seg_deg, seg_loop, nloops, px, py, tol, winding, stack, 
     return INSIDE if inside % 2 == 1 else OUTSIDE
 
 
-@pjit
+@jit
+def _classify_points_range(i0, i1, seg, seg_deg, seg_loop, nloops, uv, tol, out):
+    p1 = seg.shape[1]
+    winding = np.empty(nloops, dtype=np.int64)
+    stack = np.empty((MAX_DEPTH + 2, p1, 3))
+    depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
+    left = np.empty((p1, 3))
+    right = np.empty((p1, 3))
+    for i in range(i0, i1):
+        out[i] = classify_point(seg, seg_deg, seg_loop, nloops, uv[i, 0], uv[i, 1],
+                                tol, winding, stack, depths, left, right)
+
+
 def classify_points(seg, seg_deg, seg_loop, nloops, uv, tol, out):
     """Batch classification of ``uv`` (n, 2) into ``out`` (n,) int8, parallel."""
-    n = uv.shape[0]
-    p1 = seg.shape[1]
-    chunk = 64
-    nchunks = (n + chunk - 1) // chunk
-    for c in prange(nchunks):
-        winding = np.empty(nloops, dtype=np.int64)
-        stack = np.empty((MAX_DEPTH + 2, p1, 3))
-        depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
-        left = np.empty((p1, 3))
-        right = np.empty((p1, 3))
-        for i in range(c * chunk, min(n, (c + 1) * chunk)):
-            out[i] = classify_point(seg, seg_deg, seg_loop, nloops, uv[i, 0], uv[i, 1],
-                                    tol, winding, stack, depths, left, right)
+    prun(_classify_points_range, uv.shape[0], CLASSIFY_CHUNK, seg, seg_deg, seg_loop, nloops,
+         uv, tol, out)

@@ -7,9 +7,11 @@ import math
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
+from ._numba import jit, prun
 from .project import MAX_ITER
-from .surface import _binomial_table, derivs_scratch, surface_derivs
+
+TRIM_FEET_CHUNK = 16
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
 
 
 @jit
@@ -81,7 +83,7 @@ def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
     trim_curve_d2(Q, n, t, B, B1, B2, Cd)
     u = min(dom[1], max(dom[0], Cd[0, 0]))
     v = min(dom[3], max(dom[2], Cd[0, 1]))
-    surface_derivs(Pw, p, q, U, V, u, v, 2, bin_, scr, SKL)
+    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
     cu = Cd[1, 0]
     cv = Cd[1, 1]
     f = 0.0
@@ -100,20 +102,14 @@ def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
     return 0.5 * f, g, hh, math.sqrt(sp), u, v
 
 
-@pjit
-def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t, step_tol,
-              out_uv, out_d, out_seg, out_t):
-    """Nearest point of each point on the trim boundary of one surface.
-
-    Starts from the three nearest boundary samples (``samp_*``: points S(C(t)) on the
-    segments), then a safeguarded 1-D Newton in each segment's parameter t in [0, 1].
-    """
-    n = P.shape[0]
+@jit
+def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t,
+                     step_tol, out_uv, out_d, out_seg, out_t):
     M = samp_xyz.shape[0]
-    bin_ = _binomial_table(2)
+    bin_ = _binomial_table(D2)
     pmax = seg.shape[1] - 1
-    for i in prange(n):
-        scr = derivs_scratch(p, q, 2)
+    for i in range(i0, i1):
+        scr = derivs_scratch(p, q, D2)
         SKL = np.empty((3, 3, 3))
         B = np.empty(pmax + 1)
         B1 = np.empty(pmax + 1)
@@ -177,6 +173,17 @@ def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t, step
                 out_uv[i, 1] = min(dom[3], max(dom[2], Cd[0, 1]))
                 out_seg[i] = sg
                 out_t[i] = t
+
+
+def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t, step_tol,
+              out_uv, out_d, out_seg, out_t):
+    """Nearest point of each point on the trim boundary of one surface.
+
+    Starts from the three nearest boundary samples (``samp_*``: points S(C(t)) on the
+    segments), then a safeguarded 1-D Newton in each segment's parameter t in [0, 1].
+    """
+    prun(_trim_feet_range, P.shape[0], TRIM_FEET_CHUNK, P, Pw, p, q, U, V, dom, seg, deg,
+         samp_xyz, samp_seg, samp_t, step_tol, out_uv, out_d, out_seg, out_t)
 
 
 @jit

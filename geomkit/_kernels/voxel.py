@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, jit_inline, pjit, prange
+from ._numba import jit, jit_inline, prun
 from .tess import point_triangle_closest
 
 CROSSED = 1
@@ -31,6 +31,10 @@ ENCLOSED = 2
 """The triangle lies entirely inside the voxel."""
 
 CHUNK = 256
+# non-literal flags: bin_counts and bin_fill share one compiled _bin_triangle
+_COUNT = np.bool_(False)
+_WRITE = np.bool_(True)
+_ZERO = np.int64(0)
 
 
 # ---------------------------------------------------------------- triangle / box test
@@ -89,7 +93,7 @@ def tri_box_overlap(cx, cy, cz, hx, hy, hz, V, a, b, c):
     return True
 
 
-@jit
+@jit_inline
 def _tri_voxel_range(V, a, b, c, origin, h, dims, pad, out):
     for d in range(3):
         lo = min(V[a, d], min(V[b, d], V[c, d]))
@@ -173,30 +177,32 @@ def _bin_triangle(V, F, t, origin, h, dims, rng, write, pos, cell, tri, flag):
     return n
 
 
-@pjit
+@jit
+def _bin_counts_range(i0, i1, V, F, origin, h, dims, counts):
+    rng = np.empty((3, 2), dtype=np.int64)
+    dummy_i = np.empty(0, dtype=np.int64)
+    dummy_t = np.empty(0, dtype=np.int32)
+    dummy_f = np.empty(0, dtype=np.int8)
+    for t in range(i0, i1):
+        counts[t] = _bin_triangle(V, F, t, origin, h, dims, rng, _COUNT, _ZERO,
+                                  dummy_i, dummy_t, dummy_f)
+
+
 def bin_counts(V, F, origin, h, dims, counts):
     """Pass 1: number of voxels each triangle touches."""
-    m = F.shape[0]
-    nch = (m + CHUNK - 1) // CHUNK
-    for ch in prange(nch):
-        rng = np.empty((3, 2), dtype=np.int64)
-        dummy_i = np.empty(0, dtype=np.int64)
-        dummy_t = np.empty(0, dtype=np.int32)
-        dummy_f = np.empty(0, dtype=np.int8)
-        for t in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            counts[t] = _bin_triangle(V, F, t, origin, h, dims, rng, False, 0,
-                                      dummy_i, dummy_t, dummy_f)
+    prun(_bin_counts_range, F.shape[0], CHUNK, V, F, origin, h, dims, counts)
 
 
-@pjit
+@jit
+def _bin_fill_range(i0, i1, V, F, origin, h, dims, offsets, cell, tri, flag):
+    rng = np.empty((3, 2), dtype=np.int64)
+    for t in range(i0, i1):
+        _bin_triangle(V, F, t, origin, h, dims, rng, _WRITE, offsets[t], cell, tri, flag)
+
+
 def bin_fill(V, F, origin, h, dims, offsets, cell, tri, flag):
     """Pass 2: write (voxel, triangle, flag) entries at each triangle's offset."""
-    m = F.shape[0]
-    nch = (m + CHUNK - 1) // CHUNK
-    for ch in prange(nch):
-        rng = np.empty((3, 2), dtype=np.int64)
-        for t in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            _bin_triangle(V, F, t, origin, h, dims, rng, True, offsets[t], cell, tri, flag)
+    prun(_bin_fill_range, F.shape[0], CHUNK, V, F, origin, h, dims, offsets, cell, tri, flag)
 
 
 # ---------------------------------------------------------------- a small binary heap
@@ -205,8 +211,9 @@ def _heap_push(hk, hv, n, key, val):
     if n == hk.shape[0]:
         nk = np.empty(2 * n, dtype=hk.dtype)
         nv = np.empty(2 * n, dtype=hv.dtype)
-        nk[:n] = hk
-        nv[:n] = hv
+        for r in range(n):  # a loop, not a slice copy (no shape-check raise path)
+            nk[r] = hk[r]
+            nv[r] = hv[r]
         hk = nk
         hv = nv
     i = n
@@ -423,35 +430,38 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv
 
 
-@pjit
+@jit
+def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                          out_d, out_t, out_p, work):
+    m = F.shape[0]
+    zero = np.zeros(m)
+    stamp = np.full(m, -1, dtype=np.int64)
+    hk = np.empty(256)
+    hv = np.empty(256, dtype=np.int64)
+    ct = np.empty(1, dtype=np.int64)
+    cd = np.empty(1)
+    cs = np.empty(1)
+    cw = np.empty(1)
+    for i in range(i0, i1):
+        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+            P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
+            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, np.inf)
+        work[i, 0] = pops
+        work[i, 1] = tested
+        t = ct[0]
+        out_d[i] = cd[0]
+        out_t[i] = t
+        a, b, c = F[t, 0], F[t, 1], F[t, 2]
+        s, w = cs[0], cw[0]
+        for d in range(3):
+            out_p[i, d] = V[a, d] + s * (V[b, d] - V[a, d]) + w * (V[c, d] - V[a, d])
+
+
 def nearest_points(P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
                    out_d, out_t, out_p, work):
     """Exact nearest triangle of each point (best-first over the voxel pyramid)."""
-    n = P.shape[0]
-    m = F.shape[0]
-    nch = (n + CHUNK - 1) // CHUNK
-    zero = np.zeros(m)
-    for ch in prange(nch):
-        stamp = np.full(m, -1, dtype=np.int64)
-        hk = np.empty(256)
-        hv = np.empty(256, dtype=np.int64)
-        ct = np.empty(1, dtype=np.int64)
-        cd = np.empty(1)
-        cs = np.empty(1)
-        cw = np.empty(1)
-        for i in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
-                P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
-                occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, np.inf)
-            work[i, 0] = pops
-            work[i, 1] = tested
-            t = ct[0]
-            out_d[i] = cd[0]
-            out_t[i] = t
-            a, b, c = F[t, 0], F[t, 1], F[t, 2]
-            s, w = cs[0], cw[0]
-            for d in range(3):
-                out_p[i, d] = V[a, d] + s * (V[b, d] - V[a, d]) + w * (V[c, d] - V[a, d])
+    prun(_nearest_points_range, P.shape[0], CHUNK, P, V, F, origin, h, lvl_dims, lvl_off,
+         occ, start, tris, out_d, out_t, out_p, work)
 
 
 # ---------------------------------------------------------------- triangle queries

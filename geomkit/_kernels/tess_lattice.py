@@ -1,0 +1,223 @@
+"""Lattice triangulation kernels of the tessellation: the hanging-node rings and
+triangles of quadtree cells whose corners are integer lattice points (split out of
+:mod:`geomkit._kernels.tess`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._numba import jit, jit_inline
+
+_FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
+
+
+@jit_inline
+def _range(keys, major, lo, hi, key):
+    """``np.searchsorted(keys, major * key + lo, side="right")`` and
+    ``np.searchsorted(keys, major * key + hi, side="left")`` as plain bisections (the
+    numpy overloads cost ~0.5 s of compile)."""
+    x = major * key + lo
+    a = 0
+    e = keys.shape[0]
+    while a < e:
+        mid = (a + e) >> 1
+        if keys[mid] <= x:
+            a = mid + 1
+        else:
+            e = mid
+    x = major * key + hi
+    b = 0
+    e = keys.shape[0]
+    while b < e:
+        mid = (b + e) >> 1
+        if keys[mid] < x:
+            b = mid + 1
+        else:
+            e = mid
+    return a, b
+
+
+@jit
+def fill_rings(hkeys, vkeys, key, cells, starts, out):
+    """Lattice points around each cell, counter-clockwise from (iu0, iv0).
+
+    ``hkeys`` are sorted ``gv * key + gu`` of all lattice points, ``vkeys`` sorted
+    ``gu * key + gv``; ``starts`` (N+1,) are the ring offsets into ``out`` (K, 2).
+    """
+    for c in range(cells.shape[0]):
+        iu0 = cells[c, 0]
+        iu1 = cells[c, 1]
+        iv0 = cells[c, 2]
+        iv1 = cells[c, 3]
+        w = starts[c]
+        out[w, 0] = iu0
+        out[w, 1] = iv0
+        w += 1
+        a, b = _range(hkeys, iv0, iu0, iu1, key)
+        for r in range(a, b):
+            out[w, 0] = hkeys[r] % key
+            out[w, 1] = iv0
+            w += 1
+        out[w, 0] = iu1
+        out[w, 1] = iv0
+        w += 1
+        a, b = _range(vkeys, iu1, iv0, iv1, key)
+        for r in range(a, b):
+            out[w, 0] = iu1
+            out[w, 1] = vkeys[r] % key
+            w += 1
+        out[w, 0] = iu1
+        out[w, 1] = iv1
+        w += 1
+        a, b = _range(hkeys, iv1, iu0, iu1, key)
+        for r in range(b - 1, a - 1, -1):
+            out[w, 0] = hkeys[r] % key
+            out[w, 1] = iv1
+            w += 1
+        out[w, 0] = iu0
+        out[w, 1] = iv1
+        w += 1
+        a, b = _range(vkeys, iu0, iv0, iv1, key)
+        for r in range(b - 1, a - 1, -1):
+            out[w, 0] = iu0
+            out[w, 1] = vkeys[r] % key
+            w += 1
+
+
+@jit
+def _edge_nodes(hkeys, vkeys, key, edge, iu0, iu1, iv0, iv1, buf):
+    """Hanging nodes of a cell edge in counter-clockwise order; returns their count.
+
+    ``edge``: 0 bottom (A->B), 1 right (B->C), 2 top (C->D), 3 left (D->A).
+    """
+    n = 0
+    if edge == 0 or edge == 2:
+        vv = iv0 if edge == 0 else iv1
+        a, b = _range(hkeys, vv, iu0, iu1, key)
+        for r in range(a, b):
+            rr = r if edge == 0 else a + b - 1 - r
+            buf[n, 0] = hkeys[rr] % key
+            buf[n, 1] = vv
+            n += 1
+    else:
+        uu = iu1 if edge == 1 else iu0
+        a, b = _range(vkeys, uu, iv0, iv1, key)
+        for r in range(a, b):
+            rr = r if edge == 1 else a + b - 1 - r
+            buf[n, 0] = uu
+            buf[n, 1] = vkeys[rr] % key
+            n += 1
+    return n
+
+
+@jit_inline
+def _put(out, kind, w, ax, ay, bx, by, cx, cy, k):
+    """Write lattice triangle (a, b, c) of kind ``k`` at row ``w``."""
+    out[w, 0, 0] = ax
+    out[w, 0, 1] = ay
+    out[w, 1, 0] = bx
+    out[w, 1, 1] = by
+    out[w, 2, 0] = cx
+    out[w, 2, 1] = cy
+    kind[w] = k
+
+
+@jit
+def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
+    """Triangles of cells whose edges may carry hanging nodes (lattice corners).
+
+    Cell corners A=(iu0,iv0), B=(iu1,iv0), C=(iu1,iv1), D=(iu0,iv1).  ``diag[c]`` 0
+    splits along AC, 1 along BD.  A half-triangle (P0, P1, P2) owning cell edges
+    P0P1 (hanging nodes a_i) and P1P2 (hanging nodes b_j) is fanned from P2 over
+    P0, a_1..a_k and then from a_k over P1, b_1..b_m, P2: every piece is
+    non-degenerate and the pieces conform to the finer neighbours.  ``diag[c] == 2``
+    fans the whole ring around the cell centre instead.
+    ``starts`` (N+1,) are the output offsets (see :func:`count_cell_triangles`);
+    ``out`` (T, 3, 2) lattice triangles, counter-clockwise; ``kind[t]`` 0 for a
+    plain half of a cell, 1 for a fan piece.
+    """
+    cmax = 0
+    for c in range(counts.shape[0]):  # not counts.max(): its overloads compile slowly
+        for e in range(counts.shape[1]):
+            cmax = max(cmax, counts[c, e])
+    buf = np.empty((cmax + 2, 2), dtype=np.int64)
+    buf2 = np.empty_like(buf)
+    corners = np.empty((4, 2), dtype=np.int64)
+    for c in range(cells.shape[0]):
+        iu0 = cells[c, 0]
+        iu1 = cells[c, 1]
+        iv0 = cells[c, 2]
+        iv1 = cells[c, 3]
+        corners[0, 0] = iu0
+        corners[0, 1] = iv0
+        corners[1, 0] = iu1
+        corners[1, 1] = iv0
+        corners[2, 0] = iu1
+        corners[2, 1] = iv1
+        corners[3, 0] = iu0
+        corners[3, 1] = iv1
+        w = starts[c]
+        if diag[c] == 2:
+            cu = (iu0 + iu1) // 2
+            cv = (iv0 + iv1) // 2
+            for e in range(4):
+                n = _edge_nodes(hkeys, vkeys, key, e, iu0, iu1, iv0, iv1, buf)
+                px = corners[e, 0]
+                py = corners[e, 1]
+                for r in range(n + 1):
+                    if r < n:
+                        qx = buf[r, 0]
+                        qy = buf[r, 1]
+                    else:
+                        qx = corners[(e + 1) % 4, 0]
+                        qy = corners[(e + 1) % 4, 1]
+                    _put(out, kind, w, cu, cv, px, py, qx, qy,
+                         _FAN)
+                    w += 1
+                    px = qx
+                    py = qy
+            continue
+        for half in range(2):
+            # the half-triangle (P0, P1, P2), counter-clockwise, owning the cell edges
+            # P0 -> P1 (e1) and P1 -> P2 (e2); its third side is the diagonal
+            if diag[c] == 0:
+                c0, c1, c2 = (0, 1, 2) if half == 0 else (2, 3, 0)
+            else:
+                c0, c1, c2 = (3, 0, 1) if half == 0 else (1, 2, 3)
+            k1 = _edge_nodes(hkeys, vkeys, key, c0, iu0, iu1, iv0, iv1, buf)
+            k2 = _edge_nodes(hkeys, vkeys, key, c1, iu0, iu1, iv0, iv1, buf2)
+            # fan from P2 over P0, a_1..a_k1 (, P1 when k2 == 0)
+            px = corners[c0, 0]
+            py = corners[c0, 1]
+            last = k1 if k2 > 0 else k1 + 1
+            for r in range(last):
+                if r < k1:
+                    qx = buf[r, 0]
+                    qy = buf[r, 1]
+                else:
+                    qx = corners[c1, 0]
+                    qy = corners[c1, 1]
+                _put(out, kind, w, corners[c2, 0], corners[c2, 1], px, py, qx, qy,
+                     0 if (k1 == 0 and k2 == 0) else 1)
+                w += 1
+                px = qx
+                py = qy
+            if k2 == 0:
+                continue
+            # then fan from a_k1 (or P0) over P1, b_1..b_k2, P2
+            ax = px
+            ay = py
+            px = corners[c1, 0]
+            py = corners[c1, 1]
+            for r in range(k2 + 1):
+                if r < k2:
+                    qx = buf2[r, 0]
+                    qy = buf2[r, 1]
+                else:
+                    qx = corners[c2, 0]
+                    qy = corners[c2, 1]
+                _put(out, kind, w, ax, ay, px, py, qx, qy,
+                     _FAN)
+                w += 1
+                px = qx
+                py = qy

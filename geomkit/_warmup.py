@@ -1,0 +1,66 @@
+"""Compile kernel groups in a background process.
+
+On a fresh install the numba kernels are compiled on first use (then cached on disk,
+``cache=True``).  :func:`start_background` compiles the kernels of the given groups in
+a separate (spawned) process by calling the public API on tiny built-in inputs, so a
+second core compiles while the main process works; when the main process reaches a
+kernel that the helper has finished, numba loads it from the cache instead of
+compiling it (cache files are written atomically).
+
+Groups:
+
+* ``"projection"``: :func:`geomkit.project_points` / :func:`geomkit.deviation`
+  (tessellation, voxel grid, Newton feet);
+* ``"section"``: :func:`geomkit.plane_section`;
+* ``"distance"``: :func:`geomkit.surface_distance`.
+
+Start the groups the main process needs *last* (it compiles what it needs first
+itself); a kernel both processes compile at the same time is compiled twice.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+
+GROUPS = ("projection", "section", "distance")
+
+
+def _compile(groups) -> None:
+    import numpy as np
+
+    from . import samples
+    from .deviation import deviation
+    from .distance import surface_distance
+    from .section import plane_section
+
+    surf = samples.load("freeform_1")[0]
+    for g in groups:
+        if g == "projection":
+            (u0, u1), (v0, v1) = surf.domain
+            uv = np.array([[u0 + 0.3 * (u1 - u0), v0 + 0.6 * (v1 - v0)],
+                           [u0 + 0.7 * (u1 - u0), v0 + 0.2 * (v1 - v0)]])
+            N = surf.normals(uv)
+            deviation(surf, surf.evaluate(uv) + N, N, probe_radius=1.0)
+        elif g == "section":
+            lo, hi = surf.bounds
+            x = 0.5 * (lo[0] + hi[0])
+            plane_section(surf, np.array([1.0, 0.0, 0.0, -x]), 1e-4)
+        elif g == "distance":
+            a, b = samples.load("sphere_pair")
+            surface_distance(a, b, tol=1e-6)
+
+
+def start_background(groups) -> multiprocessing.process.BaseProcess:
+    """Compile the kernels of ``groups`` (names from :data:`GROUPS`) in a spawned
+    daemon process; returns it (``join()`` to wait, not needed: the main process
+    compiles whatever is not cached yet itself, and a daemon helper is stopped when
+    the main process exits).
+    """
+    groups = tuple(groups)
+    bad = [g for g in groups if g not in GROUPS]
+    if bad:
+        raise ValueError(f"unknown kernel group(s) {bad}; expected some of {GROUPS}")
+    proc = multiprocessing.get_context("spawn").Process(
+        target=_compile, args=(groups,), name="geomkit-warmup", daemon=True)
+    proc.start()
+    return proc
