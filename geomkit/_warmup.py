@@ -2,7 +2,7 @@
 
 On a fresh install the numba kernels are compiled on first use (then cached on disk,
 ``cache=True``).  :func:`start_background` compiles the kernels of the given groups in
-a separate (spawned) process by calling the public API on tiny built-in inputs, so a
+a separate Python process by calling the public API on tiny built-in inputs, so a
 second core compiles while the main process works; when the main process reaches a
 kernel that the helper has finished, numba loads it from the cache instead of
 compiling it (cache files are written atomically).
@@ -20,7 +20,10 @@ itself); a kernel both processes compile at the same time is compiled twice.
 
 from __future__ import annotations
 
-import multiprocessing
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 GROUPS = ("projection", "section", "distance")
 
@@ -50,17 +53,24 @@ def _compile(groups) -> None:
             surface_distance(a, b, tol=1e-6)
 
 
-def start_background(groups) -> multiprocessing.process.BaseProcess:
-    """Compile the kernels of ``groups`` (names from :data:`GROUPS`) in a spawned
-    daemon process; returns it (``join()`` to wait, not needed: the main process
-    compiles whatever is not cached yet itself, and a daemon helper is stopped when
-    the main process exits).
+def start_background(groups) -> subprocess.Popen:
+    """Compile the kernels of ``groups`` (names from :data:`GROUPS`) in a separate
+    Python process; returns its ``Popen`` (``wait()`` to let it finish).
+
+    A fresh interpreter (``python -c``), not a multiprocessing child: a spawned child
+    would re-import the caller's ``__main__`` (a user script without a main guard would
+    run again).  Its output is discarded; if it fails, the main process simply compiles
+    what it needs itself.
     """
     groups = tuple(groups)
     bad = [g for g in groups if g not in GROUPS]
     if bad:
         raise ValueError(f"unknown kernel group(s) {bad}; expected some of {GROUPS}")
-    proc = multiprocessing.get_context("spawn").Process(
-        target=_compile, args=(groups,), name="geomkit-warmup", daemon=True)
-    proc.start()
-    return proc
+    root = str(Path(__file__).resolve().parents[1])  # the geomkit this process runs
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([root] + ([env["PYTHONPATH"]]
+                                                  if env.get("PYTHONPATH") else []))
+    code = f"from geomkit._warmup import _compile; _compile({list(groups)!r})"
+    return subprocess.Popen([sys.executable, "-c", code], env=env,
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)

@@ -526,8 +526,11 @@ def _face_foot(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg, seg_loop, trim
     """Nearest point of the trimmed face ``s`` to ``x`` near (u, v): the surface foot if
     it is inside the face, else the nearest trim-boundary point."""
     Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, s)
+    # "not closed" as a runtime bool and explicit border allowances: literal arguments
+    # would compile a second foot_newton (~5 s on a fresh install) beside projection's
+    no_seam = s < 0
     u, v, d, it, st = foot_newton(Pw, p, q, U, V, dom[s, 0], dom[s, 1], dom[s, 2], dom[s, 3],
-                                  False, False, x, u, v, step_tol, bin_, scr, SKL)
+                                  no_seam, no_seam, x, u, v, step_tol, bin_, scr, SKL, 0.0, 0.0)
     if _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s, u, v, uv_tol, winding, stack,
                   depths, tleft, tright):
         out[0] = u
