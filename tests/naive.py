@@ -229,7 +229,9 @@ def project_to_surface(surface, X, uv0, iters=8):
         step = np.clip(step, -(hi - lo), hi - lo)
         new_uv = uv.copy()
         new_d = np.full(len(uv), np.inf)
-        for alpha in (1.0, 0.5, 0.125):
+        # deep backtracking: at a knot of a C0 parametrisation the one-sided derivative
+        # can be 1000x off, and only a tiny step enters the span holding the foot
+        for alpha in (1.0, 0.5) + tuple(8.0 ** -k for k in range(1, 9)):
             cand = np.clip(uv + alpha * step, lo, hi)
             d = np.linalg.norm(surface.evaluate(cand) - X, axis=1)
             take = d < new_d
