@@ -180,7 +180,6 @@ def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     inside = np.nonzero(state == 1)[0]
     c = cells[inside]
     counts = index.counts(c)
-    has = counts > 0
     # the measured better diagonal; a cell whose pieces failed: centre fan
     diag = (M[inside, 1] < M[inside, 0]).astype(np.int64)
     diag = np.where(centre[inside], 2, diag)
