@@ -38,9 +38,9 @@ from .distance import surface_distance
 from .errors import InvalidInputError
 from .types import Surface
 
-__all__ = ["Stylus", "Clearance", "probe_clearance", "read_path"]
+__all__ = ["Stylus", "Clearance", "probe_clearance", "read_path", "STYLUS_KEYS"]
 
-_STYLUS_KEYS = ("tip_radius", "shaft_radius", "shaft_length", "extension_radius",
+STYLUS_KEYS = ("tip_radius", "shaft_radius", "shaft_length", "extension_radius",
                 "extension_length", "body_radius", "body_length")
 SCREW_REL = 1e-9
 """A segment whose motion has both a rotation and a translation along the rotation axis
@@ -68,7 +68,7 @@ class Stylus:
     body_length: float = 0.0
 
     def __post_init__(self):
-        for k in _STYLUS_KEYS:
+        for k in STYLUS_KEYS:
             v = getattr(self, k)
             try:
                 v = float(v)
@@ -91,11 +91,11 @@ class Stylus:
     def from_dict(cls, d: dict) -> "Stylus":
         if not isinstance(d, dict):
             raise InvalidInputError(f"expected an object, got {type(d).__name__}", "stylus")
-        unknown = sorted(set(d) - set(_STYLUS_KEYS))
+        unknown = sorted(set(d) - set(STYLUS_KEYS))
         if unknown:
             raise InvalidInputError(f"unknown key(s) {unknown}; allowed: "
-                                    f"{', '.join(_STYLUS_KEYS)}", "stylus")
-        missing = [k for k in _STYLUS_KEYS[:3] if k not in d]
+                                    f"{', '.join(STYLUS_KEYS)}", "stylus")
+        missing = [k for k in STYLUS_KEYS[:3] if k not in d]
         if missing:
             raise InvalidInputError(f"missing key(s) {missing}", "stylus")
         return cls(**d)
@@ -110,7 +110,7 @@ class Stylus:
         return cls.from_dict(d)
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in _STYLUS_KEYS}
+        return {k: getattr(self, k) for k in STYLUS_KEYS}
 
     @property
     def length(self) -> float:
@@ -455,7 +455,7 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
         ln_ = float(np.linalg.norm(dv))
         point_stylus[i] = axis_pt + (min(r_, ln_) / ln_ if ln_ > 0 else 0.0) * dv
     contact = np.isfinite(first) & (clearance <= 0.0)
-    passed = (lower >= margin) & ~contact & np.isnan(first)
+    passed = (lower >= margin) & np.isnan(first)  # a possible contact fails the move
     certified = (clearance - lower) <= tol * (1 + 1e-9)
     return Clearance(clearance=clearance, lower_bound=lower, component=comp,
                      parameter=param, point_part=point_part, point_stylus=point_stylus,

@@ -36,7 +36,7 @@ import numpy as np
 
 from ._numba import jit, jit_inline
 from .project import _surface, foot_newton
-from .trim_feet import _trim_point
+from .trim_feet import _trim_point, segment_newton
 from .voxel import _heap_pop, _heap_push
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
@@ -475,38 +475,8 @@ def _trim_foot(Pw, p, q, U, V, dom_s, seg, deg, x, step_tol, bin_, scr, SKL, B, 
         Q = seg[k]
         for r in range(TRIM_STARTS):
             t = r / (TRIM_STARTS - 1.0)
-            f, g, hh, sp, u, v = _trim_point(Pw, p, q, U, V, dom_s, Q, nd, t, x, bin_, scr,
-                                             SKL, B, B1, B2, Cd)
-            for _ in range(60):
-                dt = -g / hh if hh > 0.0 else -g / (sp * sp + 1e-300)
-                if (t <= 0.0 and dt < 0.0) or (t >= 1.0 and dt > 0.0):
-                    break
-                alpha = 1.0
-                ok = False
-                tn = t
-                fn = f
-                gn = g
-                hn = hh
-                spn = sp
-                for _ls in range(50):
-                    tn = min(1.0, max(0.0, t + alpha * dt))
-                    fn, gn, hn, spn, un, vn = _trim_point(Pw, p, q, U, V, dom_s, Q, nd, tn, x,
-                                                          bin_, scr, SKL, B, B1, B2, Cd)
-                    if fn <= f:
-                        ok = True
-                        break
-                    alpha *= 0.5
-                if not ok:
-                    break
-                step = abs(tn - t) * sp
-                moved = tn != t
-                t = tn
-                f = fn
-                g = gn
-                hh = hn
-                sp = spn
-                if step <= step_tol or not moved:
-                    break
+            t, f = segment_newton(Pw, p, q, U, V, dom_s, Q, nd, t, x, step_tol, bin_, scr,
+                                  SKL, B, B1, B2, Cd)
             d = math.sqrt(2.0 * f)
             if d < best:
                 best = d

@@ -103,6 +103,40 @@ def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
 
 
 @jit
+def segment_newton(Pw, p, q, U, V, dom, Q, nd, t, x, step_tol, bin_, scr, SKL, B, B1, B2, Cd):
+    """Safeguarded 1-D Newton on |S(C(t)) - x|^2 / 2 over one trim segment ``Q`` (degree
+    ``nd``), t in [0, 1], from ``t``: Newton step where the second derivative is
+    positive, else a gradient step scaled by the speed; halving line search; stops on a
+    step below ``step_tol`` (model units) or at an end it is pushed against.
+    Returns ``(t, f)``."""
+    f, g, hh, sp, u, v = _trim_point(Pw, p, q, U, V, dom, Q, nd, t, x, bin_, scr, SKL, B, B1,
+                                     B2, Cd)
+    for _ in range(MAX_ITER):
+        dt = -g / hh if hh > 0.0 else -g / (sp * sp + 1e-300)
+        if (t <= 0.0 and dt < 0.0) or (t >= 1.0 and dt > 0.0):
+            break
+        alpha = 1.0
+        ok = False
+        tn = t
+        for _ls in range(60):
+            tn = min(1.0, max(0.0, t + alpha * dt))
+            fn, gn, hn, spn, un, vn = _trim_point(Pw, p, q, U, V, dom, Q, nd, tn, x, bin_,
+                                                  scr, SKL, B, B1, B2, Cd)
+            if fn <= f:
+                ok = True
+                break
+            alpha *= 0.5
+        if not ok:
+            break
+        step = abs(tn - t) * sp
+        moved = tn != t
+        t, f, g, hh, sp = tn, fn, gn, hn, spn
+        if step <= step_tol or not moved:
+            break
+    return t, f
+
+
+@jit
 def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t,
                      step_tol, out_uv, out_d, out_seg, out_t):
     M = samp_xyz.shape[0]
@@ -138,33 +172,8 @@ def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_se
             nd = deg[sg]
             Q = seg[sg]
             t = samp_t[k]
-            f, g, hh, sp, u, v = _trim_point(Pw, p, q, U, V, dom, Q, nd, t, x, bin_, scr,
-                                             SKL, B, B1, B2, Cd)
-            for _ in range(MAX_ITER):
-                if hh > 0.0:
-                    dt = -g / hh
-                else:
-                    dt = -g / (sp * sp + 1e-300)
-                if t <= 0.0 and dt < 0.0 or t >= 1.0 and dt > 0.0:
-                    break
-                alpha = 1.0
-                ok = False
-                tn = t
-                for _ls in range(60):
-                    tn = min(1.0, max(0.0, t + alpha * dt))
-                    fn, gn, hn, spn, un, vn = _trim_point(Pw, p, q, U, V, dom, Q, nd, tn,
-                                                          x, bin_, scr, SKL, B, B1, B2, Cd)
-                    if fn <= f:
-                        ok = True
-                        break
-                    alpha *= 0.5
-                if not ok:
-                    break
-                step = abs(tn - t) * sp
-                moved = tn != t
-                t, f, g, hh, sp, u, v = tn, fn, gn, hn, spn, un, vn
-                if step <= step_tol or not moved:
-                    break
+            t, f = segment_newton(Pw, p, q, U, V, dom, Q, nd, t, x, step_tol, bin_, scr,
+                                  SKL, B, B1, B2, Cd)
             d = math.sqrt(2.0 * f)
             if d < out_d[i]:
                 out_d[i] = d

@@ -27,7 +27,7 @@ input.  Writes clearance.csv, clearance.png and clearance_summary.json (last).""
 
 
 def parse_stylus(text: str):
-    from ..clearance import Stylus
+    from ..clearance import STYLUS_KEYS, Stylus
 
     p = Path(text)
     if text.lower().endswith(".json") or p.is_file():
@@ -41,9 +41,7 @@ def parse_stylus(text: str):
         raise InvalidInputError(f"expected 3, 5 or 7 numbers (TIP_R,SHAFT_R,SHAFT_L"
                                 f"[,EXT_R,EXT_L[,BODY_R,BODY_L]]), got {len(vals)}",
                                 "--stylus")
-    keys = ("tip_radius", "shaft_radius", "shaft_length", "extension_radius",
-            "extension_length", "body_radius", "body_length")
-    return Stylus(**dict(zip(keys, vals)))
+    return Stylus(**dict(zip(STYLUS_KEYS, vals)))
 
 
 def _cmd_clearance(args) -> int:
