@@ -265,12 +265,31 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     return _atomic_write(p, lambda fh: fh.write(json.dumps(doc, indent=1).encode("utf-8")))
 
 
+def _umask() -> int:
+    """The process umask, read without changing it where the system allows
+    (``/proc/self/status`` on Linux), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def _atomic_write(p: Path, write) -> Path:
-    """Write through a temporary file in the target folder, then rename into place."""
+    """Write through a temporary file in the target folder, then rename into place.
+
+    The file gets the mode a plain ``open(p, "w")`` would give (``0o666`` less the
+    umask: 0644 under the usual 022), not the 0600 of the temporary file."""
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
+            os.fchmod(fh.fileno(), 0o666 & ~_umask())
             write(fh)
         os.replace(tmp, p)
     except BaseException:
