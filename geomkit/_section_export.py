@@ -142,38 +142,57 @@ def _target(path, overwrite):
     return p
 
 
-def to_csv(section, path, overwrite=False):
-    """Rows ``curve,index,x,y,z,u,v,surface``; isolated points have curve -1."""
+def _units(section, units):
+    """The section's length unit: ``units`` if given, else the section's ``units``
+    attribute (None: unknown)."""
+    return units if units is not None else getattr(section, "units", None)
+
+
+def to_csv(section, path, overwrite=False, units=None):
+    """Rows ``curve,index,x,y,z,u,v,surface,units``; isolated points have curve -1.
+    ``units`` names the length unit of x, y, z ("model units" when unknown)."""
+    from .units import unit_label
+
     p = _target(path, overwrite)
-    lines = ["curve,index,x,y,z,u,v,surface"]
+    u = unit_label(_units(section, units))
+    u = f'"{u}"' if ("," in u or '"' in u) else u
+    lines = ["curve,index,x,y,z,u,v,surface,units"]
     for ci, (X, uv, sid) in enumerate(zip(section.curves, section.uv, section.surface_index)):
         for i in range(len(X)):
             lines.append(f"{ci},{i},{float(X[i, 0])!r},{float(X[i, 1])!r},{float(X[i, 2])!r},"
-                         f"{float(uv[i, 0])!r},{float(uv[i, 1])!r},{int(sid[i])}")
+                         f"{float(uv[i, 0])!r},{float(uv[i, 1])!r},{int(sid[i])},{u}")
     for i in range(len(section.points)):
         X, uv = section.points[i], section.points_uv[i]
         lines.append(f"-1,{i},{float(X[0])!r},{float(X[1])!r},{float(X[2])!r},"
                      f"{float(uv[0])!r},{float(uv[1])!r},"
-                     f"{int(section.points_surface[i])}")
+                     f"{int(section.points_surface[i])},{u}")
     text = "\n".join(lines) + "\n"
     return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def read_csv(path):
     """Curves and points back from :func:`to_csv`: ``(list of (k, 3), (m, 3))``."""
-    a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2, usecols=range(8))
     curves = [a[a[:, 0] == c][:, 2:5] for c in np.unique(a[:, 0]) if c >= 0]
     return curves, a[a[:, 0] == -1][:, 2:5]
 
 
-def to_dxf(section, path, fit_tol=None, overwrite=False):
-    """3-D POLYLINEs (closed flag kept), POINTs, and SPLINEs of the fit if asked."""
+def to_dxf(section, path, fit_tol=None, overwrite=False, units=None):
+    """3-D POLYLINEs (closed flag kept), POINTs, and SPLINEs of the fit if asked.
+
+    The header declares the model's length unit (``$INSUNITS``: mm 4, in 1, m 6, ...;
+    0, unitless, when unknown) so unit-aware CAD does not rescale the coordinates."""
+    from .units import dxf_insunits
+
     try:
         import ezdxf
     except ImportError as exc:  # pragma: no cover - declared dependency
         raise MissingDependencyError("to_dxf needs ezdxf (pip install ezdxf)") from exc
     p = _target(path, overwrite)
-    doc = ezdxf.new("R2010")
+    code = dxf_insunits(_units(section, units))
+    doc = ezdxf.new("R2010", units=code)
+    doc.header["$INSUNITS"] = code
+    doc.header["$MEASUREMENT"] = 0 if code in (1, 2, 3, 8, 9, 10) else 1
     msp = doc.modelspace()
     for X, closed in zip(section.curves, section.closed):
         msp.add_polyline3d([tuple(map(float, x)) for x in X], close=bool(closed),

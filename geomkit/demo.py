@@ -76,17 +76,38 @@ def synthetic_scan(surface, grid: int = 40, seed: int = 3, bump: float = BUMP_HE
     return S + (true + probe_radius)[:, None] * N, N, true
 
 
+STEPS = ("deviation", "alignment", "section", "clearance")
+"""The demo's steps, in order (the names ``progress`` is called with)."""
+
+
 def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
-             warm_up: bool = True) -> dict:
+             warm_up: bool = True, progress=None) -> dict:
     """Run the demo jobs; returns a JSON-ready summary (also written to summary.json).
 
     ``warm_up``: on a fresh install the kernels of the later steps (surface distance,
     sections) are compiled by a second process while this one compiles and runs the
-    deviation step (:mod:`geomkit._warmup`); a no-op cost (~1 s) once compiled."""
+    deviation step (:mod:`geomkit._warmup`); a no-op cost (~1 s) once compiled.
+
+    ``progress(step, summary, seconds)``, if given, is called as each step of
+    :data:`STEPS` starts (``summary`` and ``seconds`` None) and when it is done (the
+    summary so far, holding the step's results, and the step's seconds)."""
     t_all = time.perf_counter()
+    summary = {"output": str(Path(out_dir)), "surface": "freeform_1"}
+    marks, started = {}, {}
+
+    def step(name, done=False):
+        now = time.perf_counter()
+        if not done:
+            started[name] = now
+        else:
+            marks[name] = now
+        if progress is not None:
+            progress(name, summary if done else None,
+                     now - started[name] if done else None)
     helper = start_background(["distance", "section"]) if warm_up else None
     case = samples.load_case("freeform_1")
     surf = case.surfaces[0]
+    units = case.units  # None: the bundled samples do not state one ("model units")
     planes = [np.array([1.0, 0.0, 0.0, -x]) for x in (10, 30, 50, 70, 90)]
     sec_names = [f"section_{k:03d}.{e}" for k in range(len(planes))
                  for e in ("csv", "dxf", "json")]
@@ -95,17 +116,18 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
              "summary.json"] + sec_names
     targets = prepare_outputs(out_dir, names, overwrite=True)
 
-    marks = {}
     # 1. deviation of the synthetic scan
+    step("deviation")
     C, N, true = synthetic_scan(surf, grid)
     text = "x,y,z,i,j,k\n" + "".join(
         f"{a!r},{b!r},{c!r},{i!r},{j!r},{k!r}\n"
         for (a, b, c), (i, j, k) in zip(C.tolist(), N.tolist()))
     _atomic_write(targets["scan.csv"], lambda fh: fh.write(text.encode("utf-8")))
     rep = deviation(surf, C, N, probe_radius=PROBE_RADIUS, tolerance=TOLERANCE)
-    write_deviation_csv(rep, targets["deviation.csv"], overwrite=True)
-    plot_deviation_map(rep, surf, targets["deviation_map.png"], overwrite=True)
-    plot_histogram(rep, targets["deviation_hist.png"], overwrite=True)
+    write_deviation_csv(rep, targets["deviation.csv"], overwrite=True, units=units)
+    plot_deviation_map(rep, surf, targets["deviation_map.png"], overwrite=True,
+                       units=units)
+    plot_histogram(rep, targets["deviation_hist.png"], overwrite=True, units=units)
     err = float(np.nanmax(np.abs(rep.deviation - true)))
     (u0, u1), (v0, v1) = surf.domain
     centre = surf.evaluate([[u0 + (u1 - u0) * BUMP_UV[0], v0 + (v1 - v0) * BUMP_UV[1]]])[0]
@@ -115,9 +137,15 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
             "found_xyz": np.round(rep.foot[i], 3).tolist(),
             "found_distance": float(np.linalg.norm(rep.foot[i] - centre)),
             "max_error_vs_truth": err}
-
-    marks["deviation"] = time.perf_counter()
+    st = rep.summary()
+    summary["deviation"] = {k: st[k] for k in ("points", "valid", "edge", "min", "max",
+                                                "mean", "rms", "std", "pct_within",
+                                                "pct_over", "pct_under", "tolerance",
+                                                "probe_radius")}
+    summary["bump"] = bump
+    step("deviation", done=True)
     # 2. alignment check: a known rigid motion of an exact scan is recovered
+    step("alignment")
     C0, N0, _ = synthetic_scan(surf, max(6, grid // 2), bump=0.0, noise=0.0,
                                probe_radius=0.0)
     T = np.eye(4)
@@ -129,22 +157,26 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     align = {"transform_error": float(np.abs(al["transform"] - T).max()),
              "iterations": al["iterations"], "rms_before": al["rms_before"],
              "rms_after": al["rms_after"], "known_transform": T.tolist()}
-
-    marks["alignment"] = time.perf_counter()
+    summary["alignment_check"] = align
+    step("alignment", done=True)
     # 3. sections
+    step("section")
     sections = []
     for k, pl in enumerate(planes):
         sec = plane_section(surf, pl, tol)
+        sec.units = units  # the CSV and DXF writers state it
         sections.append(sec)
         write_section(sec, {e: targets[f"section_{k:03d}.{e}"] for e in ("csv", "dxf", "json")},
-                      overwrite=True)
-    plot_section(sections, targets["sections.png"], overwrite=True)
+                      overwrite=True, units=units)
+    plot_section(sections, targets["sections.png"], overwrite=True, units=units)
     section = {"planes": len(planes), "description": "x = 10, 30, 50, 70, 90",
                "curves": sum(len(s.curves) for s in sections),
                "max_residual": max(s.max_residual for s in sections),
                "tol": tol}
-    marks["section"] = time.perf_counter()
+    summary["section"] = section
+    step("section", done=True)
     # 4. probe safety: travel above the surface, then plunge along the normal
+    step("clearance")
     uvw = np.array(WAYPOINTS_UV)
     uvw = np.column_stack([u0 + (u1 - u0) * uvw[:, 0], v0 + (v1 - v0) * uvw[:, 1]])
     Sw, Nw = surf.evaluate(uvw), surf.normals(uvw)
@@ -156,8 +188,8 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
         helper.wait()
     marks["waited for the compile helper"] = time.perf_counter()
     cl = probe_clearance(surf, STYLUS, path, axis=axis, margin=SAFETY_MARGIN)
-    write_clearance_csv(cl, path, targets["clearance.csv"], overwrite=True)
-    plot_clearance(cl, targets["clearance.png"], overwrite=True)
+    write_clearance_csv(cl, path, targets["clearance.csv"], overwrite=True, units=units)
+    plot_clearance(cl, targets["clearance.png"], overwrite=True, units=units)
     k = len(cl) - 1
     fc = float(cl.first_contact[k])
     tip = path[k] + fc * (path[k + 1] - path[k]) if np.isfinite(fc) else path[k]
@@ -173,21 +205,14 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
                  "tip_distance_at_contact": check,
                  "certified": bool(np.all(cl.certified)),
                  "seconds": cl.stats["seconds"]}
-    st = rep.summary()
-    summary = {"output": str(Path(out_dir)), "surface": "freeform_1",
-               "deviation": {k: st[k] for k in ("points", "valid", "edge", "min", "max",
-                                                 "mean", "rms", "std", "pct_within",
-                                                 "pct_over", "pct_under", "tolerance",
-                                                 "probe_radius")},
-               "bump": bump, "alignment_check": align, "section": section,
-               "clearance": clearance,
-               "files": sorted(names)}
-    marks["clearance"] = time.perf_counter()
+    summary["clearance"] = clearance
+    summary["files"] = sorted(names)
+    step("clearance", done=True)
     prev, steps = t_all, {}
     for k, t in marks.items():
         steps[k] = t - prev
         prev = t
     summary["step_seconds"] = steps
     summary["seconds"] = time.perf_counter() - t_all
-    write_json(summary, targets["summary.json"], overwrite=True)
+    write_json(summary, targets["summary.json"], overwrite=True, units=units)
     return summary

@@ -2,11 +2,14 @@
 
 ``geomkit-case/1``::
 
-    {"format": "geomkit-case/1", "name": ..., "description": ...,
+    {"format": "geomkit-case/1", "name": ..., "description": ..., "units": "mm",
      "surfaces": [{"degree_u", "degree_v", "knots_u", "knots_v",
                    "control_points": [nu][nv][3], "weights": [nu][nv] (optional),
                    "trim": [loop, ...] (optional, outer first)}],
      "truth": {...}}
+
+``units`` (optional) names the length unit of the coordinates (see
+:mod:`geomkit.units`); without it the units are unknown ("model units").
 
 geomdl JSON is what ``geomdl.exchange.export_json`` writes (``{"shape": {"type":
 "surface", "data": [...]}}``, control points flattened with v varying fastest).
@@ -39,12 +42,16 @@ CASE_FORMAT = "geomkit-case/1"
 
 @dataclass
 class Case:
-    """A loaded case file: its surfaces plus the optional analytic truth."""
+    """A loaded case file: its surfaces plus the optional analytic truth.
+
+    ``units``: the length unit of the coordinates (``"mm"``, ``"in"``, ...; see
+    :mod:`geomkit.units`), None when the file does not say ("model units")."""
 
     name: str
     surfaces: list
     truth: dict = field(default_factory=dict)
     description: str = ""
+    units: str | None = None
 
 
 # --------------------------------------------------------------------- dicts
@@ -194,7 +201,23 @@ def case_from_doc(doc, where: str = "case") -> Case:
         raise FileFormatError(f"{where}: 'surfaces' must be a non-empty list")
     out = [surface_from_dict(d, f"{where}: surfaces[{k}]") for k, d in enumerate(surfs)]
     truth = doc.get("truth") or {}
-    return Case(doc.get("name", ""), out, truth, doc.get("description", ""))
+    return Case(doc.get("name", ""), out, truth, doc.get("description", ""),
+                _units_from_doc(doc, where))
+
+
+def _units_from_doc(doc: dict, where: str):
+    from .units import canonical_units
+
+    u = doc.get("units")
+    if u is None:
+        return None
+    if not isinstance(u, str):
+        raise FileFormatError(f"{where}: 'units' must be a string such as \"mm\", got "
+                              f"{type(u).__name__}")
+    try:
+        return canonical_units(u)
+    except InvalidInputError as exc:
+        raise FileFormatError(f"{where}: {exc}") from None
 
 
 def load_case(path) -> Case:
@@ -221,10 +244,12 @@ def load(path) -> list[Surface]:
 
 # --------------------------------------------------------------------- write
 def save(path, surfaces, truth: dict | None = None, name: str | None = None,
-         format: str = "geomkit-case/1", overwrite: bool = False) -> Path:
+         format: str = "geomkit-case/1", overwrite: bool = False,
+         units: str | None = None) -> Path:
     """Write surfaces as ``geomkit-case/1`` (default) or ``"geomdl"`` JSON.
 
-    The file is written to a temporary name and renamed into place, so a failure
+    ``units`` (e.g. ``"mm"``) is written as the case's top-level ``units`` field
+    (geomdl JSON has no place for it: refused there).  The file is written to a temporary name and renamed into place, so a failure
     never leaves a half-written file; an existing file is kept unless
     ``overwrite=True``.  geomdl JSON cannot hold trims: trimmed surfaces are refused.
     """
@@ -240,10 +265,19 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     p = Path(path)
     if p.exists() and not overwrite:
         raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    if units is not None:
+        from .units import canonical_units
+
+        units = canonical_units(units)
     if format == CASE_FORMAT:
         doc = {"format": CASE_FORMAT, "name": name or p.stem,
                "surfaces": [surface_to_dict(s) for s in surfaces], "truth": truth or {}}
+        if units is not None:
+            doc["units"] = units
     elif format == "geomdl":
+        if units is not None:
+            raise InvalidInputError("geomdl JSON cannot store units; use "
+                                    f"format={CASE_FORMAT!r}", "units")
         if any(s.trim for s in surfaces):
             raise InvalidSurfaceError("geomdl JSON cannot store trim loops; use "
                                       f"format={CASE_FORMAT!r}", "trim")

@@ -10,7 +10,7 @@ import argparse
 import sys
 
 from ..errors import GeomkitError
-from ._common import _positive_float, _positive_int, _positive_or_zero
+from ._common import Parser, _positive_float, _positive_int, _positive_or_zero, _units_arg
 from . import bench as _bench
 from . import clearance as _clearance
 from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
@@ -37,13 +37,19 @@ EXAMPLES = """examples:
 
 Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges: entities 128 and 144),
 STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name.  Points: CSV/XYZ
-(x y z [i j k]) or STL/PLY scans.  Errors: one line on stderr, exit code 2.
+(x y z [i j k]) or STL/PLY scans.  Units: the model's own (IGES/STEP/JSON state
+them; --units overrides), written in every report.  Errors: one line on stderr,
+exit code 2.
 `geomkit COMMAND --help` shows each command's options and an example.
 """
 
 
+UNITS_HELP = ("length unit of the model (mm, cm, m, in, ft, um, ...): overrides what "
+              "the file states; reports say 'model units' when neither does")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="geomkit",
+    ap = Parser(prog="geomkit",
                                  description="Exact NURBS surface geometry with stated "
                                              "error bounds.",
                                  epilog=EXAMPLES,
@@ -65,12 +71,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="report folder (default ./geomkit-demo)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_demo)
-    common = argparse.ArgumentParser(add_help=False)
+    common = Parser(add_help=False)
     common.add_argument("--skip-invalid", action="store_true",
                         help="IGES/STEP: skip faces that fail validation (counted) "
                              "instead of stopping")
     common.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     common.add_argument("--json", action="store_true", help="machine-readable output")
+    common.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
+                        help=UNITS_HELP)
     p = sub.add_parser("deviation", parents=[common],
                        help="CMM deviation of measured points from nominal surfaces",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -89,8 +97,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="probe ball radius: the points are ball centres")
     p.add_argument("--align", action="store_true",
                    help="best-fit rigid alignment first (transform reported)")
-    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
-                   help="points whose |deviation| exceeds this are not matched")
+    p.add_argument("--max-distance", type=_positive_float, default=None,
+                   help="points whose |deviation| exceeds this (> 0) are not matched")
     p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
                    help="tolerance band: T (meaning -T..T) or LOWER UPPER")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
@@ -103,8 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
     p.add_argument("points", help="points: CSV/XYZ or STL/PLY")
     p.add_argument("-o", "--output", default=None, help="output CSV")
-    p.add_argument("--max-distance", type=_positive_or_zero, default=None,
-                   help="points farther than this are not matched")
+    p.add_argument("--max-distance", type=_positive_float, default=None,
+                   help="points farther than this (> 0) are not matched")
     p.set_defaults(func=_cmd_distance)
     p = sub.add_parser("section", parents=[common], help="plane sections as CSV/DXF/JSON/PNG",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -129,14 +137,16 @@ def build_parser() -> argparse.ArgumentParser:
     _clearance.add_parser(sub, common, _positive_float, _positive_or_zero)
     _bench.add_parser(sub)
     p = sub.add_parser("info", help="describe the surfaces of a file")
-    p.add_argument("file")
+    p.add_argument("file", help="surfaces: JSON, IGES, STEP or a sample name")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
+                   help=UNITS_HELP)
     p.set_defaults(func=_cmd_info)
     p = sub.add_parser("mesh", help="triangulate surfaces within a chord tolerance",
                        description="Triangulate every surface of INPUT so that each "
                                    "triangle is within --tol of its surface (measured), "
                                    "and write STL, PLY or OBJ by the output's extension.")
-    p.add_argument("input", help="geomkit-case/1 or geomdl JSON file, or a sample name")
+    p.add_argument("input", help="surfaces: JSON, IGES, STEP or a sample name")
     p.add_argument("--tol", type=_positive_float, required=True,
                    help="chord tolerance, model units")
     p.add_argument("-o", "--output", required=True, help="output .stl, .ply or .obj")
@@ -146,6 +156,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="largest cell edge, model units")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--skip-invalid", action="store_true",
+                   help="IGES/STEP: skip faces that fail validation (counted) "
+                        "instead of stopping")
+    p.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
+                   help=UNITS_HELP)
     p.set_defaults(func=_cmd_mesh)
     p = sub.add_parser("samples", help="list the bundled samples")
     p.set_defaults(func=_cmd_samples)
@@ -153,7 +168,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a one-line argument error (2)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     try:
         return args.func(args)
     except (GeomkitError, FileExistsError) as exc:

@@ -1,40 +1,54 @@
-"""Shared pieces of the command line: input loading, argument types, progress bars."""
+"""Shared pieces of the command line: input loading, argument types, output targets,
+progress bars and the one-line argument errors."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from ..errors import InvalidInputError
 
-def _load_input(name: str, skip_invalid: bool = False):
-    """Surfaces from a file path (JSON, IGES, STEP), or from a bundled sample name."""
-    from pathlib import Path
 
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line ``geomkit: error: ...`` and exit 2
+    (argparse prints a usage block otherwise); sub-parsers inherit the class."""
+
+    def error(self, message):
+        words = self.prog.split()
+        cmd = f"{' '.join(words[1:])}: " if len(words) > 1 else ""
+        self.exit(2, f"geomkit: error: {cmd}{' '.join(str(message).split())}\n")
+
+
+# ----------------------------------------------------------------------- inputs
+def _load_input(name: str, skip_invalid: bool = False, units: str | None = None):
+    """Surfaces from a file path (JSON, IGES, STEP), or from a bundled sample name.
+
+    ``units`` (from ``--units``) overrides the units the file states; the case's
+    ``units`` is None when neither says."""
     from .. import load_case, samples
+    from ..io import Case
 
     try:
         exists = Path(name).exists()
     except OSError:  # e.g. a name too long for the file system: load_case reports it
         exists = False
-    if not exists and name in samples.names():
-        return samples.load_case(name)
     ext = Path(name).suffix.lower()
-    if ext in (".igs", ".iges"):
-        from ..io import Case
-        from ..iges import read_iges
-
-        res = read_iges(name, skip_invalid=skip_invalid)
+    if not exists and name in samples.names():
+        case = samples.load_case(name)
+    elif ext in (".igs", ".iges", ".stp", ".step"):
+        if ext in (".igs", ".iges"):
+            from ..iges import read_iges as read
+        else:
+            from ..step import read_step as read
+        res = read(name, skip_invalid=skip_invalid)
         _warn_skipped(res.skipped)
-        return Case(Path(name).stem, res.surfaces)
-    if ext in (".stp", ".step"):
-        from ..io import Case
-        from ..step import read_step
-
-        res = read_step(name, skip_invalid=skip_invalid)
-        _warn_skipped(res.skipped)
-        return Case(Path(name).stem, res.surfaces)
-    return load_case(name)
+        case = Case(Path(name).stem, res.surfaces, units=getattr(res, "units", None))
+    else:
+        case = load_case(name)
+    if units is not None:
+        case.units = units
+    return case
 
 
 def _warn_skipped(skipped):
@@ -43,14 +57,83 @@ def _warn_skipped(skipped):
               file=sys.stderr)
 
 
-def _progress(label: str):
-    """A ``progress(done, total)`` callable drawing a rich bar on stderr, or None when
-    stderr is not a terminal (pipes and CI logs stay clean)."""
-    if not sys.stderr.isatty():
-        return None, None
-    from rich.console import Console
-    from rich.progress import Progress
+def _load_points(path):
+    from ..points_io import read_points
 
+    return read_points(path)
+
+
+def _unit(units) -> str:
+    """The unit as printed: ``mm`` or ``model units``."""
+    from ..units import unit_label
+
+    return unit_label(units)
+
+
+# ---------------------------------------------------------------------- outputs
+class Outputs:
+    """Report files ``names`` in ``folder``, checked now, the folder created later.
+
+    The check (folder writable, nothing overwritten, no input among the targets) runs
+    before any work; :meth:`create` makes the folder only when the run is about to
+    write, so a run that fails on its inputs or in its work leaves nothing behind."""
+
+    def __init__(self, folder, names, overwrite: bool = False, inputs=()):
+        from ..report import prepare_outputs
+
+        self.folder, self.names = Path(folder), list(names)
+        self.overwrite, self.inputs = overwrite, list(inputs)
+        d = self.folder
+        if d.exists():
+            prepare_outputs(d, self.names, overwrite, inputs=self.inputs)  # creates nothing
+            return
+        anc = d.parent
+        while not anc.exists() and anc != anc.parent:
+            anc = anc.parent
+        if not anc.is_dir():
+            raise InvalidInputError(f"{anc}: exists and is not a folder", "output folder")
+        prepare_outputs(anc, [], False)  # writable? (a temporary file, removed)
+
+    def create(self) -> dict:
+        """``{name: Path}``, the folder created if needed."""
+        from ..report import prepare_outputs
+
+        return prepare_outputs(self.folder, self.names, self.overwrite, inputs=self.inputs)
+
+
+def _file_target(path, overwrite: bool, inputs=(), option: str = "-o") -> Path:
+    """Check an output file before the work: its folder must exist (it is not created
+    for a file target) and be writable; an existing file needs ``--overwrite``; an
+    input is never a target."""
+    from ..report import prepare_outputs
+
+    p = Path(path)
+    if p.is_dir():
+        raise InvalidInputError(f"{p}: is a folder, expected a file name", option)
+    parent = p.parent
+    if not parent.is_dir():
+        what = "is not a folder" if parent.exists() else "no such folder"
+        raise InvalidInputError(f"{parent}: {what} (create it first)", option)
+    return prepare_outputs(parent, [p.name], overwrite, inputs=inputs)[p.name]
+
+
+# --------------------------------------------------------------------- progress
+def _progress(label: str):
+    """``(update, bar)``: ``update(done, total)`` draws a progress bar on stderr and
+    ``bar.stop()`` removes it; ``(None, None)`` when stderr is not a terminal (pipes
+    and CI logs stay clean).  rich draws the bar; without rich a plain one-line
+    counter does."""
+    try:
+        if not sys.stderr.isatty():
+            return None, None
+    except (AttributeError, ValueError):  # a closed or replaced stderr
+        return None, None
+    try:
+        from rich.console import Console
+        from rich.progress import Progress
+    except ImportError:
+        bar = _PlainProgress(label)
+        return bar.update, bar
     prog = Progress(console=Console(stderr=True), transient=True)
     task = prog.add_task(label, total=None)
     prog.start()
@@ -61,6 +144,29 @@ def _progress(label: str):
     return update, prog
 
 
+class _PlainProgress:
+    """``label done/total`` rewritten in place on stderr (a terminal)."""
+
+    def __init__(self, label):
+        self.label, self.shown = label, False
+        self._write(f"{label} ...")
+
+    def _write(self, text):
+        sys.stderr.write(f"\r{text}\x1b[K")
+        sys.stderr.flush()
+        self.shown = True
+
+    def update(self, done, total):
+        self._write(f"{self.label} {done}/{total}" if total else f"{self.label} {done}")
+
+    def stop(self):
+        if self.shown:
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
+            self.shown = False
+
+
+# ------------------------------------------------------------------ argument types
 def _positive_or_zero(text: str) -> float:
     try:
         value = float(text)
@@ -72,23 +178,26 @@ def _positive_or_zero(text: str) -> float:
 
 
 def _tolerance(values):
+    """``--tolerance T`` (band -T..T) or ``LOWER UPPER``: finite, of non-zero width."""
+    import math
+
     if values is None:
         return None
+    if not all(math.isfinite(v) for v in values):
+        raise InvalidInputError(f"must be finite numbers, got {' '.join(map(str, values))}",
+                                "--tolerance")
     if len(values) == 1:
         t = abs(values[0])
+        if t == 0:
+            raise InvalidInputError("must be > 0 (the band -T..T would be empty)",
+                                    "--tolerance")
         return (-t, t)
     if len(values) == 2:
         lo, hi = values
-        if not lo <= hi:
-            raise InvalidInputError(f"lower {lo:g} > upper {hi:g}", "--tolerance")
+        if not lo < hi:
+            raise InvalidInputError(f"lower {lo:g} must be < upper {hi:g}", "--tolerance")
         return (lo, hi)
     raise InvalidInputError("give T (band -T..T) or LOWER UPPER", "--tolerance")
-
-
-def _load_points(path):
-    from ..points_io import read_points
-
-    return read_points(path)
 
 
 def _positive_float(text: str) -> float:
@@ -111,3 +220,11 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _units_arg(text: str) -> str:
+    """``--units``: a length unit name (mm, cm, m, in, ft, um, ...)."""
+    from ..units import canonical_units
+
+    try:
+        return canonical_units(text)
+    except InvalidInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("units: ")) from None

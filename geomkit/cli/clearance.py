@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._common import _load_input, _progress
+from ._common import Outputs, _load_input, _progress, _unit
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
                "optionally extension_radius, extension_length, body_radius, body_length) "
@@ -46,18 +46,17 @@ def parse_stylus(text: str):
 
 def _cmd_clearance(args) -> int:
     from ..clearance import probe_clearance, read_path
-    from ..report import _clean, plot_clearance, prepare_outputs, write_clearance_csv, \
-        write_json
+    from ..report import _clean, plot_clearance, write_clearance_csv, write_json
 
     stylus = parse_stylus(args.stylus)
-    case = _load_input(args.part, args.skip_invalid)
+    case = _load_input(args.part, args.skip_invalid, args.units)
     path = read_path(args.path)
     out = args.output or f"{Path(args.path).stem}-clearance"
     names = ["clearance.csv", "clearance_summary.json"]
     if not args.no_plots:
         names.append("clearance.png")
     inputs = [args.part, args.path] + ([args.stylus] if Path(args.stylus).exists() else [])
-    targets = prepare_outputs(out, names, args.overwrite, inputs=inputs)
+    outputs = Outputs(out, names, args.overwrite, inputs=inputs)  # created when writing
     update, bar = _progress("checking moves")
     try:
         res = probe_clearance(case.surfaces, stylus, path, axis=args.axis, margin=args.margin,
@@ -66,19 +65,22 @@ def _cmd_clearance(args) -> int:
         if bar is not None:
             bar.stop()
     tips = path if path.ndim == 2 else path[:, :3, 3]
-    files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite)]
+    u = case.units
+    targets = outputs.create()
+    files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite,
+                                 units=u)]
     if not args.no_plots:
-        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite))
+        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite, units=u))
     summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
-               "stylus": stylus.to_dict(), **res.summary(),
+               "units": _unit(u), "stylus": stylus.to_dict(), **res.summary(),
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
-    write_json(summary, targets["clearance_summary.json"], args.overwrite)
+    write_json(summary, targets["clearance_summary.json"], args.overwrite, units=u)
     if args.json:
         print(json.dumps(_clean(summary), indent=1))
     else:
         s = summary
         print(f"{s['segments']} segment(s): {'PASS' if s['passed'] else 'FAIL'} "
-              f"(margin {s['margin']:g}); min clearance {s['min_clearance']:.6g} "
+              f"(margin {s['margin']:g} {s['units']}); min clearance {s['min_clearance']:.6g} "
               f"(certified >= {s['min_clearance_lower_bound']:.6g}) on segment "
               f"{s['worst_segment']} at parameter {s['worst_parameter']:.4f} "
               f"({s['worst_component']})")

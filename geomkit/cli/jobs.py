@@ -8,46 +8,83 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._common import _load_input, _load_points, _progress, _tolerance
+from ._common import (Outputs, _file_target, _load_input, _load_points, _progress,
+                      _tolerance, _unit)
+
 
 def _cmd_demo(args) -> int:
-    from ..demo import run_demo
+    import sys
 
-    summary = run_demo(out_dir=args.output, grid=args.grid, tol=args.tol)
+    from ..demo import STEPS, run_demo
+
     if args.json:
-        print(json.dumps(summary, indent=1))
+        print(json.dumps(run_demo(out_dir=args.output, grid=args.grid, tol=args.tol),
+                         indent=1))
         return 0
-    d = summary["deviation"]
-    b = summary["bump"]
-    a = summary["alignment_check"]
-    print(f"geomkit demo: reports in {summary['output']}/")
-    print(f"deviation  {d['points']} scan points of {summary['surface']} "
-          f"(probe r={d['probe_radius']:g}): min {d['min']:.4f} max {d['max']:.4f} "
-          f"rms {d['rms']:.4f}; in tolerance [{d['tolerance'][0]:g}, {d['tolerance'][1]:g}] "
-          f"{d['pct_within']:.1f}%, over {d['pct_over']:.1f}%, under {d['pct_under']:.1f}%")
-    print(f"bump       known height {b['height']:g} at {b['center_xyz']}: found "
-          f"{b['found_max']:.4f} at {b['found_xyz']} ({b['found_distance']:.2f} away)")
-    print(f"alignment  known rigid transform recovered to {a['transform_error']:.1e} in "
-          f"{a['iterations']} iterations (rms {a['rms_before']:.3g} -> {a['rms_after']:.1e})")
-    s = summary["section"]
-    print(f"section    {s['planes']} planes {s['description']}: {s['curves']} curves, "
-          f"max plane residual {s['max_residual']:.1e}")
-    c = summary["clearance"]
-    print(f"clearance  stylus travel: {c['travel_moves_passed']} of {c['travel_moves']} moves "
-          f"keep the margin {c['margin']:g}; closest: move {c['travel_worst_move']} at "
-          f"{c['travel_min_clearance']:.4f} (certified >= {c['travel_min_lower_bound']:.4f})")
-    print(f"           plunge first contact at "
-          f"parameter {c['plunge_first_contact']:.6f} ({c['plunge_contact_component']}; tip "
-          f"centre {c['tip_distance_at_contact']:.6f} from the surface, radius "
-          f"{c['stylus']['tip_radius']:g})")
+    print(f"geomkit demo: reports in {Path(args.output)}/", flush=True)
+
+    def progress(step, summary, seconds):
+        k = STEPS.index(step) + 1
+        if summary is None:  # the step starts: say so before the wait
+            print(f"[{k}/{len(STEPS)}] {step} ...", flush=True)
+            return
+        lines = _DEMO_LINES[step](summary)
+        lines[-1] += f"  ({seconds:.1f} s)"
+        print("\n".join(lines), flush=True)
+
+    try:
+        summary = run_demo(out_dir=args.output, grid=args.grid, tol=args.tol,
+                           progress=progress)
+    finally:
+        sys.stdout.flush()
     print(f"done in {summary['seconds']:.2f} s; files: {', '.join(summary['files'])}")
     return 0
 
 
+def _demo_deviation(summary):
+    d, b = summary["deviation"], summary["bump"]
+    return [f"deviation  {d['points']} scan points of {summary['surface']} "
+            f"(probe r={d['probe_radius']:g}): min {d['min']:.4f} max {d['max']:.4f} "
+            f"rms {d['rms']:.4f}; in tolerance [{d['tolerance'][0]:g}, "
+            f"{d['tolerance'][1]:g}] {d['pct_within']:.1f}%, over {d['pct_over']:.1f}%, "
+            f"under {d['pct_under']:.1f}%",
+            f"bump       known height {b['height']:g} at {b['center_xyz']}: found "
+            f"{b['found_max']:.4f} at {b['found_xyz']} ({b['found_distance']:.2f} away)"]
+
+
+def _demo_alignment(summary):
+    a = summary["alignment_check"]
+    return [f"alignment  known rigid transform recovered to {a['transform_error']:.1e} in "
+            f"{a['iterations']} iterations (rms {a['rms_before']:.3g} -> "
+            f"{a['rms_after']:.1e})"]
+
+
+def _demo_section(summary):
+    s = summary["section"]
+    return [f"section    {s['planes']} planes {s['description']}: {s['curves']} curves, "
+            f"max plane residual {s['max_residual']:.1e}"]
+
+
+def _demo_clearance(summary):
+    c = summary["clearance"]
+    return [f"clearance  stylus travel: {c['travel_moves_passed']} of {c['travel_moves']} "
+            f"moves keep the margin {c['margin']:g}; closest: move "
+            f"{c['travel_worst_move']} at {c['travel_min_clearance']:.4f} (certified >= "
+            f"{c['travel_min_lower_bound']:.4f})",
+            f"           plunge first contact at parameter "
+            f"{c['plunge_first_contact']:.6f} ({c['plunge_contact_component']}; tip centre "
+            f"{c['tip_distance_at_contact']:.6f} from the surface, radius "
+            f"{c['stylus']['tip_radius']:g})"]
+
+
+_DEMO_LINES = {"deviation": _demo_deviation, "alignment": _demo_alignment,
+               "section": _demo_section, "clearance": _demo_clearance}
+
+
 def _cmd_deviation(args) -> int:
     from ..deviation import deviation
-    from ..report import (plot_deviation_map, plot_histogram, prepare_outputs,
-                          write_deviation_csv, write_json)
+    from ..report import (plot_deviation_map, plot_histogram, write_deviation_csv,
+                          write_json)
 
     tol = _tolerance(args.tolerance)
     out = args.output or f"{Path(args.points).stem}-deviation"
@@ -55,9 +92,10 @@ def _cmd_deviation(args) -> int:
     if not args.no_plots:
         names += ["deviation_map.png", "deviation_hist.png"]
     # inputs are read first (clear errors), then the folder is checked before the work
-    case = _load_input(args.nominal, args.skip_invalid)
+    # and created only when the reports are written
+    case = _load_input(args.nominal, args.skip_invalid, args.units)
     pts = _load_points(args.points)
-    targets = prepare_outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
+    outputs = Outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
     update, bar = _progress("projecting points")
     try:
         rep = deviation(case.surfaces, pts.points, pts.normals, args.probe_radius,
@@ -66,26 +104,30 @@ def _cmd_deviation(args) -> int:
     finally:
         if bar is not None:
             bar.stop()
-    files = [write_deviation_csv(rep, targets["deviation.csv"], args.overwrite)]
+    _require_matches(rep.summary()["valid"], len(rep), args.max_distance)
+    u = case.units
+    targets = outputs.create()
+    files = [write_deviation_csv(rep, targets["deviation.csv"], args.overwrite, units=u)]
     if not args.no_plots:
         files.append(plot_deviation_map(rep, case.surfaces, targets["deviation_map.png"],
-                                        args.overwrite))
-        files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite))
+                                        args.overwrite, units=u))
+        files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite,
+                                    units=u))
     summary = {"nominal": args.nominal, "points_file": args.points,
-               "surfaces": len(case.surfaces), **rep.summary(),
+               "surfaces": len(case.surfaces), "units": _unit(u), **rep.summary(),
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
-    write_json(summary, targets["summary.json"], args.overwrite)  # last: marks complete
+    write_json(summary, targets["summary.json"], args.overwrite, units=u)  # last
     if args.json:
         from ..report import _clean
         print(json.dumps(_clean(summary), indent=1))
         return 0
     s = summary
     print(f"{s['points']} points, {s['valid']} matched ({s['edge']} on edges, "
-          f"{s['beyond']} beyond max distance)")
+          f"{s['beyond']} beyond max distance); units: {s['units']}")
     print(f"deviation: min {s['min']:.6g}  max {s['max']:.6g}  mean {s['mean']:.6g}  "
-          f"rms {s['rms']:.6g}  std {s['std']:.6g}")
+          f"rms {s['rms']:.6g}  std {s['std']:.6g} {s['units']}")
     if tol:
-        print(f"tolerance [{tol[0]:g}, {tol[1]:g}]: in {s['pct_within']:.2f}%  "
+        print(f"tolerance [{tol[0]:g}, {tol[1]:g}] {s['units']}: in {s['pct_within']:.2f}%  "
               f"over {s['pct_over']:.2f}%  under {s['pct_under']:.2f}%")
     if s["alignment"]:
         a = s["alignment"]
@@ -97,60 +139,77 @@ def _cmd_deviation(args) -> int:
     return 0
 
 
+def _require_matches(matched: int, total: int, max_distance) -> None:
+    """No statistics from nothing: a run where no point has a foot is an error."""
+    if matched:
+        return
+    if max_distance is not None:
+        raise InvalidInputError(f"none of the {total} point(s) is within {max_distance:g} "
+                                "of the surfaces; raise it or check the units and the "
+                                "alignment", "--max-distance")
+    raise InvalidInputError(f"none of the {total} point(s) has a foot on the surfaces",
+                            "points")
+
+
 def _cmd_distance(args) -> int:
     from .. import project_points
-    from ..report import _clean, prepare_outputs
+    from ..report import _clean
 
-    case = _load_input(args.surface, args.skip_invalid)
+    case = _load_input(args.surface, args.skip_invalid, args.units)
     pts = _load_points(args.points)
     target = None
     if args.output:
-        o = Path(args.output)
-        target = prepare_outputs(o.parent if str(o.parent) else ".", [o.name],
-                                 args.overwrite, inputs=[args.surface, args.points])[o.name]
+        target = _file_target(args.output, args.overwrite, [args.surface, args.points])
     update, bar = _progress("projecting points")
     try:
         pr = project_points(case.surfaces, pts.points, args.max_distance, progress=update)
     finally:
         if bar is not None:
             bar.stop()
+    ok = np.isfinite(pr.distance)
+    u = _unit(case.units)
     if target is not None:
         from ..io import _atomic_write
         from ..results import STATUS_NAMES
 
         lines = ["index,x,y,z,foot_x,foot_y,foot_z,u,v,surface,distance,signed_distance,"
-                 "lower_bound,status"]
+                 "lower_bound,status,units"]
         f = (lambda x: repr(float(x)) if np.isfinite(x) else "")
+        cu = f'"{u}"' if ("," in u or '"' in u) else u
         for i in range(len(pr)):
             lines.append(",".join([str(i)] + [f(c) for c in pts.points[i]]
                                   + [f(c) for c in pr.point[i]] + [f(c) for c in pr.uv[i]]
                                   + [str(int(pr.surface[i])), f(pr.distance[i]),
                                      f(pr.signed_distance[i]), f(pr.lower_bound[i]),
-                                     STATUS_NAMES[int(pr.status[i])]]))
+                                     STATUS_NAMES[int(pr.status[i])], cu]))
         data = ("\n".join(lines) + "\n").encode("utf-8")
         if target.exists() and not args.overwrite:
             raise FileExistsError(f"{target}: exists; pass --overwrite to replace it")
         _atomic_write(target, lambda fh: fh.write(data))
-    ok = np.isfinite(pr.distance)
     d = pr.distance[ok]
     info = {"surface_file": args.surface, "points_file": args.points, "points": len(pr),
-            "matched": int(ok.sum()), "counts": pr.counts(),
-            "min": float(d.min()) if d.size else float("nan"),
-            "max": float(d.max()) if d.size else float("nan"),
-            "mean": float(d.mean()) if d.size else float("nan"),
+            "matched": int(ok.sum()), "counts": pr.counts(), "units": u,
+            "min": float(d.min()) if d.size else None,
+            "max": float(d.max()) if d.size else None,
+            "mean": float(d.mean()) if d.size else None,
             "output": str(target) if target else None}
     if args.json:
         print(json.dumps(_clean(info), indent=1))
         return 0
+    written = f"; written {target}" if target else ""
+    if not d.size:
+        beyond = (f" within --max-distance {args.max_distance:g}"
+                  if args.max_distance is not None else "")
+        print(f"{info['points']} points, none matched{beyond} ({u}){written}")
+        return 0
     print(f"{info['points']} points, {info['matched']} matched: distance min "
-          f"{info['min']:.6g} max {info['max']:.6g} mean {info['mean']:.6g}"
-          + (f"; written {target}" if target else ""))
+          f"{info['min']:.6g} max {info['max']:.6g} mean {info['mean']:.6g} {u}{written}")
     return 0
 
 
 def _cmd_section(args) -> int:
     from .. import plane_section
-    from ..report import _clean, plot_section, prepare_outputs, write_json, write_section
+    from ..report import _clean, plot_section, write_json, write_section
     from ..section import as_plane
 
     base = as_plane(args.plane)
@@ -164,7 +223,7 @@ def _cmd_section(args) -> int:
     if bad or not kinds:
         raise InvalidInputError(f"unknown format(s) {bad}; use csv, dxf, json, png",
                                 "--formats")
-    case = _load_input(args.surface, args.skip_invalid)
+    case = _load_input(args.surface, args.skip_invalid, args.units)
     stem = "section" if len(planes) == 1 else "section_{:03d}"
     names, per = [], []
     for k in range(len(planes)):
@@ -172,35 +231,40 @@ def _cmd_section(args) -> int:
         t = {kind: f"{st}.{kind}" for kind in kinds if kind != "png"}
         per.append(t)
         names += list(t.values())
-    if "png" in kinds:
-        names.append("section.png" if len(planes) == 1 else "sections.png")
+    png = ("section.png" if len(planes) == 1 else "sections.png") if "png" in kinds else None
+    names += [png] if png else []
     names.append("section_summary.json")
-    targets = prepare_outputs(args.output, names, args.overwrite, inputs=[args.surface])
+    outputs = Outputs(args.output, names, args.overwrite, inputs=[args.surface])
+    u = case.units
     update, bar = _progress("sectioning")
-    rows, sections, files = [], [], []
+    sections = []
     try:
         for k, pl in enumerate(planes):
             sec = plane_section(case.surfaces, pl, args.tol)
+            sec.units = u  # the CSV and DXF writers state it
             sections.append(sec)
-            written = write_section(sec, {kind: targets[n] for kind, n in per[k].items()},
-                                    fit_tol=args.fit_tol, overwrite=args.overwrite)
-            files += list(written.values())
-            rows.append({"plane": sec.plane.tolist(), "curves": len(sec.curves),
-                         "closed": int(sum(sec.closed)), "points": int(len(sec.points)),
-                         "curve_points": int(sum(len(c) for c in sec.curves)),
-                         "max_residual": sec.max_residual,
-                         "max_chord_error": sec.max_chord_error})
             if update:
                 update(k + 1, len(planes))
     finally:
         if bar is not None:
             bar.stop()
-    if "png" in kinds:
-        png = targets["section.png" if len(planes) == 1 else "sections.png"]
-        files.append(str(plot_section(sections, png, args.overwrite)))
-    summary = {"surface_file": args.surface, "surfaces": len(case.surfaces), "tol": args.tol,
-               "planes": rows, "files": files + [str(targets["section_summary.json"])]}
-    write_json(summary, targets["section_summary.json"], args.overwrite)
+    targets = outputs.create()
+    rows, files = [], []
+    for sec, t in zip(sections, per):
+        written = write_section(sec, {kind: targets[n] for kind, n in t.items()},
+                                fit_tol=args.fit_tol, overwrite=args.overwrite, units=u)
+        files += list(written.values())
+        rows.append({"plane": sec.plane.tolist(), "curves": len(sec.curves),
+                     "closed": int(sum(sec.closed)), "points": int(len(sec.points)),
+                     "curve_points": int(sum(len(c) for c in sec.curves)),
+                     "max_residual": sec.max_residual,
+                     "max_chord_error": sec.max_chord_error})
+    if png:
+        files.append(str(plot_section(sections, targets[png], args.overwrite, units=u)))
+    summary = {"surface_file": args.surface, "surfaces": len(case.surfaces),
+               "units": _unit(u), "tol": args.tol, "planes": rows,
+               "files": files + [str(targets["section_summary.json"])]}
+    write_json(summary, targets["section_summary.json"], args.overwrite, units=u)
     if args.json:
         print(json.dumps(_clean(summary), indent=1))
         return 0
@@ -208,14 +272,15 @@ def _cmd_section(args) -> int:
         a, b, c, d = r["plane"]
         print(f"plane {a:.6g} {b:.6g} {c:.6g} {d:.6g}: {r['curves']} curve(s) "
               f"({r['closed']} closed), {r['curve_points']} points, {r['points']} contact "
-              f"point(s), max residual {r['max_residual']:.2g}")
-    print(f"reports: {Path(args.output)}/ ({len(summary['files'])} files)")
+              f"point(s), max residual {r['max_residual']:.2g} {summary['units']}")
+    print(f"reports: {Path(args.output)}/ ({len(summary['files'])} files; "
+          f"units: {summary['units']})")
     return 0
 
 
 def _cmd_info(args) -> int:
-    case = _load_input(args.file)
-    out = {"name": case.name, "surfaces": []}
+    case = _load_input(args.file, units=args.units)
+    out = {"name": case.name, "units": _unit(case.units), "surfaces": []}
     for s in case.surfaces:
         (u0, u1), (v0, v1) = s.domain
         out["surfaces"].append({"name": s.name, "rational": s.is_rational,
@@ -228,34 +293,37 @@ def _cmd_info(args) -> int:
         for s in out["surfaces"]:
             print(f"{s['name'] or '-'}: {'NURBS' if s['rational'] else 'B-spline'} degree "
                   f"{s['degree']}, net {s['control_net']}, domain {s['domain']}, "
-                  f"{s['trim_loops']} trim loop(s), bounds {s['bounds']}")
+                  f"{s['trim_loops']} trim loop(s), bounds {s['bounds']} ({out['units']})")
     return 0
 
 
 def _cmd_mesh(args) -> int:
     import math
-    from .. import tessellate
 
-    src = Path(args.input)
+    from .. import tessellate
+    from ..io import MESH_FORMATS
+
     out = Path(args.output)
-    if out.exists() and src.exists() and src.resolve() == out.resolve():
-        raise FileExistsError(f"{out}: is the input; choose another output")
-    if out.exists() and not args.overwrite:
-        raise FileExistsError(f"{out}: exists; pass --overwrite to replace it")
-    case = _load_input(args.input)
+    if out.suffix.lower() not in MESH_FORMATS:
+        raise InvalidInputError(f"{out}: unknown mesh format {out.suffix or '(none)'!r}; "
+                                f"use {', '.join(MESH_FORMATS)}", "-o")
+    out = _file_target(out, args.overwrite, inputs=[args.input])
+    case = _load_input(args.input, args.skip_invalid, args.units)
     max_angle = math.radians(args.max_angle) if args.max_angle is not None else None
     mesh = tessellate(case.surfaces, args.tol, max_angle=max_angle, max_edge=args.max_edge)
     mesh.export(out, overwrite=args.overwrite)
     info = {"input": args.input, "output": str(out), "surfaces": len(case.surfaces),
             "vertices": int(mesh.vertices.shape[0]), "faces": int(mesh.faces.shape[0]),
-            "tol": args.tol, "max_deviation": mesh.max_deviation, "area": mesh.area,
+            "units": _unit(case.units), "tol": args.tol,
+            "max_deviation": mesh.max_deviation, "area": mesh.area,
             "seconds": sum(st["seconds"] for st in mesh.stats["surfaces"])}
     if args.json:
         print(json.dumps(info, indent=1))
     else:
         print(f"{out}: {info['faces']} triangles, {info['vertices']} vertices from "
               f"{info['surfaces']} surface(s); measured max deviation "
-              f"{info['max_deviation']:.3g} <= tol {args.tol:g}; {info['seconds']:.2f} s")
+              f"{info['max_deviation']:.3g} <= tol {args.tol:g} {info['units']}; "
+              f"{info['seconds']:.2f} s")
     return 0
 
 
