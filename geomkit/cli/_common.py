@@ -91,7 +91,8 @@ class Outputs:
         while not anc.exists() and anc != anc.parent:
             anc = anc.parent
         if not anc.is_dir():
-            raise InvalidInputError(f"{anc}: exists and is not a folder", "output folder")
+            raise InvalidInputError(f"{d}: cannot write here ({anc} is a file, not a "
+                                    "folder)", "output folder")
         prepare_outputs(anc, [], False)  # writable? (a temporary file, removed)
 
     def create(self) -> dict:
