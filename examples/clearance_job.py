@@ -4,12 +4,17 @@ The path travels 10 above the torus' top, then plunges onto the tube.  Every mov
 a certified clearance (an interval on the exact NURBS), the closest stylus piece, where
 it happens, and the first contact parameter of a colliding move.
 
-Run: python examples/clearance_job.py  (writes ./clearance-example/)
+Run: python examples/clearance_job.py [OUTPUT_FOLDER]  (default: a new temporary folder)
 """
+import sys
+import tempfile
+
 import numpy as np
 
 from geomkit import Stylus, probe_clearance, samples
 from geomkit.report import plot_clearance, prepare_outputs, write_clearance_csv
+
+OUT = sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="geomkit-clearance-")
 
 torus = samples.load("torus")                       # tube radius 5 around a circle of 20
 stylus = Stylus(tip_radius=1.0, shaft_radius=0.5, shaft_length=20.0,
@@ -26,7 +31,7 @@ for i in range(len(res)):
           f"({res.component_names[res.component[i]]} at s = {res.parameter[i]:.4f}) {what}")
 # the plunge: the tip centre descends from z = 15 to 0 over the tube top at z = 5, so it
 # touches when the centre is at z = 6: s = (15 - 6) / 15 = 0.6
-out = prepare_outputs("clearance-example", ["clearance.csv", "clearance.png"], overwrite=True)
+out = prepare_outputs(OUT, ["clearance.csv", "clearance.png"], overwrite=True)
 write_clearance_csv(res, path, out["clearance.csv"], overwrite=True)
 plot_clearance(res, out["clearance.png"], overwrite=True)
-print("reports in clearance-example/")
+print(f"reports in {OUT}/")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -235,8 +236,32 @@ def test_cli_demo(tmp_path):
     # (checked by project_points, another engine)
     assert abs(c["tip_distance_at_contact"] - 1.0) < 1e-6
     assert c["plunge_contact_component"] == "tip"
-    r = cli("demo", cwd=tmp_path)                      # reruns replace its own reports
-    assert r.returncode == 0 and "bump" in r.stdout and r.stderr == ""
+    # reruns replace its own reports; each step is printed as it finishes, not at the
+    # end: when step 2 starts, step 1's result is on stdout and step 4's report is not
+    # written yet
+    import subprocess
+    import sys
+
+    from clihelp import ROOT
+
+    (out / "clearance.csv").unlink()
+    p = subprocess.Popen([sys.executable, "-m", "geomkit", "demo"], cwd=tmp_path,
+                         env=dict(os.environ, PYTHONPATH=str(ROOT)),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = []
+    for line in p.stdout:
+        seen.append(line)
+        if line.startswith("[2/4] alignment"):
+            assert not (out / "clearance.csv").exists(), "step 4 ran before step 2 showed"
+            break
+    rest, err = p.communicate(timeout=600)
+    text = "".join(seen) + rest
+    assert p.returncode == 0 and err == "", err
+    assert any(ln.startswith("bump ") for ln in seen), seen   # step 1's result came first
+    steps = [ln.split()[0] for ln in text.splitlines() if ln.startswith("[")]
+    assert steps == ["[1/4]", "[2/4]", "[3/4]", "[4/4]"]
+    assert re.search(r"plunge first contact .*\(\d+\.\d s\)$", text, re.M)
+    assert (out / "clearance.csv").exists()
 
 
 # -------------------------------------------------------------- bad inputs

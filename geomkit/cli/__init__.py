@@ -122,7 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog="example:\n  geomkit section part.json --plane 1 0 0 -20 "
                               "--step 5 --count 10 -o cuts")
     p.add_argument("surface", help="surfaces: JSON, IGES, STEP or a sample name")
-    p.add_argument("--plane", type=float, nargs=4, metavar=("A", "B", "C", "D"), required=True)
+    p.add_argument("--plane", type=float, nargs=4, metavar=("A", "B", "C", "D"), required=True,
+                   help="the plane A x + B y + C z + D = 0 (the first of the family)")
     p.add_argument("--step", type=_positive_float, default=None,
                    help="distance between parallel planes (model units)")
     p.add_argument("--count", type=int, default=1, help="number of parallel planes")
