@@ -106,7 +106,7 @@ def test_iges_and_step_reader_units_reach_the_case(monkeypatch, tmp_path):
     class Res:
         surfaces = samples.load("sphere")
         skipped = []
-        units = "in"
+        units = "INCH"
 
     monkeypatch.setattr(geomkit.iges, "read_iges", lambda *a, **k: Res())
     p = tmp_path / "part.igs"

@@ -43,12 +43,26 @@ def _load_input(name: str, skip_invalid: bool = False, units: str | None = None)
             from ..step import read_step as read
         res = read(name, skip_invalid=skip_invalid)
         _warn_skipped(res.skipped)
-        case = Case(Path(name).stem, res.surfaces, units=getattr(res, "units", None))
+        case = Case(Path(name).stem, res.surfaces,
+                    units=_reader_units(getattr(res, "units", None)))
     else:
         case = load_case(name)
     if units is not None:
         case.units = units
     return case
+
+
+def _reader_units(units):
+    """A reader's unit name in canonical form (``"MM"`` -> ``"mm"``); a name geomkit
+    does not know is kept as the file states it."""
+    from ..units import canonical_units
+
+    if not units:
+        return None
+    try:
+        return canonical_units(units)
+    except InvalidInputError:
+        return str(units)
 
 
 def _warn_skipped(skipped):
