@@ -159,7 +159,7 @@ def test_info_unusable_path(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("argv, phrase", [
-    ([], "required: command"), (["bogus"], "invalid choice: 'bogus'"),
+    ([], "no command given"), (["bogus"], "invalid choice: 'bogus'"),
     (["demo", "--grid", "x"], "demo: argument --grid"), (["info"], "info: the following"),
     (["mesh", "sphere", "--tol", "0", "-o", "x.stl"], "mesh: argument --tol"),
     (["section", "sphere", "--plane", "0", "0", "1"], "section: argument --plane"),

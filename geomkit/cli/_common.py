@@ -17,7 +17,10 @@ class Parser(argparse.ArgumentParser):
     def error(self, message):
         words = self.prog.split()
         cmd = f"{' '.join(words[1:])}: " if len(words) > 1 else ""
-        self.exit(2, f"geomkit: error: {cmd}{' '.join(str(message).split())}\n")
+        message = " ".join(str(message).split())
+        if not cmd and message.endswith("required: command"):
+            message = "no command given (geomkit --help lists them)"
+        self.exit(2, f"geomkit: error: {cmd}{message}\n")
 
 
 # ----------------------------------------------------------------------- inputs
