@@ -93,6 +93,7 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     names = ["scan.csv", "deviation.csv", "deviation_map.png", "deviation_hist.png",
              "sections.png", "probe_path.csv", "clearance.csv", "clearance.png",
              "summary.json"] + sec_names
+    names += [f"{j}_report.html" for j in ("deviation", "section", "clearance")]
     targets = prepare_outputs(out_dir, names, overwrite=True)
 
     marks = {}
@@ -157,7 +158,7 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     marks["waited for the compile helper"] = time.perf_counter()
     cl = probe_clearance(surf, STYLUS, path, axis=axis, margin=SAFETY_MARGIN)
     write_clearance_csv(cl, path, targets["clearance.csv"], overwrite=True)
-    plot_clearance(cl, targets["clearance.png"], overwrite=True)
+    plot_clearance(cl, targets["clearance.png"], overwrite=True, probing=[len(cl) - 1])
     k = len(cl) - 1
     fc = float(cl.first_contact[k])
     tip = path[k] + fc * (path[k + 1] - path[k]) if np.isfinite(fc) else path[k]
@@ -183,6 +184,16 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
                "clearance": clearance,
                "files": sorted(names)}
     marks["clearance"] = time.perf_counter()
+    # 5. one self-contained interactive HTML report per job
+    from .report_jobs import write_reports
+
+    write_reports("deviation", ["html"], targets, True, rep=rep, surfaces=surf,
+                  part="freeform_1")
+    write_reports("section", ["html"], targets, True, sections=sections, surfaces=surf,
+                  scan=C, probe_radius=PROBE_RADIUS, tolerance=TOLERANCE, part="freeform_1")
+    write_reports("clearance", ["html"], targets, True, res=cl, surfaces=surf,
+                  path_points=path, stylus=STYLUS, axis=axis, probing=[k], part="freeform_1")
+    marks["html reports"] = time.perf_counter()
     prev, steps = t_all, {}
     for k, t in marks.items():
         steps[k] = t - prev

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
+from . import _reports
 from ._common import _load_input, _progress
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
@@ -57,6 +58,7 @@ def _cmd_clearance(args) -> int:
     if not args.no_plots:
         names.append("clearance.png")
     inputs = [args.part, args.path] + ([args.stylus] if Path(args.stylus).exists() else [])
+    names += _reports.names(args, "clearance")
     targets = prepare_outputs(out, names, args.overwrite, inputs=inputs)
     update, bar = _progress("checking moves")
     try:
@@ -69,6 +71,10 @@ def _cmd_clearance(args) -> int:
     files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite)]
     if not args.no_plots:
         files.append(plot_clearance(res, targets["clearance.png"], args.overwrite))
+    files += _reports.write(args, "clearance", targets, res=res, surfaces=case.surfaces,
+                            path_points=tips, stylus=stylus, part=args.part,
+                            axis=args.axis if path.ndim == 2 else None,
+                            units=getattr(case, "units", None))
     summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
                "stylus": stylus.to_dict(), **res.summary(),
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}

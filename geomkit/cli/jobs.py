@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
+from . import _reports
 from ._common import _load_input, _load_points, _progress, _tolerance
 
 def _cmd_demo(args) -> int:
@@ -57,6 +58,7 @@ def _cmd_deviation(args) -> int:
     # inputs are read first (clear errors), then the folder is checked before the work
     case = _load_input(args.nominal, args.skip_invalid)
     pts = _load_points(args.points)
+    names += _reports.names(args, "deviation")
     targets = prepare_outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
     update, bar = _progress("projecting points")
     try:
@@ -71,6 +73,8 @@ def _cmd_deviation(args) -> int:
         files.append(plot_deviation_map(rep, case.surfaces, targets["deviation_map.png"],
                                         args.overwrite))
         files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite))
+    files += _reports.write(args, "deviation", targets, rep=rep, surfaces=case.surfaces,
+                            part=args.nominal, units=getattr(case, "units", None))
     summary = {"nominal": args.nominal, "points_file": args.points,
                "surfaces": len(case.surfaces), **rep.summary(),
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
@@ -174,6 +178,7 @@ def _cmd_section(args) -> int:
         names += list(t.values())
     if "png" in kinds:
         names.append("section.png" if len(planes) == 1 else "sections.png")
+    names += _reports.names(args, "section")
     names.append("section_summary.json")
     targets = prepare_outputs(args.output, names, args.overwrite, inputs=[args.surface])
     update, bar = _progress("sectioning")
@@ -198,6 +203,9 @@ def _cmd_section(args) -> int:
     if "png" in kinds:
         png = targets["section.png" if len(planes) == 1 else "sections.png"]
         files.append(str(plot_section(sections, png, args.overwrite)))
+    files += _reports.write(args, "section", targets, sections=sections,
+                            surfaces=case.surfaces, part=args.surface,
+                            units=getattr(case, "units", None))
     summary = {"surface_file": args.surface, "surfaces": len(case.surfaces), "tol": args.tol,
                "planes": rows, "files": files + [str(targets["section_summary.json"])]}
     write_json(summary, targets["section_summary.json"], args.overwrite)
