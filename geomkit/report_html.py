@@ -375,7 +375,7 @@ def _whiskers(sections, scan, surfaces, band, probe_radius=0.0):
             ext = max(ext, float(np.ptp(rc.to_plane(X, sec.plane), axis=0).max()))
         if dev.size:
             vmax = max(vmax, float(np.abs(dev).max()))
-    scale = 0.05 * ext / vmax if vmax > 0 else 1.0
+    scale = 0.1 * ext / vmax if vmax > 0 else 1.0
     scale = float(10 ** np.floor(np.log10(scale))) if scale > 0 else 1.0
     return [(f, f + scale * (q - f), d, scale) for f, q, d in out]
 

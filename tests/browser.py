@@ -40,7 +40,7 @@ addEventListener('load', function () { setTimeout(function () {
   plots.forEach(function (p) { var b = p.getBoundingClientRect();
     rects.push({x: b.left, y: b.top + scrollY, w: b.width, h: b.height,
                 gl: !!p.querySelector('.gl-container canvas')}); });
-  var pre = document.createElement('pre'); pre.id = 'geomkit-probe';
+  var pre = document.createElement('pre'); pre.id = 'geomkit-probe'; pre.style.display = 'none';
   pre.textContent = JSON.stringify({errors: __gk, plots: plots.length,
     svg: document.querySelectorAll('svg.main-svg').length,
     gl: document.querySelectorAll('.gl-container canvas').length, rects: rects,
@@ -104,7 +104,7 @@ def open_report(path, screenshot=None, size=(1280, 1600), budget_ms=15000, timeo
                f"--window-size={size[0]},{size[1]}", f"--virtual-time-budget={budget_ms}",
                f"--screenshot={shot}", "--dump-dom", page.as_uri()]
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        m = re.search(r'<pre id="geomkit-probe">(.*?)</pre>', r.stdout, re.S)
+        m = re.search(r'<pre id="geomkit-probe"[^>]*>(.*?)</pre>', r.stdout, re.S)
         probe = json.loads(html.unescape(m.group(1))) if m else None
         console = [ln for ln in r.stderr.splitlines() if ":CONSOLE" in ln]
         out = None

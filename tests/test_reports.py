@@ -242,7 +242,8 @@ def _doc_image(src, name, width=880, crop_h=1500):
     im = im.resize((width, round(im.height * width / im.width)), Image.LANCZOS)
     out = ROOT / "docs" / "img" / name
     out.parent.mkdir(exist_ok=True)
-    im.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(out, optimize=True)
+    im.quantize(colors=256, method=Image.Quantize.MAXCOVERAGE, dither=Image.Dither.NONE
+                ).save(out, optimize=True)
     assert out.stat().st_size < 200_000, (name, out.stat().st_size)
 
 
