@@ -147,12 +147,14 @@ def _clean(obj):
 
 def write_json(doc: dict, path, overwrite: bool = False, units: str | None = None,
                model_note: str | None = None) -> Path:
-    """Write a JSON document atomically (NaN written as null).  A ``units`` field
-    ("model units" when None) and a ``model_note`` field (when given) are added unless
-    ``doc`` has them."""
+    """Write a JSON document atomically (NaN written as null).  ``units`` and
+    ``model_note``, when given, are added as fields of the same names unless ``doc``
+    has them (a ``units`` the caller wants to show as "model units" should be put in
+    ``doc`` so that what is printed and what is written agree)."""
     p = _check_target(path, overwrite)
     doc = dict(doc)
-    doc.setdefault("units", rc.unit_name(units))
+    if units is not None:
+        doc.setdefault("units", rc.unit_name(units))
     if model_note:
         doc.setdefault("model_note", model_note)
     data = json.dumps(_clean(doc), indent=1, allow_nan=False).encode("utf-8")
