@@ -303,3 +303,37 @@ def test_cli_report_option_rejects_an_unknown_kind(tmp_path, capsys):
                                    "--report", "html,xml", "-o", str(tmp_path / "x")])
     assert e.value.code == 2 and "unknown report kind 'xml'" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_section_whiskers_against_known_offsets(jobs):
+    from geomkit.report_html import _whiskers
+
+    P, d = jobs["P"], jobs["truth"]
+    inplane = np.abs(P[:, 2]) < 1e-12                   # the b = 0 and b = pi rows
+    (foot, tip, dev, scale), _ = _whiskers(jobs["sections"], P[inplane], jobs["surfs"],
+                                           band=1e-9)
+    assert dev.size == int(inplane.sum()) and scale > 1
+    r_foot = np.linalg.norm(foot, axis=1)                # plane z = 0: frame (x, y)
+    assert np.allclose(np.sort(np.unique(np.round(r_foot, 9))), [15.0, 25.0], atol=1e-9)
+    assert np.allclose(np.sort(dev), np.sort(d[inplane]), atol=1e-9)
+    outer = r_foot > 20                                  # outward normal: radius grows
+    sgn = np.where(outer, 1.0, -1.0)
+    assert np.allclose(np.linalg.norm(tip, axis=1), r_foot + sgn * scale * dev, atol=1e-7)
+
+
+def test_cli_section_scan_report(tmp_path):
+    from geomkit.cli import main
+
+    P, _ = _torus_scan(12)
+    pts = tmp_path / "pts.xyz"
+    np.savetxt(pts, P)
+    out = tmp_path / "cuts"
+    assert main(["section", "torus", "--plane", "0", "0", "1", "0", "--formats", "csv",
+                 "--scan", str(pts), "-o", str(out)]) == 2
+    assert not out.exists()
+    assert main(["section", "torus", "--plane", "0", "0", "1", "0", "--formats", "csv",
+                 "--scan", str(pts), "--report", "html", "-o", str(out)]) == 0
+    text = (out / "section_report.html").read_text(encoding="utf-8")
+    assert "whiskers: scan deviation x" in text and "z = 0" in text
+    summary = json.loads((out / "section_summary.json").read_text())
+    assert str(out / "section_report.html") in summary["files"]

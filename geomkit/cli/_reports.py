@@ -43,9 +43,17 @@ def names(args, job: str) -> list[str]:
     """Report file names for ``prepare_outputs`` (reads ``--scan`` now, so a bad file
     is reported before the work)."""
     kinds = parse_kinds(getattr(args, "report", None))
-    if job == "section" and getattr(args, "scan", None) and "html" in kinds:
+    if job == "section" and getattr(args, "scan", None):
+        from ..errors import InvalidInputError
         from ..points_io import read_points
 
+        if "html" not in kinds:
+            raise InvalidInputError("the scan is drawn in the HTML report: add --report "
+                                    "html", "--scan")
+        r = args.scan_probe_radius
+        if not (r >= 0 and r != float("inf")):
+            raise InvalidInputError(f"must be a finite number >= 0, got {r}",
+                                    "--scan-probe-radius")
         args._report_scan = read_points(args.scan).points
     return report_files(job, kinds)
 
