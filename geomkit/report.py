@@ -317,7 +317,7 @@ def section_figure(sections, units=None, model_note=None, figsize=None):
         for X in sec.curves:
             ext = np.maximum(ext, np.ptp(rc.to_plane(X, sec.plane), axis=0))
     tall = ext[1] > ext[0]
-    cols = min(k, 4) if tall else (1 if k <= 3 else 2)
+    cols = min(k, 6) if tall else (1 if k <= 3 else 2)
     rows = -(-k // cols)
     w = 10 if cols > 1 else 7.5
     aspect = (ext[1] / ext[0]) if ext.min() > 0 else 0.6
