@@ -18,8 +18,9 @@
 Reports go to ``out_dir`` (default ``./geomkit-demo``): ``scan.csv`` (the synthetic
 measurement, to try the CLI on), ``deviation.csv``, ``deviation_map.png``,
 ``deviation_hist.png``, ``section_000..004.csv/.dxf/.json``, ``sections.png``,
-``probe_path.csv`` (the stylus path), ``clearance.csv``, ``clearance.png`` and
-``summary.json`` (written last).  The demo replaces its own report files there.
+``probe_path.csv`` (the stylus path), ``clearance.csv``, ``clearance.png``,
+``deviation_report.html``, ``section_report.html``, ``clearance_report.html`` (one
+interactive report per job) and ``summary.json`` (written last).  The demo replaces its own report files there.
 """
 
 from __future__ import annotations
@@ -76,7 +77,7 @@ def synthetic_scan(surface, grid: int = 40, seed: int = 3, bump: float = BUMP_HE
     return S + (true + probe_radius)[:, None] * N, N, true
 
 
-STEPS = ("deviation", "alignment", "section", "clearance")
+STEPS = ("deviation", "alignment", "section", "clearance", "reports")
 """The demo's steps, in order (the names ``progress`` is called with)."""
 
 
@@ -114,6 +115,7 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     names = ["scan.csv", "deviation.csv", "deviation_map.png", "deviation_hist.png",
              "sections.png", "probe_path.csv", "clearance.csv", "clearance.png",
              "summary.json"] + sec_names
+    names += [f"{j}_report.html" for j in ("deviation", "section", "clearance")]
     targets = prepare_outputs(out_dir, names, overwrite=True)
 
     # 1. deviation of the synthetic scan
@@ -189,7 +191,8 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     marks["waited for the compile helper"] = time.perf_counter()
     cl = probe_clearance(surf, STYLUS, path, axis=axis, margin=SAFETY_MARGIN)
     write_clearance_csv(cl, path, targets["clearance.csv"], overwrite=True, units=units)
-    plot_clearance(cl, targets["clearance.png"], overwrite=True, units=units)
+    plot_clearance(cl, targets["clearance.png"], overwrite=True, units=units,
+                   probing=[len(cl) - 1])
     k = len(cl) - 1
     fc = float(cl.first_contact[k])
     tip = path[k] + fc * (path[k + 1] - path[k]) if np.isfinite(fc) else path[k]
@@ -208,6 +211,19 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
     summary["clearance"] = clearance
     summary["files"] = sorted(names)
     step("clearance", done=True)
+    # 5. one self-contained interactive HTML report per job
+    step("reports")
+    from .report_jobs import write_reports
+
+    write_reports("deviation", ["html"], targets, True, rep=rep, surfaces=surf,
+                  part="freeform_1", units=units)
+    write_reports("section", ["html"], targets, True, sections=sections, surfaces=surf,
+                  scan=C, probe_radius=PROBE_RADIUS, tolerance=TOLERANCE, part="freeform_1",
+                  units=units)
+    write_reports("clearance", ["html"], targets, True, res=cl, surfaces=surf,
+                  path_points=path, stylus=STYLUS, axis=axis, probing=[k], part="freeform_1",
+                  units=units)
+    step("reports", done=True)
     prev, steps = t_all, {}
     for k, t in marks.items():
         steps[k] = t - prev

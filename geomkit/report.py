@@ -147,12 +147,14 @@ def _clean(obj):
 
 def write_json(doc: dict, path, overwrite: bool = False, units: str | None = None,
                model_note: str | None = None) -> Path:
-    """Write a JSON document atomically (NaN written as null).  A ``units`` field
-    ("model units" when None) and a ``model_note`` field (when given) are added unless
-    ``doc`` has them."""
+    """Write a JSON document atomically (NaN written as null).  ``units`` and
+    ``model_note``, when given, are added as fields of the same names unless ``doc``
+    has them (a ``units`` the caller wants to show as "model units" should be put in
+    ``doc`` so that what is printed and what is written agree)."""
     p = _check_target(path, overwrite)
     doc = dict(doc)
-    doc.setdefault("units", rc.unit_name(units))
+    if units is not None:
+        doc.setdefault("units", rc.unit_name(units))
     if model_note:
         doc.setdefault("model_note", model_note)
     data = json.dumps(_clean(doc), indent=1, allow_nan=False).encode("utf-8")
@@ -315,7 +317,7 @@ def section_figure(sections, units=None, model_note=None, figsize=None):
         for X in sec.curves:
             ext = np.maximum(ext, np.ptp(rc.to_plane(X, sec.plane), axis=0))
     tall = ext[1] > ext[0]
-    cols = min(k, 4) if tall else (1 if k <= 3 else 2)
+    cols = min(k, 6) if tall else (1 if k <= 3 else 2)
     rows = -(-k // cols)
     w = 10 if cols > 1 else 7.5
     aspect = (ext[1] / ext[0]) if ext.min() > 0 else 0.6

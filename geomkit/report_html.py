@@ -279,7 +279,7 @@ def section_html(sections, path, overwrite: bool = False, units: str | None = No
                                              extra), model_note)
     shown = sections[:24]
     whisk = _whiskers(sections, scan, surfaces, band, probe_radius) if scan is not None else None
-    cols = 1 if len(shown) <= 2 else 2
+    cols = 1 if len(shown) == 1 else 2
     rows = -(-max(len(shown), 1) // cols)
     fig = make_subplots(rows=rows, cols=cols, subplot_titles=[
         f"plane {rc.plane_name(s.plane)}" for s in shown], horizontal_spacing=0.08,
@@ -355,7 +355,7 @@ def _whiskers(sections, scan, surfaces, band, probe_radius=0.0):
     P, _ = as_points(scan, 3, "scan")
     if band is None:
         band = 0.005 * float(np.linalg.norm(np.ptp(P, axis=0)))
-    out, ext, vmax = [], 1e-300, 0.0
+    out, ext, devs = [], 1e-300, []
     for sec in sections:
         near = np.abs(P @ sec.plane[:3] + sec.plane[3]) <= band
         Q = P[near]
@@ -373,11 +373,21 @@ def _whiskers(sections, scan, surfaces, band, probe_radius=0.0):
         out.append([rc.to_plane(foot, sec.plane), rc.to_plane(Q, sec.plane), dev])
         for X in sec.curves:
             ext = max(ext, float(np.ptp(rc.to_plane(X, sec.plane), axis=0).max()))
-        if dev.size:
-            vmax = max(vmax, float(np.abs(dev).max()))
-    scale = 0.05 * ext / vmax if vmax > 0 else 1.0
-    scale = float(10 ** np.floor(np.log10(scale))) if scale > 0 else 1.0
-    return [(f, f + scale * (q - f), d, scale) for f, q, d in out]
+        devs.append(np.abs(dev))
+    return [(f, f + scale * (q - f), d, scale) for (f, q, d), scale in
+            zip(out, [_whisker_scale(np.concatenate(devs), ext)] * len(out))]
+
+
+def _whisker_scale(a, ext) -> float:
+    """Magnification (1, 2 or 5 x a power of 10) drawing the 95th-percentile deviation
+    at ~8 % of the curves' extent ``ext``, the largest at most ~30 %."""
+    if not a.size or not a.max() > 0:
+        return 1.0
+    ref = max(float(np.percentile(a, 95)), float(a.max()) / 4)
+    x = 0.08 * ext / ref
+    e = np.floor(np.log10(x) + 1e-9)
+    m = max(k for k in (1, 2, 5) if k * 10 ** e <= x * (1 + 1e-9))
+    return float(m * 10 ** e)
 
 
 def _add_whiskers(fig, go, w, sec, tolerance, m, u, r, c):

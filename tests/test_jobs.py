@@ -251,7 +251,7 @@ def test_cli_demo(tmp_path):
     seen = []
     for line in p.stdout:
         seen.append(line)
-        if line.startswith("[2/4] alignment"):
+        if line.startswith("[2/5] alignment"):
             assert not (out / "clearance.csv").exists(), "step 4 ran before step 2 showed"
             break
     rest, err = p.communicate(timeout=600)
@@ -259,8 +259,9 @@ def test_cli_demo(tmp_path):
     assert p.returncode == 0 and err == "", err
     assert any(ln.startswith("bump ") for ln in seen), seen   # step 1's result came first
     steps = [ln.split()[0] for ln in text.splitlines() if ln.startswith("[")]
-    assert steps == ["[1/4]", "[2/4]", "[3/4]", "[4/4]"]
+    assert steps == ["[1/5]", "[2/5]", "[3/5]", "[4/5]", "[5/5]"]
     assert re.search(r"plunge first contact .*\(\d+\.\d s\)$", text, re.M)
+    assert re.search(r"^reports .*deviation_report.html.*\(\d+\.\d s\)$", text, re.M)
     assert (out / "clearance.csv").exists()
 
 

@@ -165,6 +165,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_mesh)
     p = sub.add_parser("samples", help="list the bundled samples")
     p.set_defaults(func=_cmd_samples)
+    from . import _reports  # --report html,pdf on deviation, section, clearance
+
+    _reports.add_options(sub)
     return ap
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
+from . import _reports
 from ._common import Outputs, _load_input, _progress, _unit
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
@@ -56,6 +57,7 @@ def _cmd_clearance(args) -> int:
     if not args.no_plots:
         names.append("clearance.png")
     inputs = [args.part, args.path] + ([args.stylus] if Path(args.stylus).exists() else [])
+    names += _reports.names(args, "clearance")
     outputs = Outputs(out, names, args.overwrite, inputs=inputs)  # created when writing
     update, bar = _progress("checking moves")
     try:
@@ -71,6 +73,9 @@ def _cmd_clearance(args) -> int:
                                  units=u)]
     if not args.no_plots:
         files.append(plot_clearance(res, targets["clearance.png"], args.overwrite, units=u))
+    files += _reports.write(args, "clearance", targets, res=res, surfaces=case.surfaces,
+                            path_points=tips, stylus=stylus, part=args.part,
+                            axis=args.axis if path.ndim == 2 else None, units=u)
     summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
                "units": _unit(u), "stylus": stylus.to_dict(), **res.summary(),
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
+from . import _reports
 from ._common import (Outputs, _file_target, _load_input, _load_points, _progress,
                       _tolerance, _unit)
 
@@ -77,8 +78,14 @@ def _demo_clearance(summary):
             f"{c['stylus']['tip_radius']:g})"]
 
 
+def _demo_reports(summary):
+    html = [f for f in summary["files"] if f.endswith(".html")]
+    return [f"reports    interactive HTML: {', '.join(html)}"]
+
+
 _DEMO_LINES = {"deviation": _demo_deviation, "alignment": _demo_alignment,
-               "section": _demo_section, "clearance": _demo_clearance}
+               "section": _demo_section, "clearance": _demo_clearance,
+               "reports": _demo_reports}
 
 
 def _cmd_deviation(args) -> int:
@@ -95,6 +102,7 @@ def _cmd_deviation(args) -> int:
     # and created only when the reports are written
     case = _load_input(args.nominal, args.skip_invalid, args.units)
     pts = _load_points(args.points)
+    names += _reports.names(args, "deviation")
     outputs = Outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
     update, bar = _progress("projecting points")
     try:
@@ -113,6 +121,8 @@ def _cmd_deviation(args) -> int:
                                         args.overwrite, units=u))
         files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite,
                                     units=u))
+    files += _reports.write(args, "deviation", targets, rep=rep, surfaces=case.surfaces,
+                            part=args.nominal, units=u)
     summary = {"nominal": args.nominal, "points_file": args.points,
                "surfaces": len(case.surfaces), "units": _unit(u), **rep.summary(),
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
@@ -233,6 +243,7 @@ def _cmd_section(args) -> int:
         names += list(t.values())
     png = ("section.png" if len(planes) == 1 else "sections.png") if "png" in kinds else None
     names += [png] if png else []
+    names += _reports.names(args, "section")
     names.append("section_summary.json")
     outputs = Outputs(args.output, names, args.overwrite, inputs=[args.surface])
     u = case.units
@@ -261,6 +272,8 @@ def _cmd_section(args) -> int:
                      "max_chord_error": sec.max_chord_error})
     if png:
         files.append(str(plot_section(sections, targets[png], args.overwrite, units=u)))
+    files += _reports.write(args, "section", targets, sections=sections,
+                            surfaces=case.surfaces, part=args.surface, units=u)
     summary = {"surface_file": args.surface, "surfaces": len(case.surfaces),
                "units": _unit(u), "tol": args.tol, "planes": rows,
                "files": files + [str(targets["section_summary.json"])]}
