@@ -42,6 +42,8 @@ True
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from ._collision_types import Body, Contact, Contacts, Distance
@@ -231,15 +233,21 @@ def _collide_boxes(a, Pa, b, Pb, all_pairs):
     if Pa.dtype != np.float64 or Pb.dtype != np.float64 or Pa.shape != (4, 4) or \
             Pb.shape != (4, 4) or not (Pa.flags.c_contiguous and Pb.flags.c_contiguous):
         return None
-    pairs = np.empty((_FAST_CAP, 2), dtype=np.int64)
-    tags = np.empty((_FAST_CAP, 2), dtype=np.int64)
+    scr = _scratch.__dict__
+    pairs = scr.get("pairs")
+    if pairs is None:   # per-thread output buffers, reused (results get copies)
+        pairs = scr["pairs"] = np.empty((_FAST_CAP, 2), dtype=np.int64)
+        scr["tags"] = np.empty((_FAST_CAP, 2), dtype=np.int64)
+    tags = scr["tags"]
     n, tests, bad = kq.collide_posed(a.kind, a.child, a.rng, a.C, a.R, a.E, a.K, a.T, a.order,
                                      a.face_tags, b.child, b.rng, b.C, b.R, b.E, b.K, b.T,
                                      b.order, b.face_tags, Pa, Pb, POSE_TOL, kb.KDOP_ORDER,
                                      not all_pairs, pairs, tags)
     if bad or n > _FAST_CAP:
         return None
-    pairs, tags = pairs[:n], tags[:n]
+    if n == 0:
+        return Contact(False, _NO_PAIRS, _NO_PAIRS, tests)
+    pairs, tags = pairs[:n].copy(), tags[:n].copy()
     if n > 1:
         o = np.lexsort((pairs[:, 1], pairs[:, 0]))
         pairs, tags = pairs[o], tags[o]
@@ -247,6 +255,9 @@ def _collide_boxes(a, Pa, b, Pb, all_pairs):
 
 
 _FAST_CAP = 64
+_scratch = threading.local()
+_NO_PAIRS = np.empty((0, 2), dtype=np.int64)
+_NO_PAIRS.flags.writeable = False
 
 
 def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
