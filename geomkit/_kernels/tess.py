@@ -72,23 +72,19 @@ def _normal_gap(Nrm, G, i, j, x0, x1, x2):
 @jit
 def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
     mm = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(mm)
+    right = np.empty(mm)
+    tmp = np.empty(4)
+    G = np.empty((m, m, 3))
+    Nrm = np.empty((m, m, 3))
+    Bu = np.empty((m, p + 1))
+    Bv = np.empty((m, q + 1))
+    H = np.empty((q + 1, 4))
     for c in range(i0, i1):
-        Nu = np.empty(p + 1)
-        Nv = np.empty(q + 1)
-        left = np.empty(mm)
-        right = np.empty(mm)
-        tmp = np.empty(4)
-        G = np.empty((m, m, 3))
-        Nrm = np.empty((m, m, 3))
-        u0 = cells[c, 0]
-        u1 = cells[c, 1]
-        v0 = cells[c, 2]
-        v1 = cells[c, 3]
-        for i in range(m):
-            u = u0 + (u1 - u0) * i / (m - 1)
-            for j in range(m):
-                v = v0 + (v1 - v0) * j / (m - 1)
-                surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, G[i, j])
+        _cell_grid(Pw, p, q, U, V, cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3], m - 1,
+                   Nu, Nv, left, right, Bu, Bv, H, G)
         _grid_normals(G, Nrm)
         e_d0 = 0.0
         e_d1 = 0.0
