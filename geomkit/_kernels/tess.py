@@ -309,8 +309,8 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                     vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
                     surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
                     d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
-                    if d_ts <= d_st:
-                        break  # max(d_st, d_ts) cannot fall further
+                    if d_ts <= d_st or d_ts <= exact_above:
+                        break  # max(d_st, d_ts) cannot fall further, or passes
                     # chord step next: keep the Jacobian, move the residual's base point
                     for r in range(3):
                         SKL[0, 0, r] = Q[r]
@@ -353,7 +353,7 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
       foot of ``X``, both with the Jacobian at ``uv`` (exact derivatives here, grid
       differences in :func:`cell_deviation`; any surface point bounds the distance
       from above, so the Jacobian only steers), stopping once ``|X - S(uv')|`` is at
-      most ``dist(P, triangle)``; the sample's value is
+      most ``dist(P, triangle)`` or ``exact_above``; the sample's value is
       the larger of the two (and never more than the gap).
 
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
