@@ -81,6 +81,19 @@ def _as_scene(x, field) -> list[Surface]:
                                                      else ""), field)
 
 
+def _approx_error(scene) -> float:
+    """Largest ``approx_error`` (distance bound from the true face) of a scene's faces;
+    0 for exact faces (and for Surface objects without the attribute)."""
+    e = 0.0
+    for s in scene:
+        v = float(getattr(s, "approx_error", 0.0) or 0.0)
+        if not (math.isfinite(v) and v >= 0.0):
+            raise InvalidInputError(f"approx_error must be a finite number >= 0, got {v!r}",
+                                    "approx_error")
+        e = max(e, v)
+    return e
+
+
 def _pack_trims(surfaces):
     pieces = []
     pmax = 1
@@ -170,7 +183,12 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
         The two scenes (e.g. a probe against a part); trimmed faces are honoured.
     tol : float > 0
         Width of the certified interval: on return ``upper - lower <= tol`` (unless the
-        work cap was hit; see ``certified``), in model units.
+        work cap was hit; see ``certified``), in model units.  Faces that carry an
+        ``approx_error`` (their distance bound from the true geometry, e.g. approximated
+        offset faces) widen ``lower`` / ``upper`` by the largest such error of each
+        scene, so the interval bounds the distance of the *true* faces; ``distance``
+        and the points stay those of the faces given, and ``certified`` is then False
+        when the widened interval is wider than ``tol``.
     max_pairs : int >= 1
         Cap on examined sub-patch pairs.
 
@@ -241,6 +259,13 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
     lower = max(0.0, float(out_f[1]) - rounding)
     if measured <= tol:  # touching / intersecting: 0 is in the interval
         lower = 0.0
+    # faces that only approximate the true geometry (e.g. approximated offsets) are
+    # within their ``approx_error`` of it: the true distance lies within the sum of the
+    # two scenes' largest approximation errors of the computed one
+    widen = _approx_error(A) + _approx_error(B)
+    if widen > 0.0:
+        lower = max(0.0, lower - widen)
+        upper = upper + widen
     nodes = int(out_i[5])
     node_bytes = nodes * (_dk.NI * 8 + _dk.NF * 8)
     ctrl_bytes = int(ni[:nodes, _dk.I_OFF].max() + 1) * 8 if nodes else 0

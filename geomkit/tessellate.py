@@ -280,6 +280,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     force = None
     known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
+    measured = {}   # UV triangle (bytes of its corners) -> measured deviation
     rounds = 0
     for rounds in range(1, 40):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
@@ -293,6 +294,17 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
             if fanned else np.zeros(len(cells), dtype=bool)
         tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed, centre)
         todo = np.nonzero(np.isnan(dev))[0]
+        keys = None
+        if len(todo):
+            # triangles measured in an earlier round (same UV corners: same triangle)
+            keys = np.ascontiguousarray(tri_uv[todo]).reshape(len(todo), 6) \
+                .view(np.dtype((np.void, 48))).ravel().tolist()
+            if measured:
+                old = np.array([measured.get(key, np.nan) for key in keys])
+                hit = ~np.isnan(old)
+                dev[todo[hit]] = old[hit]
+                keys = [key for key, h in zip(keys, hit.tolist()) if not h]
+                todo = todo[~hit]
         if len(todo):
             sub = np.ascontiguousarray(tri_uv[todo])
             tri_xyz = evaluate(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
@@ -301,6 +313,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
                                sub, tri_xyz, k, u0, u1, v0, v1, EXACT_ABOVE * tol, out)
             dev[todo] = out
+            measured.update(zip(keys, out.tolist()))
         bad = dev > tol
         if not bad.any():
             break

@@ -28,8 +28,9 @@ def test_schema_and_measured_errors(tiny):
     res, _ = tiny
     rows = res["rows"]
     assert {r["engine"] for r in rows} == {"evaluation", "distance", "collision"}
-    # 1 evaluation row, 2 distance rows, collide + min_distance for the one tolerance
-    assert len(rows) == 1 + 2 + 2
+    # 1 evaluation row, 2 distance rows, collide + collide_many + min_distance for the
+    # one tolerance
+    assert len(rows) == 1 + 2 + 3
     for r in rows:
         assert tuple(r) == FIELDS
         assert r["geomkit_seconds"] > 0 and math.isfinite(r["geomkit_seconds"])

@@ -24,17 +24,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
-from .bvh import refit_kdop
+from ._numba import jit, jit_inline, pjit, prange
+from .bvh import pose_status, refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
 LB_SHRINK = 1.0 - 1e-9
 STACK = 1024
+LEAF_BUF = 16
 INV_SQRT3 = 1.0 / np.sqrt(3.0)
 
 
-@jit
+@jit_inline
 def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
     """B-node box in the axes of A-node box: ``Rab = RA^T Rr RB``, ``T`` centre
     (``M`` (3, 3) scratch)."""
@@ -50,7 +51,7 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
             Rab[r, c] = RA[i, 0, r] * M[0, c] + RA[i, 1, r] * M[1, c] + RA[i, 2, r] * M[2, c]
 
 
-@jit
+@jit_inline
 def box_separation(Rab, T, a, b, early, Ab):
     """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3).
 
@@ -97,7 +98,7 @@ def box_separation(Rab, T, a, b, early, Ab):
     return best
 
 
-@jit
+@jit_inline
 def kdop_separation(KA, KB, i, j, order, early):
     """Largest interval gap of two 14-DOPs over the 7 unit directions (Paper 5)."""
     best = -np.inf
@@ -113,7 +114,7 @@ def kdop_separation(KA, KB, i, j, order, early):
     return best
 
 
-@jit
+@jit_inline
 def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
               scr):
     if kind == 2:
@@ -122,14 +123,14 @@ def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, 
     return box_separation(Rab, T, EA[i], EB[j], early, scr[1])
 
 
-@jit
+@jit_inline
 def _size(kind, E, K, i):
     if kind == 2:
         return max(K[i, 1] - K[i, 0], K[i, 3] - K[i, 2], K[i, 5] - K[i, 4])
     return max(E[i, 0], E[i, 1], E[i, 2])
 
 
-@jit
+@jit_inline
 def _move(T, r, M, m, out):
     for v in range(3):
         x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
@@ -150,7 +151,9 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     st = np.empty((STACK, 2), dtype=np.int64)
     Rab = np.empty((3, 3))
     T = np.empty(3)
-    scr = np.empty((2, 3, 3))
+    M = np.empty((3, 3))
+    Ab = np.empty((3, 3))
+    tbs = np.empty((LEAF_BUF, 3, 3))
     hit = np.empty(3)
     ta = np.empty((3, 3))
     tb = np.empty((3, 3))
@@ -165,17 +168,35 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         i = st[top, 0]
         j = st[top, 1]
         tests += 1
-        if _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, True,
-                     Rab, T, scr) > 0.0:
-            continue
+        # the node test written out (not _node_sep): measured 4x faster per test
+        if kind == 2:
+            if kdop_separation(KA, KB, i, j, order, True) > 0.0:
+                continue
+        else:
+            _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M)
+            if box_separation(Rab, T, EA[i], EB[j], True, Ab) > 0.0:
+                continue
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
+            rb0 = rngB[j, 0]
+            nbl = rngB[j, 1] - rb0
+            if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
+                for rb in range(nbl):
+                    _move(TB, rb0 + rb, MB, mB, tbs[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
-                _move(TA, ra, MA, mA, ta)
+                if kind == 2:
+                    _move(TA, ra, MA, mA, ta)
+                    tra = ta
+                else:             # box trees traverse in A's frame: A does not move
+                    tra = TA[ra]
                 for rb in range(rngB[j, 0], rngB[j, 1]):
-                    _move(TB, rb, MB, mB, tb)
-                    if _intersect_point(ta, tb, hit):
+                    if nbl <= LEAF_BUF:
+                        trb = tbs[rb - rb0]
+                    else:
+                        _move(TB, rb, MB, mB, tb)
+                        trb = tb
+                    if _intersect_point(tra, trb, hit):
                         if npairs < cap:
                             out_pairs[npairs, 0] = orderA[ra]
                             out_pairs[npairs, 1] = orderB[rb]
@@ -320,3 +341,33 @@ def collide_many_kdops(childA, rngA, KA, TA, orderA, childB, rngB, KB, TB, order
         colliding[k] = c > 0
         npairs[k] = c
         tests[k] = t
+
+
+@jit
+def collide_posed(kind, childA, rngA, CA, RA, EA, KA, TA, orderA, tagsA,
+                  childB, rngB, CB, RB, EB, KB, TB, orderB, tagsB,
+                  Pa, Pb, pose_tol, order, first_only, out_pairs, out_tags):
+    """One :func:`collide_trees` call for box trees (OBB / AABB) straight from the
+    two (4, 4) poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for
+    the first one that is not rigid, nothing traversed), forms the relative motion
+    ``Ra^T [Rb | tb - ta]`` and writes the face tags of the pairs found.
+    Returns ``(n_pairs, bv_tests, bad)``."""
+    if pose_status(Pa.reshape((1, 4, 4)), pose_tol)[0] >= 0:
+        return 0, 0, 1
+    if pose_status(Pb.reshape((1, 4, 4)), pose_tol)[0] >= 0:
+        return 0, 0, 2
+    Rr = np.empty((3, 3))
+    tr = np.empty(3)
+    for r in range(3):
+        tr[r] = Pa[0, r] * (Pb[0, 3] - Pa[0, 3]) + Pa[1, r] * (Pb[1, 3] - Pa[1, 3]) + \
+            Pa[2, r] * (Pb[2, 3] - Pa[2, 3])
+        for c in range(3):
+            Rr[r, c] = Pa[0, r] * Pb[0, c] + Pa[1, r] * Pb[1, c] + Pa[2, r] * Pb[2, c]
+    n, tests = collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                             childB, rngB, CB, RB, EB, KB, TB, orderB,
+                             Rr, tr, np.eye(3), np.zeros(3), Rr, tr, order,
+                             first_only, out_pairs)
+    for k in range(min(n, out_pairs.shape[0])):
+        out_tags[k, 0] = tagsA[out_pairs[k, 0]]
+        out_tags[k, 1] = tagsB[out_pairs[k, 1]]
+    return n, tests, 0

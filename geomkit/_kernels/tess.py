@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ._numba import jit, jit_inline, prun
+from .basis import basis_funs, find_span
 from .surface import D1, derivs_scratch, surface_derivs, surface_point
 
 CELL_CHUNK = 8
@@ -71,23 +72,19 @@ def _normal_gap(Nrm, G, i, j, x0, x1, x2):
 @jit
 def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
     mm = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(mm)
+    right = np.empty(mm)
+    tmp = np.empty(4)
+    G = np.empty((m, m, 3))
+    Nrm = np.empty((m, m, 3))
+    Bu = np.empty((m, p + 1))
+    Bv = np.empty((m, q + 1))
+    H = np.empty((q + 1, 4))
     for c in range(i0, i1):
-        Nu = np.empty(p + 1)
-        Nv = np.empty(q + 1)
-        left = np.empty(mm)
-        right = np.empty(mm)
-        tmp = np.empty(4)
-        G = np.empty((m, m, 3))
-        Nrm = np.empty((m, m, 3))
-        u0 = cells[c, 0]
-        u1 = cells[c, 1]
-        v0 = cells[c, 2]
-        v1 = cells[c, 3]
-        for i in range(m):
-            u = u0 + (u1 - u0) * i / (m - 1)
-            for j in range(m):
-                v = v0 + (v1 - v0) * j / (m - 1)
-                surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, G[i, j])
+        _cell_grid(Pw, p, q, U, V, cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3], m - 1,
+                   Nu, Nv, left, right, Bu, Bv, H, G)
         _grid_normals(G, Nrm)
         e_d0 = 0.0
         e_d1 = 0.0
@@ -244,10 +241,13 @@ def point_triangle_closest(px, py, pz, V, a, b, c):
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_):
+             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, hu, hv):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
-    See :func:`triangle_deviation` for the measure.
+    See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
+    points of the samples are read from the grid ``G`` (k+1, k+1, 3) of a cell
+    (:func:`_cell_grid`) whose corners A, B, C are the grid nodes
+    ``gc = (a_u, a_v, b_u, b_v, c_u, c_v)`` (each 0 or k) instead of evaluated.
     """
     worst = 0.0
     for i in range(k + 1):
@@ -259,7 +259,17 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                 continue  # the corners are exact
             u = l0 * A[0] + l1 * B[0] + l2 * C[0]
             v = l0 * A[1] + l1 * B[1] + l2 * C[1]
-            surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
+            gu = 0
+            gv = 0
+            if gc[0] >= 0:
+                i0 = k - i - j
+                gu = (i0 * gc[0] + i * gc[2] + j * gc[4]) // k
+                gv = (i0 * gc[1] + i * gc[3] + j * gc[5]) // k
+                P[0] = G[gu, gv, 0]
+                P[1] = G[gu, gv, 1]
+                P[2] = G[gu, gv, 2]
+            else:
+                surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
             x = l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0]
             y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
             z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
@@ -269,8 +279,20 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                 d_ts = gap
                 uu = u
                 vv = v
-                for _ in range(2):
+                if gc[0] >= 0:
+                    # grid: a difference Jacobian (any step direction keeps
+                    # |X - S(uv')| an upper bound; the steps just need to be good)
+                    ga = max(gu - 1, 0)
+                    gb = min(gu + 1, k)
+                    ha = max(gv - 1, 0)
+                    hb = min(gv + 1, k)
+                    for r in range(3):
+                        SKL[0, 0, r] = P[r]
+                        SKL[1, 0, r] = (G[gb, gv, r] - G[ga, gv, r]) / ((gb - ga) * hu)
+                        SKL[0, 1, r] = (G[gu, hb, r] - G[gu, ha, r]) / ((hb - ha) * hv)
+                else:
                     surface_derivs(Pw, p, q, U, V, uu, vv, D1, bin_, scr, SKL)
+                for it in range(2):
                     r0 = x - SKL[0, 0, 0]
                     r1 = y - SKL[0, 0, 1]
                     r2 = z - SKL[0, 0, 2]
@@ -287,6 +309,11 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                     vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
                     surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
                     d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
+                    if d_ts <= d_st or d_ts <= exact_above:
+                        break  # max(d_st, d_ts) cannot fall further, or passes
+                    # chord step next: keep the Jacobian, move the residual's base point
+                    for r in range(3):
+                        SKL[0, 0, r] = Q[r]
                 gap = max(d_st, d_ts)
             worst = max(worst, gap)
     return worst
@@ -303,11 +330,13 @@ def _dev_scratch(p, q):
 @jit
 def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin,
                               vmax, exact_above, out):
+    G = np.empty((1, 1, 3))
+    gc = np.full(6, -1, dtype=np.int64)   # no grid: evaluate every sample
+    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
     for t in range(i0, i1):
-        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_)
+                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, 0.0, 0.0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -320,8 +349,11 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     * the parametric gap ``|P - X|`` bounds the distance both ways;
     * where it exceeds ``exact_above``, the two one-sided distances are measured
       instead: ``dist(P, triangle)`` exactly, and ``dist(X, surface)`` from above by
-      ``|X - S(uv')|`` after two Gauss–Newton steps ``uv -> uv'`` toward the foot of
-      ``X`` (any surface point bounds the distance from above); the sample's value is
+      ``|X - S(uv')|`` after two Gauss–Newton (chord) steps ``uv -> uv'`` toward the
+      foot of ``X``, both with the Jacobian at ``uv`` (exact derivatives here, grid
+      differences in :func:`cell_deviation`; any surface point bounds the distance
+      from above, so the Jacobian only steers), stopping once ``|X - S(uv')|`` is at
+      most ``dist(P, triangle)`` or ``exact_above``; the sample's value is
       the larger of the two (and never more than the gap).
 
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
@@ -332,12 +364,60 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
 
 
 @jit
+def _cell_grid(Pw, p, q, U, V, u0, u1, v0, v1, k, Nu, Nv, left, right, Bu, Bv, H, G):
+    """``G[a, b] = S(u0 + a (u1 - u0) / k, v0 + b (v1 - v0) / k)`` for a, b in 0..k by
+    one tensor product: a cell lies in one knot span (cells refine the spans), so the
+    span's basis polynomials hold on the whole closed cell, ends included."""
+    su = find_span(Pw.shape[0] - 1, p, 0.5 * (u0 + u1), U)
+    sv = find_span(Pw.shape[1] - 1, q, 0.5 * (v0 + v1), V)
+    for a in range(k + 1):
+        u = u1 if a == k else u0 + (u1 - u0) * (a / k)
+        basis_funs(su, u, p, U, Nu, left, right)
+        for i in range(p + 1):
+            Bu[a, i] = Nu[i]
+        v = v1 if a == k else v0 + (v1 - v0) * (a / k)
+        basis_funs(sv, v, q, V, Nv, left, right)
+        for j in range(q + 1):
+            Bv[a, j] = Nv[j]
+    for a in range(k + 1):
+        for j in range(q + 1):
+            for c in range(4):
+                H[j, c] = 0.0
+            col = sv - q + j
+            for i in range(p + 1):
+                w = Bu[a, i]
+                row = su - p + i
+                for c in range(4):
+                    H[j, c] += w * Pw[row, col, c]
+        for b in range(k + 1):
+            h0 = 0.0
+            h1 = 0.0
+            h2 = 0.0
+            h3 = 0.0
+            for j in range(q + 1):
+                w = Bv[b, j]
+                h0 += w * H[j, 0]
+                h1 += w * H[j, 1]
+                h2 += w * H[j, 2]
+                h3 += w * H[j, 3]
+            G[a, b, 0] = h0 / h3
+            G[a, b, 1] = h1 / h3
+            G[a, b, 2] = h2 / h3
+
+
+@jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                           exact_above, target, out):
+    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+    G = np.empty((k + 1, k + 1, 3))
+    Bu = np.empty((k + 1, p + 1))
+    Bv = np.empty((k + 1, q + 1))
+    H = np.empty((q + 1, 4))
+    gc = np.empty(6, dtype=np.int64)
+    UVc = np.empty((4, 2))
+    X = np.empty((4, 3))
+    T = np.empty((3, 3))
     for c in range(i0, i1):
-        Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
-        UVc = np.empty((4, 2))
-        X = np.empty((4, 3))
         UVc[0, 0] = cells[c, 0]
         UVc[0, 1] = cells[c, 2]
         UVc[1, 0] = cells[c, 1]
@@ -346,9 +426,14 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
         UVc[2, 1] = cells[c, 3]
         UVc[3, 0] = cells[c, 0]
         UVc[3, 1] = cells[c, 3]
+        _cell_grid(Pw, p, q, U, V, cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3], k,
+                   Nu, Nv, left, right, Bu, Bv, H, G)
         for r in range(4):
-            surface_point(Pw, p, q, U, V, UVc[r, 0], UVc[r, 1], Nu, Nv, left, right, tmp, X[r])
-        T = np.empty((3, 3))
+            gu = k if r == 1 or r == 2 else 0
+            gv = k if r >= 2 else 0
+            X[r, 0] = G[gu, gv, 0]
+            X[r, 1] = G[gu, gv, 1]
+            X[r, 2] = G[gu, gv, 2]
         out[c, 0] = np.inf
         out[c, 1] = np.inf
         for step in range(2):
@@ -365,9 +450,17 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
                     T[0, r] = X[a, r]
                     T[1, r] = X[b, r]
                     T[2, r] = X[cc, r]
+                gc[0] = k if a == 1 or a == 2 else 0
+                gc[1] = k if a >= 2 else 0
+                gc[2] = k if b == 1 or b == 2 else 0
+                gc[3] = k if b >= 2 else 0
+                gc[4] = k if cc == 1 or cc == 2 else 0
+                gc[5] = k if cc >= 2 else 0
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
-                                            left, right, tmp, P, Q, scr, SKL, bin_))
+                                            left, right, tmp, P, Q, scr, SKL, bin_, G, gc,
+                                            (cells[c, 1] - cells[c, 0]) / k,
+                                            (cells[c, 3] - cells[c, 2]) / k))
             out[c, diag] = worst
 
 

@@ -182,9 +182,12 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
 
     * ``min_distance`` vs ``coal.distance``: error = largest |mesh distance - exact
       distance of the surfaces| over the poses;
-    * ``collide`` (first hit) vs ``coal.collide``: error = largest |exact contact
-      margin| (:func:`_sweep_poses`) at a pose the answer got wrong (0 when every
-      pose is right), i.e. how far from the contact boundary a wrong answer can be.
+    * ``collide`` (first hit, one Python call per pose) vs ``coal.collide``: error =
+      largest |exact contact margin| (:func:`_sweep_poses`) at a pose the answer got
+      wrong (0 when every pose is right), i.e. how far from the contact boundary a
+      wrong answer can be;
+    * ``collide_many`` (first hit, all poses in one call; time / poses) against the
+      same coal loop.
     """
     from ._common import MISSING_COAL, coal_or_none, make_row
 
@@ -212,8 +215,16 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
                 dist[k] = min_distance(a, eye, b, PB[k]).distance
             t_hit = _median_time(gk_hit, poses)
             t_dist = _median_time(gk_dist, poses)
+            EYE = np.broadcast_to(eye, PB.shape)
+            collide_many(a, b, EYE[:2], PB[:2])
+            t_many = []
+            for _ in range(3):
+                t0 = time.perf_counter()
+                many = collide_many(a, b, EYE, PB).colliding
+                t_many.append((time.perf_counter() - t0) / poses)
             size = f"{len(meshes[0][1])} + {len(meshes[1][1])} triangles"
             out = {"collide": [t_hit, _wrong(hit, touching, margin)],
+                   "collide_many": [float(np.median(t_many)), _wrong(many, touching, margin)],
                    "min_distance": [t_dist, float(np.max(np.abs(dist - exact)))]}
             refs = {k: dict(note=f"{size}; {MISSING_COAL}") for k in out}
             if coal is not None:
@@ -241,6 +252,8 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
                                        note=f"{size}; {int(touching.sum())}/{poses} poses "
                                             f"touch; wrong: geomkit {int((hit != touching).sum())}"
                                             f", coal {int((chit != touching).sum())}")
+                refs["collide_many"] = dict(refs["collide"], note=f"{size}; all poses in "
+                                            "one call, time / poses; coal: one call per pose")
                 refs["min_distance"] = dict(
                     reference_name="coal distance (OBBRSS)",
                     reference_seconds=_median_time(c_dist, poses),

@@ -86,7 +86,33 @@ def cases():
     sph = samples.load("sphere")[0]
     out.append(("sphere_vs_plate_edge", _moved(sph, (-13, 50, 4)), plate,
                 math.sqrt(185.0) - 10))
-    return out
+    return out + continuum_cases()
+
+
+CONTINUUM_CASES = ("torus_sphere_axis", "coaxial_cylinders", "concentric_spheres",
+                   "parallel_trimmed_planes")
+
+
+def _scaled(s, sx, sy, sz, t=(0.0, 0.0, 0.0)):
+    return Surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                   s.control_points * np.array([sx, sy, sz]) + np.asarray(t, float),
+                   s.weights, trim=list(s.trim) or None)
+
+
+def continuum_cases():
+    """Pairs whose minimum is attained on a continuum (analytic truths): the sphere
+    (r 10) centred on the torus's axis in its hole (R 20, r 5: every point of the
+    circle of radius 15 is a minimum, 5); coaxial quarter cylinders r 10 and 15 (5);
+    concentric spheres r 10 and 20 (10); the plate with a hole and its copy 3 above
+    (parallel trimmed planes, 3)."""
+    sph = samples.load("sphere")[0]
+    tor = samples.load("torus")[0]
+    cyl = samples.load("cylinder_quarter")[0]
+    plate = samples.load("plate_with_hole")[0]
+    return [("torus_sphere_axis", sph, tor, 5.0),
+            ("coaxial_cylinders", cyl, _scaled(cyl, 1.5, 1.5, 1.0), 5.0),
+            ("concentric_spheres", sph, _scaled(sph, 2.0, 2.0, 2.0), 10.0),
+            ("parallel_trimmed_planes", plate, _moved(plate, (0.0, 0.0, 3.0)), 3.0)]
 
 
 cases_ = cases
@@ -144,6 +170,9 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=3):
                            reference_seconds=float(np.median(ts)),
                            reference_error=abs(d_occ - truth),
                            note=f"error vs {oracle}")
+            cert = "certified" if r.certified else "NOT certified"
+            ref["note"] = (ref.get("note", "") + f"; {cert}, interval "
+                           f"{r.upper - r.lower:.2g}").lstrip("; ")
             rows.append(make_row("distance", name, "tol", tol, t, abs(r.distance - truth),
                                  repeats=k, **ref))
     return rows

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import textwrap
 
 #: Errors of exactly 0 are drawn hollow a decade below a panel's smallest positive
 #: error (at this value when the panel has none).
@@ -62,8 +63,12 @@ def plot_rows(rows, fh, title=None):
         ax.set_ylabel(f"seconds per {sub[0]['per']}")
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=6, loc="best")
-    fig.suptitle("geomkit (solid, circles) vs reference (dashed, squares)"
-                 + (f"\n{title}" if title else ""), fontsize=9)
-    fig.tight_layout()
-    fig.savefig(fh, format="png", dpi=110)
+    # the subtitle (run conditions) is wrapped to the figure's width and the layout
+    # leaves room for it; bbox "tight" keeps any overhang in the picture
+    head = ["geomkit (solid, circles) vs reference (dashed, squares)"]
+    if title:
+        head += textwrap.wrap(str(title), width=int(24 * 5.2 * cols / 2.6))
+    fig.suptitle("\n".join(head), fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.16 * len(head) / (4.2 * nrows)))
+    fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)

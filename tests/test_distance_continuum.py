@@ -1,0 +1,67 @@
+"""surface_distance on continua of minima (every point of a curve or region is a
+minimum) and on faces that carry an approximation error.
+
+Oracles: analytic truths (sphere r 10 on the axis of the torus R 20, r 5 in its hole:
+5; coaxial quarter cylinders r 10 / 15: 5; concentric spheres r 10 / 20: 10; the plate
+with a hole and its copy 3 above: 3).  Whatever the search does, the returned
+interval must contain the truth with zero slack; when it says certified, it must be
+at most tol wide.
+"""
+
+import pytest
+
+from geomkit import samples
+from geomkit.bench.distance import continuum_cases
+from geomkit.distance import surface_distance
+from geomkit.types import Surface
+
+CASES = {c[0]: c[1:] for c in continuum_cases()}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_continuum_interval_contains_truth(name):
+    a, b, truth = CASES[name]
+    r = surface_distance(a, b, tol=1e-9, max_pairs=20_000)
+    assert r.lower <= truth <= r.upper                      # zero slack
+    assert r.lower <= r.distance <= r.upper
+    if r.certified:
+        assert r.upper - r.lower <= 1e-9
+        assert abs(r.distance - truth) <= 1e-9
+    else:
+        assert r.stats["stop"] == "max_pairs"
+
+
+def test_parallel_trimmed_planes_certified():
+    a, b, truth = CASES["parallel_trimmed_planes"]
+    r = surface_distance(a, b, tol=1e-9)
+    assert r.certified and r.upper - r.lower <= 1e-9
+    assert r.lower <= truth <= r.upper
+
+
+class _Approx(Surface):
+    """A Surface carrying ``approx_error`` whether or not geomkit.types.Surface has the
+    attribute itself."""
+
+
+def _with_error(s, e):
+    x = _Approx(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points, s.weights)
+    object.__setattr__(x, "approx_error", e)
+    assert getattr(x, "approx_error", 0.0) == e
+    return x
+
+
+def test_approx_error_widens_the_interval():
+    a, b = samples.load("sphere_pair")
+    exact = surface_distance(a, b, tol=1e-9)
+    assert exact.certified
+    e_a, e_b = 1e-3, 2.5e-3
+    r = surface_distance([_with_error(a, e_a)], _with_error(b, e_b), tol=1e-9)
+    assert r.distance == exact.distance                     # the faces given
+    assert r.lower == pytest.approx(exact.lower - (e_a + e_b), abs=1e-15)
+    assert r.upper == pytest.approx(exact.upper + (e_a + e_b), abs=1e-15)
+    assert not r.certified                                  # wider than tol now
+    # a true face anywhere within the errors stays inside the interval: 5 -/+ 3.5e-3
+    assert r.lower <= 5.0 - 3.5e-3 + 1e-12 and r.upper >= 5.0 + 3.5e-3 - 1e-12
+    # the widening is at most what the faces declare: with a loose tol it certifies
+    r2 = surface_distance(_with_error(a, e_a), b, tol=1e-2)
+    assert r2.certified and r2.upper - r2.lower <= 1e-2
