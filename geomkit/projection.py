@@ -188,6 +188,7 @@ class Projector:
 
     # ------------------------------------------------------------------ one chunk
     def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float) -> Projection:
+        t0 = time.perf_counter()
         n = P.shape[0]
         K = MAX_STARTS
         fs = np.full((n, K), -1, dtype=np.int64)
@@ -204,6 +205,7 @@ class Projector:
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           *self.breaks, step_tol, max_distance, K, fs, fuv, fd, fst, nf, lb,
                           flags, work)
+        t1 = time.perf_counter()
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
         # trimmed faces: feet outside the face are replaced by the trim-boundary foot
@@ -235,6 +237,7 @@ class Projector:
             extra_d[r] = td_[better]
             extra_uv[r] = tuv[better]
             extra_s[r] = si
+        t2 = time.perf_counter()
         j = np.argmin(fd, axis=1)
         rows = np.arange(n)
         best_d = fd[rows, j]
@@ -298,7 +301,9 @@ class Projector:
                                  "triangles_tested": int(work[:, 1].sum()),
                                  "newton_runs": int(nf.sum()),
                                  "lower_bound_above_distance":
-                                     int(np.count_nonzero(ok & (lb > dist)))})
+                                     int(np.count_nonzero(ok & (lb > dist))),
+                                 "time_kernel": t1 - t0, "time_trim": t2 - t1,
+                                 "time_finish": time.perf_counter() - t2})
 
     # ------------------------------------------------------------------ public
     def iter_project(self, points, max_distance: float | None = None,
