@@ -59,6 +59,24 @@ face was the 9th start for points far from the model)."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
 CHUNK_SIZE = 1 << 16
+TIE_TOL = 1e-12
+"""Feet whose distances differ by less than this times max(model size, distance) are
+a tie (one point on an edge shared by two faces), resolved to the lowest surface
+index."""
+
+
+def _groups(keys, mask):
+    """``(key, indices)`` for each key value among ``keys[mask]`` (one sort, instead
+    of one pass over all rows per surface)."""
+    idx = np.flatnonzero(mask)
+    if not idx.size:
+        return []
+    k = keys[idx]
+    order = np.argsort(k, kind="stable")
+    idx = idx[order]
+    k = k[order]
+    cut = np.flatnonzero(np.diff(k)) + 1
+    return [(int(k[a]), idx[a:b]) for a, b in zip(np.r_[0, cut], np.r_[cut, idx.size])]
 
 
 def _as_surfaces(surfaces) -> list[Surface]:
@@ -183,6 +201,12 @@ class Projector:
             for e, row in enumerate(rows):
                 collapsed = np.ptp(row, axis=0).max() <= eps
                 self.free_edges[i, e] = not (collapsed or (cu if e < 2 else cv))
+        # achieved approximation error of each face (0 for exact NURBS; set on offset
+        # surfaces approximated by NURBS): distances hold to the approximation, and
+        # the lower bounds are widened by the largest one
+        self.face_approx_error = np.array([float(getattr(s, "approx_error", 0.0) or 0.0)
+                                           for s in self.surfaces])
+        self.approx_error = float(self.face_approx_error.max())
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
         self.build_time = time.perf_counter() - t0
@@ -218,17 +242,16 @@ class Projector:
         extra_d = np.full(n, np.inf)
         extra_uv = np.zeros((n, 2))
         extra_s = np.full(n, -1, dtype=np.int64)
-        for si, td in self.trims.items():
-            on = (fs == si) & np.isfinite(fd)
-            if not on.any():
+        fdf = fd.reshape(-1)
+        fuvf = fuv.reshape(-1, 2)
+        for si, flat in _groups(fs.reshape(-1), np.isfinite(fdf)
+                                & (self.trimmed[np.maximum(fs, 0)].reshape(-1) != 0)):
+            td = self.trims[si]
+            flat = flat[classify_uv(self.surfaces[si], fuvf[flat]) == OUTSIDE]
+            if not flat.size:
                 continue
-            cls = classify_uv(self.surfaces[si], fuv[on])
-            bad = np.zeros_like(on)
-            bad[on] = cls == OUTSIDE
-            if not bad.any():
-                continue
-            fd[bad] = np.inf
-            rows = np.nonzero(bad.any(axis=1))[0]
+            fdf[flat] = np.inf
+            rows = np.unique(flat // K)
             s = self.surfaces[si]
             tuv = np.empty((rows.size, 2))
             td_ = np.empty(rows.size)
@@ -244,10 +267,19 @@ class Projector:
             extra_uv[r] = tuv[better]
             extra_s[r] = si
         t2 = time.perf_counter()
-        j = np.argmin(fd, axis=1)
+        # the nearest foot; feet within rounding of it (a foot on an edge shared by
+        # two faces is found from both) go to the lowest surface index, so a point
+        # gets one answer whatever the order the candidates came in
         rows = np.arange(n)
+        dmin = np.minimum(fd.min(axis=1), extra_d)
+        tie = (TIE_TOL * np.maximum(self.size, np.where(np.isfinite(dmin), dmin, 0.0)))[:, None]
+        big = np.iinfo(np.int64).max
+        key = np.where(fd <= dmin[:, None] + tie, fs, big)
+        j = np.argmin(key, axis=1)
         best_d = fd[rows, j]
-        use_trim = extra_d < best_d
+        trim_key = np.where(extra_d <= dmin + tie[:, 0], extra_s, big)
+        use_trim = (trim_key < key[rows, j]) | ~np.isfinite(best_d)
+        use_trim &= np.isfinite(extra_d)
         dist = np.where(use_trim, extra_d, best_d)
         uv = np.where(use_trim[:, None], extra_uv, fuv[rows, j])
         surf = np.where(use_trim, extra_s, fs[rows, j])
@@ -261,10 +293,8 @@ class Projector:
         foot = np.full((n, 3), np.nan)
         nrm = np.full((n, 3), np.nan)
         resid = np.full(n, np.nan)
-        for si, s in enumerate(self.surfaces):
-            sel = (surf == si) & (status != R.BEYOND) & (status != R.FAILED)
-            if not sel.any():
-                continue
+        for si, sel in _groups(surf, (status != R.BEYOND) & (status != R.FAILED)):
+            s = self.surfaces[si]
             (u0, u1), (v0, v1) = s.domain
             q = uv[sel]
             q[:, 0] = np.clip(q[:, 0], u0, u1)
@@ -298,6 +328,10 @@ class Projector:
         uv[~ok] = np.nan
         surf = np.where(ok, surf, -1).astype(np.int32)
         lower = np.where(ok, np.minimum(lb, dist), lb)
+        if self.approx_error > 0.0:
+            # approximated faces (e.g. IGES offset surfaces): the true face lies within
+            # its approx_error of the one projected on
+            lower = np.maximum(0.0, lower - self.approx_error)
         return Projection(point=foot, uv=uv, surface=surf, distance=dist,
                           signed_distance=signed, normal=nrm, status=status,
                           lower_bound=lower, residual=resid,
@@ -308,6 +342,7 @@ class Projector:
                                  "newton_runs": int(nf.sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
+                                 "approx_error": self.approx_error,
                                  "time_kernel": t1 - t0, "time_trim": t2 - t1,
                                  "time_finish": time.perf_counter() - t2})
 
@@ -360,6 +395,7 @@ class Projector:
                             "normal", "status", "lower_bound", "residual", "feet_tried")))
         out.stats = {k: sum(p.stats[k] for p in parts) for k in parts[0].stats}
         out.stats.update(time=time.perf_counter() - t0, build_time=self.build_time,
+                         approx_error=self.approx_error,
                          candidate_triangles=int(self.mesh.faces.shape[0]))
         return out
 
