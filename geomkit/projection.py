@@ -65,6 +65,17 @@ a tie (one point on an edge shared by two faces), resolved to the lowest surface
 index."""
 
 
+def _morton_order(P, origin, h):
+    """Order of the points along a Z curve over cells of 4 voxels (21 bits/axis)."""
+    c = np.floor((P - origin) / (4.0 * h))
+    c = np.clip(c, 0, (1 << 21) - 1).astype(np.uint64)
+    key = np.zeros(P.shape[0], dtype=np.uint64)
+    for b in range(21):
+        for a in range(3):
+            key |= ((c[:, a] >> np.uint64(b)) & np.uint64(1)) << np.uint64(3 * b + a)
+    return np.argsort(key, kind="stable")
+
+
 def _groups(keys, mask):
     """``(key, indices)`` for each key value among ``keys[mask]`` (one sort, instead
     of one pass over all rows per surface)."""
@@ -209,6 +220,8 @@ class Projector:
         self.approx_error = float(self.face_approx_error.max())
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
+        self.morton = False  # Morton-ordered points: same answers, speed gain not
+        # shown on the loaded machine (-20% .. +16% per case), so off by default
         self.build_time = time.perf_counter() - t0
 
     def __repr__(self) -> str:
@@ -230,11 +243,20 @@ class Projector:
         work = np.zeros((n, 2), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
-        _pk.project_batch(P, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
+        # points in Morton order of their voxel: neighbours share cells and triangles
+        # (cache locality); the kernel's answers are per point, unpermuted below
+        order = _morton_order(P, g.origin, g.voxel_size) if self.morton and n > 1 else None
+        Pk = P if order is None else np.ascontiguousarray(P[order])
+        _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, step_tol, max_distance, K, fs, fuv, fd,
                           fst, nf, lb,
                           flags, work)
+        if order is not None:
+            inv = np.empty(n, dtype=np.int64)
+            inv[order] = np.arange(n)
+            fs, fuv, fd, fst, nf, lb, flags, work = (a[inv] for a in (fs, fuv, fd, fst, nf,
+                                                                     lb, flags, work))
         t1 = time.perf_counter()
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
