@@ -18,7 +18,8 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    so the answer is the nearest point of the *trimmed* face.
 
 The nearest foot wins; points with many feet (the sphere centre) get the exact
-distance and one of them.  Work is parallel over points (numba ``prange``), in chunks
+distance and one of them.  Work is parallel over points (serial kernels on threads,
+``_numba.prun``), in chunks
 of ``chunk_size`` points, so memory stays bounded for any number of points
 (:meth:`Projector.iter_project` streams).
 """
