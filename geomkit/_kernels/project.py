@@ -364,8 +364,8 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
 @jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
-                   out_st, out_nf, out_lb, out_flags, out_work):
+                   trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv,
+                   out_d, out_st, out_nf, out_lb, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -398,7 +398,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         out_work[i, 1] = tested
         flags = 1 if ovf else 0
         nf = 0
-        best = np.inf
+        # the mesh upper bound holds for trimmed faces too (their triangles lie on
+        # the face); a Newton foot on a trimmed surface may lie outside the face,
+        # so its distance is no upper bound and must not prune candidates
+        best = UB
         if k == 0:
             flags |= 2
         for c in range(k):
@@ -463,13 +466,14 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             out_d[i, j] = d
             out_st[i, j] = st
             nf += 1
-            best = min(best, d)
+            if trimmed[s] == 0:
+                best = min(best, d)
         out_nf[i] = nf
         out_flags[i] = flags
 
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
-                  occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, brk_all,
+                  occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
                   brk_off, step_tol, max_dist,
                   max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_flags,
                   out_work):
@@ -478,11 +482,40 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
     ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
     nearest first.  ``out_lb[i]`` is the mesh lower bound of the point's distance
-    (certified up to the mesh deviation bounds ``fdev``).  ``out_flags[i]`` bit 0:
+    (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
+    trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
     more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
     Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
+         closed, trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
          out_st, out_nf, out_lb, out_flags, out_work)
+
+
+@jit
+def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+                      start, tris, max_dist, out_k, out_lb):
+    """The candidate search of :func:`_project_chunk` alone (for profiling)."""
+    stamp = np.full(F.shape[0], -1, dtype=np.int64)
+    hk = np.empty(256)
+    hv = np.empty(256, dtype=np.int64)
+    cap = 64
+    ct = np.empty(cap, dtype=np.int64)
+    cd = np.empty(cap)
+    cs = np.empty(cap)
+    cw = np.empty(cap)
+    for i in range(i0, i1):
+        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+            P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
+            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+        out_k[i] = k
+        out_lb[i] = LB
+
+
+def candidates_batch(P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                     max_dist, out_k, out_lb):
+    """Number of candidate triangles and the lower bound of each point: the first
+    stage of :func:`project_batch` on its own (the benchmark's stage profile)."""
+    prun(_candidates_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, dmax, origin, h,
+         lvl_dims, lvl_off, occ, start, tris, max_dist, out_k, out_lb)

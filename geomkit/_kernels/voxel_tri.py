@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, pjit, prange
+from ._numba import jit, prun
 from .triangles import triangle_triangle_distance
 from .voxel import _decode, _heap_pop, _push_children, _seed_heap, _tri_aabb
 
@@ -39,14 +39,10 @@ def _test_voxel(lin, start, tris, VB, FB, TA, TB, stamp, qid, best, bt, pa, pb, 
     return best, bt
 
 
-@pjit
-def nearest_tris_best_first(VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start, tris,
-                            out_d, out_t, out_pa, out_pb, visits):
-    """Best-first over the occupancy pyramid; a cell is opened only while the gap
-    between its box and the query triangle's box is below the best distance."""
-    m = FA.shape[0]
-    nch = (m + CHUNK - 1) // CHUNK
-    for ch in prange(nch):
+@jit
+def _best_first_range(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start,
+                      tris, out_d, out_t, out_pa, out_pb, visits):
+    if ia < ib:
         stamp = np.full(FB.shape[0], -1, dtype=np.int64)
         hk = np.empty(256)
         hv = np.empty(256, dtype=np.int64)
@@ -58,7 +54,7 @@ def nearest_tris_best_first(VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, s
         pb = np.empty(3)
         qa = np.empty(3)
         qb = np.empty(3)
-        for i in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
+        for i in range(ia, ib):
             _load_tri(VA, FA, i, TA)
             _tri_aabb(VA, FA, i, qlo, qhi)
             hk, hv, n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv)
@@ -102,18 +98,12 @@ def _shell_bound(origin, h, dims, blo, bhi, qlo, qhi):
     return max(0.0, lb)
 
 
-@pjit
-def nearest_tris_shells(VA, FA, VB, FB, origin, h, dims, start, tris, first_hit,
-                        out_d, out_t, out_pa, out_pb, visits):
-    """Paper 1's growing box: shell k is the block of voxels around the query
-    triangle's box grown by k layers.  With ``first_hit`` the search stops at the first
-    shell that holds a triangle (the paper's rule); otherwise it continues until the
-    block's guaranteed lower bound reaches the best distance (exact)."""
-    m = FA.shape[0]
-    nch = (m + CHUNK - 1) // CHUNK
+@jit
+def _shells_range(ia, ib, VA, FA, VB, FB, origin, h, dims, start, tris, first_hit,
+                  out_d, out_t, out_pa, out_pb, visits):
     ny = dims[1]
     nz = dims[2]
-    for ch in prange(nch):
+    if ia < ib:
         stamp = np.full(FB.shape[0], -1, dtype=np.int64)
         TA = np.empty((3, 3))
         TB = np.empty((3, 3))
@@ -127,7 +117,7 @@ def nearest_tris_shells(VA, FA, VB, FB, origin, h, dims, start, tris, first_hit,
         r0hi = np.empty(3, dtype=np.int64)
         blo = np.empty(3, dtype=np.int64)
         bhi = np.empty(3, dtype=np.int64)
-        for i in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
+        for i in range(ia, ib):
             _load_tri(VA, FA, i, TA)
             _tri_aabb(VA, FA, i, qlo, qhi)
             for d in range(3):
@@ -178,3 +168,24 @@ def nearest_tris_shells(VA, FA, VB, FB, origin, h, dims, start, tris, first_hit,
             for c in range(3):
                 out_pa[i, c] = pa[c]
                 out_pb[i, c] = pb[c]
+
+
+def nearest_tris_best_first(VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                            out_d, out_t, out_pa, out_pb, visits):
+    """Best-first over the occupancy pyramid; a cell is opened only while the gap
+    between its box and the query triangle's box is below the best distance.
+    Parallel over the triangles of A (:func:`prun`: serial workers on threads, one
+    compile instead of numba's parallel call tree)."""
+    prun(_best_first_range, FA.shape[0], CHUNK, VA, FA, VB, FB, origin, h, lvl_dims,
+         lvl_off, occ, start, tris, out_d, out_t, out_pa, out_pb, visits)
+
+
+def nearest_tris_shells(VA, FA, VB, FB, origin, h, dims, start, tris, first_hit,
+                        out_d, out_t, out_pa, out_pb, visits):
+    """Paper 1's growing box: shell k is the block of voxels around the query
+    triangle's box grown by k layers.  With ``first_hit`` the search stops at the first
+    shell that holds a triangle (the paper's rule); otherwise it continues until the
+    block's guaranteed lower bound reaches the best distance (exact).  Parallel as
+    :func:`nearest_tris_best_first`."""
+    prun(_shells_range, FA.shape[0], CHUNK, VA, FA, VB, FB, origin, h, dims, start, tris,
+         bool(first_hit), out_d, out_t, out_pa, out_pb, visits)

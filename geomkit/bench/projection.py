@@ -220,8 +220,39 @@ def main(argv=None):
     ap.add_argument("--occ-n", type=int, default=1000)
     ap.add_argument("--margin", type=float, default=10.0)
     ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--mesh", action="store_true",
+                    help="instead: geomkit vs libigl / trimesh mesh queries with the stage "
+                         "profile (geomkit.bench.projection_mesh)")
     a = ap.parse_args(argv)
+    if a.mesh:
+        from .projection_mesh import run as run_mesh
+        run_mesh(a.n)
+        return
     run(a.n, a.occ_n, a.margin, a.cases.split(","))
+
+
+def mesh_sweep(cases=("freeform_1", "sphere", "torus", "plate_with_hole", "impeller"),
+               n=10_000, repeat=3, seed=0):
+    """Rows of the common schema: geomkit ``project`` against libigl's
+    ``point_mesh_squared_distance`` on a 1e-3 mesh (mesh-only; its error against
+    geomkit's exact distance in ``reference_error``), scan and box points
+    (:mod:`geomkit.bench.projection_mesh`; cases it cannot load are skipped)."""
+    from ._common import make_row
+    from .projection_mesh import run as run_mesh
+
+    rows = []
+    for r in run_mesh(n, repeat, cases, seed=seed, trimesh_n=0):
+        ref = {}
+        if "igl_us" in r:
+            ref = dict(reference_name="libigl point_mesh_squared_distance (1e-3 mesh)",
+                       reference_seconds=r["igl_us"] * 1e-6, reference_error=r["igl_err"])
+        rows.append(make_row("projection", f"{r['case']}/{r['points']}", "mesh_tol", 1e-3,
+                             r["gk_us"] * 1e-6, None, per="point", repeats=repeat,
+                             note=f"AABB prebuilt {r.get('aabb_us', float('nan')):.2f} us; "
+                                  f"stages search/newton/trim/finish us "
+                                  f"{r['search_us']:.2f}/{r['newton_us']:.2f}/"
+                                  f"{r['trim_us']:.2f}/{r['finish_us']:.2f}", **ref))
+    return rows
 
 
 if __name__ == "__main__":
