@@ -41,6 +41,7 @@ from .cad._iges_entities import Unsupported as _Skip
 from .cad._iges_entities import f_ as _f
 from .cad._iges_entities import i_ as _i
 from .cad._iges_entities import restrict, surface as _surface_entity
+from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
 from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                      MissingDependencyError)
@@ -316,48 +317,19 @@ class _Reader:
         return self._close_gaps(self._clip(pieces, domain), de, domain)
 
     def _clip(self, pieces, domain):
-        """Move control points that lie at most CLIP_TOL x the domain size outside the
-        parameter domain onto its edge (files round the domain ends: 0.011739075 vs
-        0.0117390748871053); the curve moves by at most that much.  Points farther out
-        are kept, and validation reports them."""
+        """Snap control points within ``CLIP_TOL`` outside the domain onto it."""
         if domain is None:
             return pieces
-        (u0, u1), (v0, v1) = domain
-        eps = CLIP_TOL * max(u1 - u0, v1 - v0)
-        out = []
-        for c in pieces:
-            P = np.array(c.control_points)
-            Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
-            moved = np.abs(Q - P).max()
-            if moved == 0 or moved > eps:
-                out.append(c)
-                continue
-            self.clipped += 1
-            out.append(TrimCurve.create(c.degree, c.knots, Q,
-                                        None if np.all(c.weights == 1) else c.weights))
+        out, moves = clip_to_domain(pieces, domain, CLIP_TOL)
+        self.clipped += len(moves)
         return out
 
     def _close_gaps(self, pieces, de, domain):
-        """Bridge gaps between consecutive pieces (CAD files carry gaps of 1e-5 to 1e-3
-        of the domain in UV) with straight UV segments: the exact pieces are kept as
-        they are.  Gaps above GAP_TOL x the domain size skip the face."""
+        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`)."""
         if domain is None:
             return pieces
-        (u0, u1), (v0, v1) = domain
-        size = max(u1 - u0, v1 - v0)
-        out = []
-        for k, a in enumerate(pieces):
-            out.append(a)
-            b = pieces[(k + 1) % len(pieces)]
-            gap = float(np.hypot(*(a.end - b.start)))
-            if gap <= 1e-9 * size:
-                continue
-            if gap > GAP_TOL * size:
-                raise _Skip(f"boundary 142 at DE {de}: pieces {k} and "
-                            f"{(k + 1) % len(pieces)} are {gap:.3g} apart in UV (more than "
-                            f"{GAP_TOL:g} of the domain)")
-            self.gaps.append(gap)
-            out.append(TrimCurve.polyline([a.end, b.start]))
+        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}")
+        self.gaps += gaps
         return out
 
 
@@ -366,9 +338,6 @@ PCURVE_TOL = 1e-10
 reparametrisation of its surface."""
 CLIP_TOL = 1e-7
 """Trim control points this close outside the domain (relative) are moved onto it."""
-GAP_TOL = 1e-2
-"""Largest gap between the pieces of a trim loop that is bridged, relative to the
-parameter domain size."""
 
 
 def read_iges(path, skip_invalid: bool = False,

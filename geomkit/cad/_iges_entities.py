@@ -16,15 +16,12 @@ import numpy as np
 
 from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, ruled,
                        transform_curve)
+from .loops import Unsupported
 
 READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
                  122: "tabulated cylinder", 118: "ruled surface"}
 READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
                112: "parametric spline curve"}
-
-
-class Unsupported(Exception):
-    """An entity this reader cannot convert exactly (the message says which and why)."""
 
 
 def f_(x: str) -> float:
