@@ -7,7 +7,7 @@ import sys
 
 from ..errors import InvalidInputError
 
-def _load_input(name: str, skip_invalid: bool = False):
+def _load_input(name: str, skip_invalid: bool = False, skip_unsupported: bool = False):
     """Surfaces from a file path (JSON, IGES, STEP), or from a bundled sample name."""
     from pathlib import Path
 
@@ -24,16 +24,16 @@ def _load_input(name: str, skip_invalid: bool = False):
         from ..io import Case
         from ..iges import read_iges
 
-        res = read_iges(name, skip_invalid=skip_invalid)
+        res = read_iges(name, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
         _warn_skipped(res.skipped)
-        return Case(Path(name).stem, res.surfaces)
+        return Case(Path(name).stem, res.surfaces, skipped=list(res.skipped))
     if ext in (".stp", ".step"):
         from ..io import Case
         from ..step import read_step
 
-        res = read_step(name, skip_invalid=skip_invalid)
+        res = read_step(name, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
         _warn_skipped(res.skipped)
-        return Case(Path(name).stem, res.surfaces)
+        return Case(Path(name).stem, res.surfaces, skipped=list(res.skipped))
     return load_case(name)
 
 
