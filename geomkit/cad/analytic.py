@@ -65,7 +65,7 @@ def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
     k = np.clip(np.floor((th - theta0) / d), 0, n - 1)
     mid = theta0 + (k + 0.5) * d
     r = 0.5 * (np.tan(0.5 * (th - mid)) / math.tan(d / 4) + 1.0)
-    return theta0 + (k + r) * d
+    return np.clip(theta0 + (k + r) * d, theta0, theta1)
 
 
 def param_to_angle(s, theta0: float, theta1: float) -> np.ndarray:
