@@ -428,12 +428,12 @@ def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
             spacing = max(spacing, float(np.linalg.norm(np.diff(Q, axis=0), axis=1).max()))
             O.append(Q)
             ex.Next()
-        O = np.concatenate(O)
+        edges, O = O, np.concatenate(O)
         S = geomkit.plane_section(impeller.surfaces, np.append(n, -c), tol=tol, gap=gap)
         assert S.curves and S.max_gap_bridged <= gap
         G = np.concatenate(S.curves)
         d_occ = _seg_dist(O, S.curves, S.closed)
-        d_gk = _seg_dist(G, [O], [False])
+        d_gk = _seg_dist(G, edges, [False] * len(edges))
         print(f"\nplane {'xyz'[axis]} = {c}: {len(S.curves)} curves ({sum(S.closed)} "
               f"closed), bridged {S.max_gap_bridged:.3g}; OCC -> geomkit {d_occ.max():.3g}, "
               f"geomkit -> OCC {d_gk.max():.3g} (spacing {spacing:.3g})")
