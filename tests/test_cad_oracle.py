@@ -292,7 +292,7 @@ def _check_against_occ(surfaces, shape, n, seed, label):
 
 FULL = bool(os.environ.get("GEOMKIT_FULL_ORACLE"))
 """``GEOMKIT_FULL_ORACLE=1``: the issue's full sizes (700 + 300 impeller points, 10
-section planes; ~4 min); by default a quarter of the points and 3 planes (fast)."""
+section planes; ~5 min); by default a fifth of the points and 2 planes."""
 
 EDGE_GAP = 1e-2
 """The impeller's edge gaps: its 142 model-space curves (OCC's edges) lie up to ~9e-3
@@ -398,9 +398,10 @@ def _seg_dist(P, curves, closed):
 @pytest.mark.occ
 @needs_occ
 def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
-    """Every OCC section point within tol + model gap of a geomkit curve, and every
-    geomkit point within tol + gap of OCC's section edges (their curves, sampled at
-    400 points each, plus the sample spacing); loops closed like OCC's."""
+    """Every OCC section point within tol + model gap of a geomkit curve; every
+    geomkit point within tol + gap of OCC's section edges (sampled at 400 points each,
+    plus the sample spacing) or else a real point of its face inside the trim (OCC's
+    section skips some sliver faces); all loops closed."""
     from OCP.BRepAdaptor import BRepAdaptor_Curve
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Section
     from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
@@ -413,9 +414,9 @@ def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
     gap = model_gap(impeller.surfaces)
     assert 1e-3 < gap < 2e-2  # the file's edges: OCC's edge tolerances say ~1e-2
     tol = 1e-3
-    planes = [(2, -30.1), (2, -9.3), (2, 1.2), (0, -33.3), (0, 17.7), (1, -41.9),
+    planes = [(2, 1.2), (2, -30.1), (2, -9.3), (0, -33.3), (0, 17.7), (1, -41.9),
               (1, 23.3), (2, -21.7), (0, 5.9), (1, 0.7)]
-    for axis, c in planes if FULL else planes[:3]:
+    for axis, c in planes if FULL else planes[:2]:
         n = np.zeros(3)
         n[axis] = 1
         sec = BRepAlgoAPI_Section(occ_impeller, gp_Pln(gp_Pnt(*(n * c)), gp_Dir(*n)))
@@ -438,5 +439,16 @@ def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
               f"closed), bridged {S.max_gap_bridged:.3g}; OCC -> geomkit {d_occ.max():.3g}, "
               f"geomkit -> OCC {d_gk.max():.3g} (spacing {spacing:.3g})")
         assert d_occ.max() <= tol + gap
-        assert d_gk.max() <= tol + gap + spacing
+        # geomkit points OCC's section has no edge near (on the impeller: thin sliver
+        # faces, u-width 4.6e-4, e.g. 144@8731, at z = -30.1): each must be a real point
+        # of its face, inside the trim, on the plane
+        far = np.nonzero(d_gk > tol + gap + spacing)[0]
+        sid, uv = np.concatenate(S.surface_index), np.concatenate(S.uv)
+        for i in far:
+            f = impeller.surfaces[sid[i]]
+            assert f.classify_uv(uv[i:i + 1])[0] != geomkit.OUTSIDE
+            assert np.linalg.norm(f.evaluate(uv[i:i + 1])[0] - G[i]) < 1e-9 * f.size
+            assert abs(G[i] @ n - c) < 1e-9 * f.size
+        print(f"  geomkit points farther than tol + gap from OCC's edges: {far.size} "
+              f"(on faces {sorted({impeller.surfaces[sid[i]].name for i in far})})")
         assert all(S.closed)
