@@ -65,6 +65,8 @@ class Section:
     max_gap_bridged : float, the largest distance between curve ends that were joined
         (across faces or to close a loop): above ``tol`` only where a CAD model's faces
         do not meet exactly.
+    approx_error : float, the largest ``Surface.approx_error`` of the surfaces cut: the
+        section points lie on the NURBS; the surfaces they stand for are within this.
     stats : dict, counts (sub-patches, leaves, crossings) per surface.
     """
 
@@ -83,6 +85,7 @@ class Section:
     stats: dict = field(default_factory=dict)
     gap: float = 0.0
     max_gap_bridged: float = 0.0
+    approx_error: float = 0.0
     surfaces: list = field(default_factory=list, repr=False)
 
     def __len__(self) -> int:
@@ -228,7 +231,9 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
                    uv=[c["uv"] for c in curves], surface_index=[c["sid"] for c in curves],
                    points=pts, points_uv=puv, points_surface=psid, plane=abcd, tol=tol,
                    max_residual=resid, max_chord_error=chord, coplanar=coplanar, stats=stats,
-                   surfaces=surfs, gap=gap, max_gap_bridged=bridged[0])
+                   surfaces=surfs, gap=gap, max_gap_bridged=bridged[0],
+                   approx_error=max((getattr(s, "approx_error", 0.0) for s in surfs),
+                                    default=0.0))
 
 
 def _as_surfaces(surfaces) -> list:

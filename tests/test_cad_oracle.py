@@ -452,3 +452,20 @@ def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
         print(f"  geomkit points farther than tol + gap from OCC's edges: {far.size} "
               f"(on faces {sorted({impeller.surfaces[sid[i]].name for i in far})})")
         assert all(S.closed)
+
+
+def test_section_joins_across_a_model_gap_and_reports_it():
+    from geomkit.cad.gaps import model_gap
+
+    a = Surface(*analytic.plane_patch([0, 0, 0], [1, 0, 0], [0, 0, 1], 0, 1, 0, 1))
+    b_args = analytic.plane_patch([0, 0, 0], [1, 0, 0], [0, 0, 1], 1.001, 2, 0, 1)
+    b = Surface(*b_args, approx_error=1e-7)
+    assert abs(model_gap([a, b], per_piece=201) - 1e-3) < 1e-12
+    plane = [0, 0, 1, -0.5]
+    s0 = geomkit.plane_section([a, b], plane, tol=1e-6)
+    assert len(s0.curves) == 2 and s0.max_gap_bridged == 0.0
+    s1 = geomkit.plane_section([a, b], plane, tol=1e-6, gap=2e-3)
+    assert len(s1.curves) == 1 and abs(s1.max_gap_bridged - 1e-3) < 1e-12
+    assert s1.gap == 2e-3 and s1.approx_error == 1e-7
+    with pytest.raises(InvalidInputError, match="gap"):
+        geomkit.plane_section([a, b], plane, gap=-1)
