@@ -171,7 +171,8 @@ def read_step(path, skip_invalid: bool = False,
             else:  # the face's bounded patch (elementary, swept, offset, trimmed)
                 face = _cast("Face", BRepBuilderAPI_NurbsConvert(face0, True).Shape())
             bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
-            base = _bspline_surface(bs, name, None)
+            u0, u1, v0, v1 = bs.Bounds()
+            domain = ((u0, u1), (v0, v1))
             outer = BRepTools.OuterWire_s(face)
             wires = [outer]
             wx = TopExp_Explorer(face, TopAbs_WIRE)
@@ -196,9 +197,9 @@ def read_step(path, skip_invalid: bool = False,
                     pieces.append(_bspline_curve2d(bc))
                     we.Next()
                 if pieces:
-                    pieces, moved = clip_to_domain(pieces, base.domain, CLIP_TOL, GAP_TOL)
+                    pieces, moved = clip_to_domain(pieces, domain, CLIP_TOL, GAP_TOL)
                     gaps += moved
-                    pieces, g = close_gaps(pieces, base.domain, f"{name} wire {len(loops)}")
+                    pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}")
                     gaps += g
                     loops.append(pieces)
             s = _bspline_surface(bs, name, loops or None)
