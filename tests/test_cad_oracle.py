@@ -291,9 +291,8 @@ def _check_against_occ(surfaces, shape, n, seed, label):
 
 
 FULL = bool(os.environ.get("GEOMKIT_FULL_ORACLE"))
-"""``GEOMKIT_FULL_ORACLE=1``: the issue's full sizes (700 + 300 impeller points, 3
-section planes and the known-failing x plane; ~5 min); by default a fifth of the
-points and 2 planes."""
+"""``GEOMKIT_FULL_ORACLE=1``: the issue's full sizes (700 + 300 impeller points, 10
+section planes; ~6 min); by default a fraction of the points and 2 planes."""
 
 EDGE_GAP = 1e-2
 """The impeller's edge gaps: its 142 model-space curves (OCC's edges) lie up to ~9e-3
@@ -376,7 +375,9 @@ def test_step_round_trip_of_occ_primitives(tmp_path):
 
 
 def _seg_dist(P, curves, closed):
-    """Distance of each point to the polylines (closed ones wrap)."""
+    """Exact distance of each point to the polylines (closed ones wrap): candidate
+    segments are those whose midpoint is within (nearest vertex distance + largest
+    half-length) of the point, which always includes the nearest segment."""
     from scipy.spatial import cKDTree
 
     A, B = [], []
@@ -385,14 +386,16 @@ def _seg_dist(P, curves, closed):
         A.append(Y[:-1])
         B.append(Y[1:])
     A, B = np.concatenate(A), np.concatenate(B)
-    _, j = cKDTree((A + B) / 2).query(P, k=min(16, len(A)))
-    j = j.reshape(len(P), -1)
-    best = np.full(len(P), np.inf)
-    for c in range(j.shape[1]):
-        a, ab = A[j[:, c]], B[j[:, c]] - A[j[:, c]]
+    half = 0.5 * float(np.linalg.norm(B - A, axis=1).max())
+    dv = cKDTree(np.concatenate([A, B])).query(P)[0]
+    cand = cKDTree((A + B) / 2).query_ball_point(P, dv + half + 1e-12)
+    best = np.empty(len(P))
+    for i, js in enumerate(cand):
+        js = np.asarray(js, int)
+        a, ab = A[js], B[js] - A[js]
         L = np.einsum("ij,ij->i", ab, ab)
-        t = np.clip(np.einsum("ij,ij->i", P - a, ab) / np.where(L > 0, L, 1), 0, 1)
-        best = np.minimum(best, np.linalg.norm(P - (a + t[:, None] * ab), axis=1))
+        t = np.clip(np.einsum("ij,ij->i", P[i] - a, ab) / np.where(L > 0, L, 1), 0, 1)
+        best[i] = np.linalg.norm(P[i] - (a + t[:, None] * ab), axis=1).min()
     return best
 
 
@@ -454,19 +457,9 @@ def _check_sections(impeller, occ_impeller, planes):
 @pytest.mark.occ
 @needs_occ
 def test_impeller_sections_match_open_cascade(impeller, occ_impeller):
-    planes = [(2, 1.2), (2, -30.1), (2, -9.3)]
+    planes = [(2, 1.2), (0, -33.3), (2, -30.1), (2, -9.3), (0, 17.7), (1, -41.9),
+              (1, 23.3), (2, -21.7), (0, 5.9), (1, 0.7)]
     _check_sections(impeller, occ_impeller, planes if FULL else planes[:2])
-
-
-@pytest.mark.occ
-@needs_occ
-@pytest.mark.skipif(not FULL, reason="slow (BRepAlgoAPI_Section); GEOMKIT_FULL_ORACLE=1")
-@pytest.mark.xfail(strict=True, reason="section engine: at x = -33.3 the trace of face "
-                   "144@2477 (bicubic 4x4) is one 24-long chord whose true curve bows "
-                   "~1e-2 away (chord tolerance 1e-3 not met) and the multi-face chain "
-                   "leaves OCC points 3.4 from any geomkit curve; not fixed yet")
-def test_impeller_section_across_the_blades(impeller, occ_impeller):
-    _check_sections(impeller, occ_impeller, [(0, -33.3)])
 
 
 def test_section_joins_across_a_model_gap_and_reports_it():
