@@ -429,8 +429,13 @@ def _check_sections(impeller, occ_impeller, planes):
             spacing = max(spacing, float(np.linalg.norm(np.diff(Q, axis=0), axis=1).max()))
             O.append(Q)
             ex.Next()
-        edges, O = O, np.concatenate(O)
         S = geomkit.plane_section(impeller.surfaces, np.append(n, -c), tol=tol, gap=gap)
+        if not O:  # OCC finds nothing: neither may geomkit
+            print(f"\nplane {'xyz'[axis]} = {c}: no section (OCC), geomkit "
+                  f"{len(S.curves)} curves, {len(S.points)} points")
+            assert not S.curves and not len(S.points)
+            continue
+        edges, O = O, np.concatenate(O)
         assert S.curves and S.max_gap_bridged <= gap
         G = np.concatenate(S.curves)
         d_occ = _seg_dist(O, S.curves, S.closed)
