@@ -300,6 +300,17 @@ def _refine(ev, leaves, uv, segleaf, tol, zsnap):
         # safety factor 2: the midpoint deviation estimates the arc's largest one
         # (exact for a circular arc; near a singular crossing the corner can be missed)
         split = (err > 0.5 * tol) & ~tiny
+        # an S-shaped arc (inflection) has its midpoint on the chord: check the quarter
+        # points of the segments about to be accepted too
+        ok = np.nonzero(~split & ~tiny)[0]
+        if len(ok):
+            for lo_, hi_ in ((a[ok], mid[ok]), (mid[ok], b[ok])):
+                Q = ev.points(_midpoints(ev, leaves, lo_, hi_, segleaf[idx[ok]], zsnap))
+                tq = np.clip(np.einsum("ij,ij->i", Q - A[ok], d[ok])
+                             / np.where(ll[ok] > 0, ll[ok], 1.0), 0, 1)
+                eq = np.linalg.norm(A[ok] + tq[:, None] * d[ok] - Q, axis=1)
+                err[ok] = np.maximum(err[ok], eq)
+            split = (err > 0.5 * tol) & ~tiny
         if np.any(~split):
             chord = max(chord, float(err[~split].max()))
         if not np.any(split):

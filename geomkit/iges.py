@@ -1,24 +1,27 @@
-"""Reading IGES files: B-spline surfaces (entity 128) and trimmed surfaces (144).
+"""Reading IGES files: every face as an exact NURBS :class:`~geomkit.Surface`.
 
 pyiges lists the entities (directory section); the parameter records are read here
 from the file's P section, so every value is taken exactly as written.
 
-* 128 (rational B-spline surface): ``K1, K2, M1, M2, PROP1..5``, knots ``S`` (K1+M1+2)
-  and ``T`` (K2+M2+2), weights and control points with the *first* index (u)
-  varying fastest, then ``U0, U1, V0, V1``.  Unclamped (e.g. periodic) knot vectors are
-  clamped by :class:`~geomkit.Surface` (the surface is unchanged).  PROP3 = 1
-  (polynomial) drops the weights.  A transformation matrix (124) is applied to the
-  control points (exact for NURBS).
+* Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 120
+  (surface of revolution about a 110 axis, generatrix 110 / 100 / 126 / 112), 122
+  (tabulated cylinder), 118 (ruled, between non-arc curves of equal degree), each with
+  its 124 transformation chain.  Revolutions are built exactly (The NURBS Book A7.1 /
+  A8.1); their angle parameter becomes a rational one, and the face's pcurves are
+  carried through that map (:mod:`geomkit.cad.uvmap`: exact for iso-parametric
+  segments, else a cubic interpolant within ``PCURVE_TOL`` x the domain).
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
   line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
   means the outer boundary is the domain boundary.
 * Gaps between the pieces of a boundary (CAD files carry 1e-5..1e-3 of the domain)
   are bridged by straight UV segments and counted (``gaps_closed``, ``max_gap``).
-* Faces that cannot be read exactly — a surface that is not a 128 (e.g. 120 surface
-  of revolution), a boundary without a parameter-space curve, a 100 arc in parameter
-  space — are skipped and listed in :attr:`IgesResult.skipped` (never guessed).
-* 128 surfaces used by no 144 are returned untrimmed.
+* Faces that cannot be read exactly are never guessed: by default the read fails
+  listing every one and why; with ``skip_unsupported=True`` they are left out and
+  listed in :attr:`IgesResult.skipped` as ``(id, reason)`` pairs.
+* Units (global parameters 14 / 15) and the model resolution (parameter 19) are read
+  into :attr:`IgesResult.units` / :attr:`IgesResult.resolution`.
+* Surfaces used by no 144 are returned untrimmed (unless physically dependent).
 
 Each surface is validated; an invalid one raises :class:`InvalidSurfaceError` naming
 its entity (directory sequence number), or is skipped with ``skip_invalid=True``.
@@ -30,29 +33,59 @@ import contextlib
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
+from .cad._iges_entities import Unsupported as _Skip
+from .cad._iges_entities import f_ as _f
+from .cad._iges_entities import i_ as _i
+from .cad._iges_entities import restrict, surface as _surface_entity
+from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
+from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                      MissingDependencyError)
 from .types import Surface, TrimCurve
 
-__all__ = ["read_iges", "IgesResult"]
+__all__ = ["read_iges", "IgesResult", "Skipped"]
+
+UNIT_FLAGS = {1: "in", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um",
+              10: "cm", 11: "uin"}
+"""IGES global parameter 14 (unit flag) to a unit name."""
+_UNIT_NAMES = {"IN": "in", "INCH": "in", "MM": "mm", "FT": "ft", "MI": "mi", "M": "m",
+               "KM": "km", "MIL": "mil", "UM": "um", "MICRON": "um", "CM": "cm",
+               "UIN": "uin"}
+
+
+class Skipped(NamedTuple):
+    """One face or entity left out of a read: its id (``"<type>@<DE>"`` or
+    ``"face<k>"``) and why."""
+
+    id: str
+    reason: str
+
+    def __str__(self) -> str:
+        return f"{self.id}: {self.reason}"
 
 
 @dataclass(eq=False)
 class IgesResult:
-    """Surfaces read from an IGES file.
+    """Surfaces read from an IGES (or STEP) file.
 
     Attributes
     ----------
     surfaces : list of Surface, named ``"<type>@<DE>"`` (entity type and directory
-        sequence number of the face or surface).
-    entities : list of int, the directory sequence number of each surface's entity.
-    skipped : list of str, one line per face not read and why.
-    counts : dict, entities per type in the file.
-    gaps_closed : int, trim-piece gaps bridged by UV segments (see ``GAP_TOL``); max_gap : their largest
+        sequence number of the face or surface; ``"face<k>"`` for STEP).
+    entities : list of int, the directory sequence number (STEP: face index) of each.
+    skipped : list of :class:`Skipped` ``(id, reason)``, faces left out (only with
+        ``skip_unsupported`` / ``skip_invalid``).
+    counts : dict, entities per type in the file (STEP: ``{"faces": n}``).
+    gaps_closed : int, trim-piece gaps bridged by UV segments; max_gap : their largest
         size in UV.
+    units : str or None, the file's length unit (``"mm"``, ``"in"``, ``"m"``, ...).
+    resolution : float or None, the file's model resolution / uncertainty in ``units``.
+    pcurve_error : float, largest UV error of the pcurves carried through a
+        reparametrisation (0 when every one was mapped exactly).
     """
 
     surfaces: list
@@ -61,6 +94,9 @@ class IgesResult:
     counts: dict = field(default_factory=dict)
     gaps_closed: int = 0
     max_gap: float = 0.0
+    units: str | None = None
+    resolution: float | None = None
+    pcurve_error: float = 0.0
 
 
 def _import_pyiges():
@@ -71,8 +107,31 @@ def _import_pyiges():
     return pyiges
 
 
-def _param_records(path: Path) -> tuple[dict, str]:
-    """``{DE pointer: [fields]}`` from the P section (fields as strings)."""
+def _global_fields(glob: str, psep: str, rsep: str) -> list:
+    """The global section's fields, Hollerith strings (``3HABC``) decoded."""
+    out, k, n = [], 0, len(glob)
+    while k < n:
+        j = k
+        while j < n and glob[j].isdigit():
+            j += 1
+        if j < n and j > k and glob[j] == "H":
+            m = int(glob[k:j])
+            out.append(glob[j + 1: j + 1 + m])
+            k = j + 1 + m
+        else:
+            e = k
+            while e < n and glob[e] not in (psep, rsep):
+                e += 1
+            out.append(glob[k:e].strip())
+            k = e
+        if k < n and glob[k] == rsep:
+            break
+        k += 1
+    return out
+
+
+def _param_records(path: Path) -> tuple[dict, list]:
+    """``({DE pointer: [fields]}, global fields)`` from the P and G sections."""
     text = path.read_text(encoding="latin-1")
     lines = text.splitlines()
     glob = "".join(ln[:72] for ln in lines if len(ln) >= 73 and ln[72] == "G")
@@ -100,23 +159,35 @@ def _param_records(path: Path) -> tuple[dict, str]:
         if rsep in s:
             s = s[: s.index(rsep)]
         recs[de] = [f.strip() for f in s.split(psep)]
-    return recs, psep
+    return recs, _global_fields(glob, psep, rsep)
 
 
-def _f(x: str) -> float:
-    return float(x.replace("D", "E").replace("d", "e")) if x else 0.0
-
-
-def _i(x: str) -> int:
-    return int(float(x)) if x else 0
+def _units(gf: list):
+    """``(units, resolution)`` from global parameters 14, 15 and 19 (1-based)."""
+    units = res = None
+    if len(gf) >= 15:
+        name = gf[14].strip().upper().replace(".", "")
+        units = _UNIT_NAMES.get(name)
+        if units is None and gf[13]:
+            try:
+                units = UNIT_FLAGS.get(int(float(gf[13])))
+            except ValueError:
+                units = None
+    if len(gf) >= 19 and gf[18]:
+        try:
+            res = _f(gf[18])
+        except ValueError:
+            res = None
+    return units, res
 
 
 class _Reader:
     def __init__(self, path: Path, iges):
         self.path = path
-        self.recs, _ = _param_records(path)
+        self.recs, self.glob = _param_records(path)
         self.dir = {}
         self.gaps = []
+        self.pcurve_error = 0.0
         self.clipped = 0
         for e in iges.items:
             self.dir[e.sequence_number] = e
@@ -152,7 +223,8 @@ class _Reader:
         return T
 
     # ----------------------------------------------------------------- 128
-    def surface128(self, de: int, trim=None, name=None) -> Surface:
+    def surface128_args(self, de: int):
+        """Entity 128 as :class:`~geomkit.Surface` arguments ``(p, q, U, V, P, W)``."""
         r = self.rec(de)
         K1, K2, M1, M2 = (_i(x) for x in r[1:5])
         prop3 = _i(r[7])
@@ -175,10 +247,16 @@ class _Reader:
         if Tm is not None:
             P = P @ Tm[:3, :3].T + Tm[:3, 3]
         weights = None if prop3 == 1 or np.all(W == W.flat[0]) else W
+        return M1, M2, S, T, P, weights
+
+    def make_surface(self, de: int, args, trim=None, name=None) -> Surface:
         try:
-            return Surface(M1, M2, S, T, P, weights, trim, name=name or f"128@{de}")
+            return Surface(*args, trim, name=name)
         except InvalidInputError as exc:
-            raise InvalidSurfaceError(f"entity 128 at DE {de}: {exc}") from None
+            if trim is not None:
+                raise
+            raise InvalidSurfaceError(f"entity {self.type_of(de)} at DE {de}: {exc}") \
+                from None
 
     # ------------------------------------------------------------ curves
     def pcurve_pieces(self, de: int, where: str) -> list:
@@ -208,11 +286,16 @@ class _Reader:
             a += 3 * (K + 1)
             v0, v1 = _f(r[a]), _f(r[a + 1])
             w = None if prop3 == 1 or np.all(W == W[0]) else W
-            return [_restricted_curve(M, knots, P[:, :2], w, v0, v1, f"{where}.curve@{de}")]
+            if w is None:
+                w = np.ones(K + 1)
+            U, Pw = restrict(M, knots, np.column_stack([P[:, :2] * w[:, None], w]), v0, v1)
+            w = Pw[:, 2]
+            return [TrimCurve.create(M, U, Pw[:, :2] / w[:, None],
+                                     None if np.all(w == w[0]) else w, f"{where}.curve@{de}")]
         raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110 and 102 "
                     "are read exactly)")
 
-    def loop142(self, de: int, where: str, domain=None):
+    def loop142(self, de: int, where: str, domain=None, fu=None, fv=None):
         if self.type_of(de) != 142:
             raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 142")
         r = self.rec(de)
@@ -220,99 +303,46 @@ class _Reader:
         if bptr == 0:
             raise _Skip(f"boundary 142 at DE {de} has no parameter-space curve")
         pieces = self.pcurve_pieces(bptr, where)
+        if (fu is not None or fv is not None) and pieces:
+            (u0, u1), (v0, v1) = domain
+            tol = PCURVE_TOL * max(u1 - u0, v1 - v0)
+            mapped = []
+            for c in pieces:
+                m, err = map_pcurve(c, fu, fv, tol)
+                self.pcurve_error = max(self.pcurve_error, err)
+                mapped.append(m)
+            pieces = mapped
         if not pieces:
             raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
         return self._close_gaps(self._clip(pieces, domain), de, domain)
 
     def _clip(self, pieces, domain):
-        """Move control points that lie at most CLIP_TOL x the domain size outside the
-        parameter domain onto its edge (files round the domain ends: 0.011739075 vs
-        0.0117390748871053); the curve moves by at most that much.  Points farther out
-        are kept, and validation reports them."""
+        """Snap control points within ``CLIP_TOL`` outside the domain onto it."""
         if domain is None:
             return pieces
-        (u0, u1), (v0, v1) = domain
-        eps = CLIP_TOL * max(u1 - u0, v1 - v0)
-        out = []
-        for c in pieces:
-            P = np.array(c.control_points)
-            Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
-            moved = np.abs(Q - P).max()
-            if moved == 0 or moved > eps:
-                out.append(c)
-                continue
-            self.clipped += 1
-            out.append(TrimCurve.create(c.degree, c.knots, Q,
-                                        None if np.all(c.weights == 1) else c.weights))
+        out, moves = clip_to_domain(pieces, domain, CLIP_TOL)
+        self.clipped += len(moves)
         return out
 
     def _close_gaps(self, pieces, de, domain):
-        """Bridge gaps between consecutive pieces (CAD files carry gaps of 1e-5 to 1e-3
-        of the domain in UV) with straight UV segments: the exact pieces are kept as
-        they are.  Gaps above GAP_TOL x the domain size skip the face."""
+        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`)."""
         if domain is None:
             return pieces
-        (u0, u1), (v0, v1) = domain
-        size = max(u1 - u0, v1 - v0)
-        out = []
-        for k, a in enumerate(pieces):
-            out.append(a)
-            b = pieces[(k + 1) % len(pieces)]
-            gap = float(np.hypot(*(a.end - b.start)))
-            if gap <= 1e-9 * size:
-                continue
-            if gap > GAP_TOL * size:
-                raise _Skip(f"boundary 142 at DE {de}: pieces {k} and "
-                            f"{(k + 1) % len(pieces)} are {gap:.3g} apart in UV (more than "
-                            f"{GAP_TOL:g} of the domain)")
-            self.gaps.append(gap)
-            out.append(TrimCurve.polyline([a.end, b.start]))
+        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}")
+        self.gaps += gaps
         return out
 
 
+PCURVE_TOL = 1e-10
+"""UV error (relative to the domain size) allowed where a pcurve is re-fitted through a
+reparametrisation of its surface."""
 CLIP_TOL = 1e-7
 """Trim control points this close outside the domain (relative) are moved onto it."""
-GAP_TOL = 1e-2
-"""Largest gap between the pieces of a trim loop that is bridged, relative to the
-parameter domain size."""
 
 
-class _Skip(Exception):
-    pass
-
-
-def _restricted_curve(p, knots, P, w, t0, t1, field):
-    """A 2-D NURBS curve restricted to ``[t0, t1]`` (exact, by knot insertion)."""
-    from ._kernels.bezier import insert_knot
-
-    n = P.shape[0]
-    if w is None:
-        w = np.ones(n)
-    Pw = np.column_stack([P * w[:, None], w])
-    U = np.asarray(knots, float)
-    lo, hi = U[p], U[n]
-    t0 = max(t0, lo)
-    t1 = min(t1, hi) if t1 > t0 else hi
-    if t0 > lo or t1 < hi:
-        for t in (t0, t1):
-            s = int(np.count_nonzero(U == t))
-            if s < p:
-                Pw, U = insert_knot(np.ascontiguousarray(Pw), p, U, t, p - s)
-        first_a = int(np.nonzero(U == t0)[0][0])
-        start = first_a + int(np.count_nonzero(U == t0)) - 1 - p
-        first_b = int(np.nonzero(U == t1)[0][0])
-        newU = U[start: first_b + p + 1].copy()
-        newU[: p + 1] = t0
-        newU[-(p + 1):] = t1
-        Pw = Pw[start: first_b]
-        U = newU
-    w = Pw[:, 2]
-    return TrimCurve.create(p, U, Pw[:, :2] / w[:, None],
-                            None if np.all(w == w[0]) else w, field)
-
-
-def read_iges(path, skip_invalid: bool = False) -> IgesResult:
-    """Read the B-spline and trimmed surfaces of an IGES file.
+def read_iges(path, skip_invalid: bool = False,
+              skip_unsupported: bool = False) -> IgesResult:
+    """Read every face of an IGES file as an exact NURBS surface.
 
     Parameters
     ----------
@@ -320,6 +350,9 @@ def read_iges(path, skip_invalid: bool = False) -> IgesResult:
     skip_invalid : bool
         Skip (and list in ``skipped``) surfaces that fail validation instead of
         raising.
+    skip_unsupported : bool
+        Leave out (and list in ``skipped``) faces whose entities are not read, instead
+        of raising.  Never silent: the result's ``skipped`` says which and why.
 
     Returns
     -------
@@ -327,8 +360,11 @@ def read_iges(path, skip_invalid: bool = False) -> IgesResult:
 
     Raises
     ------
+    InvalidInputError
+        An empty file.
     FileFormatError
-        Missing or unreadable file, or no surface that can be read.
+        Missing or unreadable file, no surface entity, or faces that cannot be read
+        (listed, each with its reason) without ``skip_unsupported``.
     InvalidSurfaceError
         A surface or trim that fails validation, naming its entity.
     MissingDependencyError
@@ -339,11 +375,13 @@ def read_iges(path, skip_invalid: bool = False) -> IgesResult:
         raise FileFormatError(f"{p}: no such file")
     if p.is_dir():
         raise FileFormatError(f"{p}: is a directory, expected an IGES file")
+    if not p.read_bytes().strip():
+        raise InvalidInputError(f"{p}: empty file, expected an IGES file")
     pyiges = _import_pyiges()
     try:
         with contextlib.redirect_stdout(io.StringIO()):  # pyiges prints warnings
             ig = pyiges.read(str(p))
-    except (ValueError, IndexError, KeyError, UnicodeDecodeError) as exc:
+    except Exception as exc:  # pyiges fails with assorted errors on malformed input
         raise FileFormatError(f"{p}: not a readable IGES file ({type(exc).__name__}: "
                               f"{exc})") from None
     rd = _Reader(p, ig)
@@ -362,48 +400,74 @@ def read_iges(path, skip_invalid: bool = False) -> IgesResult:
         used.add(pts)
         where = f"144@{de}"
         try:
-            if rd.type_of(pts) != 128:
-                raise _Skip(f"surface DE {pts} is entity {rd.type_of(pts)} (only 128 B-spline "
-                            "surfaces are read)")
-            base = rd.surface128(pts, name=where)
+            if rd.transform(de) is not None:
+                raise _Skip("transformation matrix on the trimmed surface itself")
+            args, fu, fv = _surface_entity(rd, pts)
+            base = rd.make_surface(pts, args, name=where)
             loops = []
             if n1 == 1 and pto:
-                loops.append(rd.loop142(pto, where, base.domain))
+                loops.append(rd.loop142(pto, where, base.domain, fu, fv))
             elif n2:
                 (u0, u1), (v0, v1) = base.domain
                 loops.append([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])
             for k in pti:
-                loops.append(rd.loop142(k, where, base.domain))
-            if rd.transform(de) is not None:
-                raise _Skip("transformation matrix on the trimmed surface itself")
-            s = rd.surface128(pts, trim=loops or None, name=where)
+                loops.append(rd.loop142(k, where, base.domain, fu, fv))
+            s = rd.make_surface(pts, args, trim=loops or None, name=where)
         except _Skip as why:
-            skipped.append(f"{where}: {why}")
+            skipped.append(Skipped(where, str(why)))
             continue
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: trimmed surface 144 at DE {de}: {exc}") \
                     from None
-            skipped.append(f"{where}: invalid: {exc}")
+            skipped.append(Skipped(where, f"invalid: {exc}"))
             continue
         surfaces.append(s)
         entities.append(de)
     for de, e in sorted(rd.dir.items()):
-        if int(e.d["entity_type_number"]) != 128 or de in used:
+        t = int(e.d["entity_type_number"])
+        if t not in (128, 120, 122, 118) or de in used:
             continue
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
             continue
+        where = f"{t}@{de}"
         try:
-            surfaces.append(rd.surface128(de))
+            args, _, _ = _surface_entity(rd, de)
+            surfaces.append(rd.make_surface(de, args, name=where))
             entities.append(de)
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: {exc}") from None
-            skipped.append(f"128@{de}: invalid: {exc}")
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+    for de, e in sorted(rd.dir.items()):
+        t = int(e.d["entity_type_number"])
+        sub = (e.d.get("status_number") or 0) // 10000 % 100
+        if t in UNREAD_SURFACES and de not in used and sub != 1:
+            skipped.append(Skipped(f"{t}@{de}", f"entity {t} ({UNREAD_SURFACES[t]}) is "
+                                   "not read"))
+    unsupported = [k for k in skipped if not k.reason.startswith("invalid:")]
+    if unsupported and not skip_unsupported:
+        lines = "; ".join(str(k) for k in unsupported[:5])
+        more = f" (and {len(unsupported) - 5} more)" if len(unsupported) > 5 else ""
+        raise FileFormatError(f"{p}: {len(unsupported)} face(s) cannot be read: {lines}"
+                              f"{more}; pass skip_unsupported=True (--skip-unsupported) "
+                              "to go on without them")
     if not surfaces:
-        raise FileFormatError(f"{p}: no readable B-spline surface (entities 128/144); "
-                              f"{len(skipped)} face(s) skipped"
-                              + (f", first: {skipped[0]}" if skipped else ""))
+        kinds = ", ".join(f"{n} x {t}" for t, n in sorted(counts.items()))
+        raise FileFormatError(f"{p}: no readable surface (entities 128, 120, 122, 118, "
+                              f"144); the file holds {kinds or 'no entities'}"
+                              + (f"; first skipped: {skipped[0]}" if skipped else ""))
+    units, res = _units(rd.glob)
     return IgesResult(surfaces, entities, skipped, counts, len(rd.gaps),
-                      max(rd.gaps, default=0.0))
+                      max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
+
+
+UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface", 140: "offset surface",
+                   143: "bounded surface", 186: "manifold solid B-rep object",
+                   190: "plane surface", 192: "right circular cylindrical surface",
+                   194: "right circular conical surface", 196: "spherical surface",
+                   198: "toroidal surface", 510: "face", 514: "shell"}
+"""Surface entities listed as skipped when they are not under a 144 that was read."""

@@ -52,6 +52,8 @@ class Case:
     truth: dict = field(default_factory=dict)
     description: str = ""
     units: str | None = None
+    skipped: list = field(default_factory=list)
+    """Faces left out of a CAD read (``skip_unsupported``): ``(id, reason)`` pairs."""
 
 
 # --------------------------------------------------------------------- dicts
@@ -65,6 +67,8 @@ def surface_to_dict(s: Surface) -> dict:
         d["trim"] = [loop.to_case() for loop in s.trim]
     if s.name:
         d["name"] = s.name
+    if s.approx_error:
+        d["approx_error"] = s.approx_error
     return d
 
 
@@ -86,7 +90,7 @@ def surface_from_dict(d: dict, where: str = "surface") -> Surface:
     try:
         return Surface(d["degree_u"], d["degree_v"], d["knots_u"], d["knots_v"],
                        d["control_points"], d.get("weights"), d.get("trim"),
-                       name=d.get("name"))
+                       name=d.get("name"), approx_error=d.get("approx_error", 0.0))
     except InvalidInputError as exc:
         raise _prefixed(exc, where) from None
 

@@ -61,6 +61,12 @@ class Section:
     max_chord_error : float, largest measured distance of a curve midpoint (exact) from
         its chord; <= ``tol`` unless a refinement limit was hit (then reported as is).
     coplanar : list of int, surfaces lying in the plane (not sectioned).
+    gap : float, the model gap the section was built with (``plane_section``'s ``gap``);
+    max_gap_bridged : float, the largest distance between curve ends that were joined
+        (across faces or to close a loop): above ``tol`` only where a CAD model's faces
+        do not meet exactly.
+    approx_error : float, the largest ``Surface.approx_error`` of the surfaces cut: the
+        section points lie on the NURBS; the surfaces they stand for are within this.
     stats : dict, counts (sub-patches, leaves, crossings) per surface.
     """
 
@@ -77,6 +83,9 @@ class Section:
     max_chord_error: float
     coplanar: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
+    gap: float = 0.0
+    max_gap_bridged: float = 0.0
+    approx_error: float = 0.0
     surfaces: list = field(default_factory=list, repr=False)
 
     def __len__(self) -> int:
@@ -132,7 +141,7 @@ def as_plane(plane) -> np.ndarray:
     return abcd / ln
 
 
-def plane_section(surfaces, plane, tol: float = 1e-6) -> Section:
+def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Section:
     """Intersect one or several surfaces with a plane.
 
     Parameters
@@ -145,6 +154,11 @@ def plane_section(surfaces, plane, tol: float = 1e-6) -> Section:
         curve between them deviates from their chord by at most ``tol`` (measured at
         the exact curve midpoint and reported as ``max_chord_error``); curve ends of
         different surfaces (or across a seam) closer than ``tol`` are joined.
+    gap : float >= 0
+        The model's edge gap (a CAD file's faces meet within it, not exactly; see
+        :func:`geomkit.cad.gaps.model_gap`): curve ends closer than ``max(tol, gap)``
+        are joined and loops closed; the largest distance bridged is reported
+        (``max_gap_bridged``).
 
     Returns
     -------
@@ -168,6 +182,12 @@ def plane_section(surfaces, plane, tol: float = 1e-6) -> Section:
         raise InvalidInputError(f"must be a number, got {type(tol).__name__}", "tol") from None
     if not (np.isfinite(tol) and tol > 0):
         raise InvalidInputError(f"must be a finite number > 0, got {tol!r}", "tol")
+    try:
+        gap = float(gap)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"must be a number, got {type(gap).__name__}", "gap") from None
+    if not (np.isfinite(gap) and gap >= 0):
+        raise InvalidInputError(f"must be a finite number >= 0, got {gap!r}", "gap")
     curves, contacts, coplanar, stats = [], [], [], {}
     for k, s in enumerate(surfs):
         P = s.control_points.reshape(-1, 3)
@@ -190,7 +210,8 @@ def plane_section(surfaces, plane, tol: float = 1e-6) -> Section:
     ev = {k: _Eval(s, abcd) for k, s in enumerate(surfs)}
     for c in curves:
         c["X"] = _points(ev, c["uv"], c["sid"])
-    curves = _join(curves, tol)
+    bridged = [0.0]
+    curves = _join(curves, max(tol, gap), bridged)
     # curves within tol of a point are contact points
     keep = []
     for c in curves:
@@ -210,7 +231,9 @@ def plane_section(surfaces, plane, tol: float = 1e-6) -> Section:
                    uv=[c["uv"] for c in curves], surface_index=[c["sid"] for c in curves],
                    points=pts, points_uv=puv, points_surface=psid, plane=abcd, tol=tol,
                    max_residual=resid, max_chord_error=chord, coplanar=coplanar, stats=stats,
-                   surfaces=surfs)
+                   surfaces=surfs, gap=gap, max_gap_bridged=bridged[0],
+                   approx_error=max((getattr(s, "approx_error", 0.0) for s in surfs),
+                                    default=0.0))
 
 
 def _as_surfaces(surfaces) -> list:
@@ -304,9 +327,11 @@ def _boundary(s, ev, a_in, b_out, zsnap, iters=60):
     return a
 
 
-def _join(curves, tol):
+def _join(curves, tol, bridged=None):
     """Join open curves whose ends coincide within ``tol`` (seams, shared edges);
-    flag curves whose two ends meet as closed."""
+    flag curves whose two ends meet as closed.  ``bridged[0]`` is raised to the
+    largest distance joined."""
+    bridged = [0.0] if bridged is None else bridged
     curves = list(curves)
     changed = True
     while changed:
@@ -318,7 +343,8 @@ def _join(curves, tol):
                 for ra, rb in ((False, False), (False, True), (True, False), (True, True)):
                     ea = a["X"][0] if ra else a["X"][-1]
                     sb = b["X"][-1] if rb else b["X"][0]
-                    if np.linalg.norm(ea - sb) <= tol:
+                    if (dist := float(np.linalg.norm(ea - sb))) <= tol:
+                        bridged[0] = max(bridged[0], dist)
                         A = _rev(a) if ra else a
                         B = _rev(b) if rb else b
                         curves[i] = {k: (np.concatenate([A[k], B[k][1:]]) if k in ("uv", "sid", "X")
@@ -333,6 +359,7 @@ def _join(curves, tol):
                 break
     for c in curves:
         if not c["closed"] and len(c["X"]) > 2 and np.linalg.norm(c["X"][0] - c["X"][-1]) <= tol:
+            bridged[0] = max(bridged[0], float(np.linalg.norm(c["X"][0] - c["X"][-1])))
             c["closed"] = True
             for k in ("uv", "sid", "X"):
                 c[k] = c[k][:-1]

@@ -1,10 +1,18 @@
 """Reading STEP files through Open CASCADE (the optional ``cadquery-ocp`` extra).
 
-Each face's surface is converted to a ``Geom_BSplineSurface`` (``GeomConvert``: exact
-for B-spline, Bézier and the elementary surfaces, NURBS for the quadrics) and its
-wires' parameter-space curves (pcurves, ``Geom2dConvert``) become the trim loops, outer
-wire first.  Faces whose surface or pcurves cannot be converted are skipped and listed.
-Face orientation is not carried (geomkit's normal is ``S_u x S_v`` of the surface).
+Every face is converted with ``BRepBuilderAPI_NurbsConvert``: the face's *bounded*
+patch becomes a ``Geom_BSplineSurface`` (exact for B-spline, Bezier, plane, cylinder,
+cone, sphere, torus, revolution and extrusion surfaces; offset surfaces are
+approximated by OCC) and its pcurves are re-expressed on it consistently.  Each wire's
+pcurves (``Geom2dConvert``) become a trim loop, outer wire first.  Real files' pcurves
+meet within the file's tolerance, not exactly: gaps between consecutive pieces are
+bridged by straight UV segments (counted in ``gaps_closed``, largest in ``max_gap``),
+as for IGES.  Faces that still cannot be converted are an error unless
+``skip_unsupported=True`` (then listed in ``skipped``).
+
+Coordinates stay in the file's length unit (``units``); ``resolution`` is the file's
+``UNCERTAINTY_MEASURE_WITH_UNIT`` length value.  Face orientation is not carried
+(geomkit's normal is ``S_u x S_v`` of the surface).
 """
 
 from __future__ import annotations
@@ -15,10 +23,24 @@ import numpy as np
 
 from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError, \
     MissingDependencyError
-from .iges import IgesResult
+import re
+
+from .cad.loops import GAP_TOL, clip_to_domain, close_gaps
+from .iges import IgesResult, Skipped
 from .types import Surface, TrimCurve
 
 __all__ = ["read_step"]
+
+_UNITS = {"MILLIMETRE": ("mm", 1.0), "METRE": ("m", 1000.0), "INCH": ("in", 25.4),
+          "FOOT": ("ft", 304.8), "CENTIMETRE": ("cm", 10.0), "MICROMETRE": ("um", 1e-3),
+          "KILOMETRE": ("km", 1e6), "MIL": ("mil", 0.0254), "MICROINCH": ("uin", 2.54e-5)}
+"""STEP length unit names to geomkit unit names and their size in millimetres."""
+_UNCERTAINTY = re.compile(r"UNCERTAINTY_MEASURE_WITH_UNIT\s*\(\s*LENGTH_MEASURE\s*\(\s*"
+                          r"([-+0-9.EeDd]+)\s*\)", re.I)
+
+CLIP_TOL = 1e-4
+"""Pcurve control points this close outside the face's domain (relative to its size)
+are moved onto it; the move counts as a bridged gap."""
 
 INSTALL_HINT = "reading STEP needs Open CASCADE: pip install 'geomkit[step]' (cadquery-ocp)"
 
@@ -61,17 +83,47 @@ def _bspline_curve2d(c):
     return TrimCurve.create(c.Degree(), k, P, W if c.IsRational() else None)
 
 
-def read_step(path, skip_invalid: bool = False) -> IgesResult:
+def _file_units(rd):
+    from OCP.OCP.collections import Sequence_TCollection_AsciiString as Seq
+
+    a, b, c = Seq(), Seq(), Seq()
+    try:
+        rd.FileUnits(a, b, c)
+    except Exception:  # noqa: BLE001 - OCC raises its own kinds; units stay unknown
+        return None, None
+    names = {a.Value(i + 1).ToCString().upper() for i in range(a.Length())}
+    if len(names) != 1:
+        return None, None
+    return _UNITS.get(names.pop(), (None, None))
+
+
+def _resolution(path: Path):
+    m = _UNCERTAINTY.search(path.read_text(encoding="latin-1", errors="replace"))
+    if not m:
+        return None
+    try:
+        return float(m.group(1).replace("D", "E").replace("d", "e"))
+    except ValueError:
+        return None
+
+
+def read_step(path, skip_invalid: bool = False,
+              skip_unsupported: bool = False) -> IgesResult:
     """Read the faces of a STEP file as trimmed :class:`~geomkit.Surface` objects.
 
-    Returns an :class:`~geomkit.iges.IgesResult` (``entities`` holds face indices).
+    Returns an :class:`~geomkit.iges.IgesResult` (``entities`` holds face indices in
+    OCC's ``TopExp_Explorer`` order, so ``len(surfaces)`` equals OCC's face count when
+    nothing is skipped).
 
     Raises
     ------
     MissingDependencyError
         cadquery-ocp is not installed (with the install hint).
+    InvalidInputError
+        An empty file.
     FileFormatError
-        Missing or unreadable file, or no face.
+        Missing or unreadable file, no face, or faces that cannot be converted (listed)
+        without ``skip_unsupported``.
     InvalidSurfaceError
         A face that fails validation (unless ``skip_invalid``).
     """
@@ -80,8 +132,11 @@ def read_step(path, skip_invalid: bool = False) -> IgesResult:
         raise FileFormatError(f"{p}: no such file")
     if p.is_dir():
         raise FileFormatError(f"{p}: is a directory, expected a STEP file")
+    if not p.read_bytes().strip():
+        raise InvalidInputError(f"{p}: empty file, expected a STEP file")
     try:
         from OCP.BRep import BRep_Tool
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
         from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
         from OCP.Geom2d import Geom2d_TrimmedCurve
         from OCP.Geom2dConvert import Geom2dConvert
@@ -96,18 +151,28 @@ def read_step(path, skip_invalid: bool = False) -> IgesResult:
     rd = STEPControl_Reader()
     if rd.ReadFile(str(p)) != IFSelect_RetDone:
         raise FileFormatError(f"{p}: not a readable STEP file")
+    units, mm = _file_units(rd)
+    if mm is not None:  # keep coordinates in the file's unit (OCC's default: mm)
+        rd.SetSystemLengthUnit(mm)
     rd.TransferRoots()
     shape = rd.OneShape()
-    surfaces, entities, skipped = [], [], []
+    surfaces, entities, skipped, gaps = [], [], [], []
     ex = TopExp_Explorer(shape, TopAbs_FACE)
     k = -1
     while ex.More():
         k += 1
-        face = _cast("Face", ex.Current())
+        face0 = _cast("Face", ex.Current())
         ex.Next()
         name = f"face{k}"
         try:
+            kind = BRep_Tool.Surface_s(face0).DynamicType().Name()
+            if kind in ("Geom_BSplineSurface", "Geom_BezierSurface"):
+                face = face0  # already bounded and exact; pcurves as in the file
+            else:  # the face's bounded patch (elementary, swept, offset, trimmed)
+                face = _cast("Face", BRepBuilderAPI_NurbsConvert(face0, True).Shape())
             bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
+            u0, u1, v0, v1 = bs.Bounds()
+            domain = ((u0, u1), (v0, v1))
             outer = BRepTools.OuterWire_s(face)
             wires = [outer]
             wx = TopExp_Explorer(face, TopAbs_WIRE)
@@ -132,19 +197,30 @@ def read_step(path, skip_invalid: bool = False) -> IgesResult:
                     pieces.append(_bspline_curve2d(bc))
                     we.Next()
                 if pieces:
+                    pieces, moved = clip_to_domain(pieces, domain, CLIP_TOL, GAP_TOL)
+                    gaps += moved
+                    pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}")
+                    gaps += g
                     loops.append(pieces)
             s = _bspline_surface(bs, name, loops or None)
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: face {k}: {exc}") from None
-            skipped.append(f"{name}: invalid: {exc}")
+            skipped.append(Skipped(name, f"invalid: {exc}"))
             continue
-        except Exception as exc:  # OCC raises its own Standard_Failure kinds
-            skipped.append(f"{name}: cannot convert ({type(exc).__name__}: {exc})")
+        except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure kinds
+            skipped.append(Skipped(name, f"cannot convert ({type(exc).__name__}: {exc})"))
             continue
         surfaces.append(s)
         entities.append(k)
+    unsupported = [s for s in skipped if not s.reason.startswith("invalid:")]
+    if unsupported and not skip_unsupported:
+        lines = "; ".join(str(s) for s in unsupported[:5])
+        raise FileFormatError(f"{p}: {len(unsupported)} face(s) cannot be read: {lines}; "
+                              "pass skip_unsupported=True (--skip-unsupported) to go on "
+                              "without them")
     if not surfaces:
         raise FileFormatError(f"{p}: no readable face" + (f"; first skipped: {skipped[0]}"
                                                            if skipped else ""))
-    return IgesResult(surfaces, entities, skipped, {"faces": k + 1})
+    return IgesResult(surfaces, entities, skipped, {"faces": k + 1}, len(gaps),
+                      max(gaps, default=0.0), units, _resolution(p))

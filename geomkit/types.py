@@ -251,6 +251,10 @@ class Surface:
         A UV point is in the trimmed face when an odd number of loops wind around it
         (outer loop minus holes).
     name : str, optional, carried through I/O.
+    approx_error : float >= 0, optional
+        Largest distance between this NURBS and the surface it stands for, when it is
+        an approximation (e.g. a CAD offset surface); 0 for an exact surface.  Results
+        computed on it widen their error bounds by it; carried through I/O.
 
     Raises
     ------
@@ -261,11 +265,17 @@ class Surface:
     """
 
     __slots__ = ("degree_u", "degree_v", "knots_u", "knots_v", "control_points", "weights",
-                 "trim", "name", "_Pw", "_cache")
+                 "trim", "name", "approx_error", "_Pw", "_cache")
 
     def __init__(self, degree_u, degree_v, knots_u, knots_v, control_points, weights=None,
-                 trim=None, name: str | None = None):
+                 trim=None, name: str | None = None, approx_error: float = 0.0):
         E = InvalidSurfaceError
+        try:
+            err = float(approx_error)
+        except (TypeError, ValueError):
+            raise E(f"expected a number >= 0, got {approx_error!r}", "approx_error") from None
+        if not (np.isfinite(err) and err >= 0):
+            raise E(f"must be finite and >= 0, got {err!r}", "approx_error")
         p = as_int(degree_u, "degree_u", minimum=1, error=E)
         q = as_int(degree_v, "degree_v", minimum=1, error=E)
         P = as_float_array(control_points, "control_points", shape=(None, None, 3), error=E)
@@ -309,6 +319,7 @@ class Surface:
         self._Pw = _readonly(Pw)
         self._cache = {}
         self.name = name
+        self.approx_error = err
         self.trim = self._parse_trim(trim)
 
     # ------------------------------------------------------------------ trims

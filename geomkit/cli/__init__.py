@@ -75,6 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
     common.add_argument("--skip-invalid", action="store_true",
                         help="IGES/STEP: skip faces that fail validation (counted) "
                              "instead of stopping")
+    common.add_argument("--skip-unsupported", action="store_true",
+                        help="go on without CAD faces whose entities cannot be read "
+                             "(they are listed); default: such a file is an error")
     common.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     common.add_argument("--json", action="store_true", help="machine-readable output")
     common.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",

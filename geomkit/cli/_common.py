@@ -24,11 +24,13 @@ class Parser(argparse.ArgumentParser):
 
 
 # ----------------------------------------------------------------------- inputs
-def _load_input(name: str, skip_invalid: bool = False, units: str | None = None):
+def _load_input(name: str, skip_invalid: bool = False, units: str | None = None,
+                skip_unsupported: bool = False):
     """Surfaces from a file path (JSON, IGES, STEP), or from a bundled sample name.
 
     ``units`` (from ``--units``) overrides the units the file states; the case's
-    ``units`` is None when neither says."""
+    ``units`` is None when neither says.  ``skip_unsupported`` reads a CAD file on
+    without the faces it cannot convert; they are listed in ``case.skipped``."""
     from .. import load_case, samples
     from ..io import Case
 
@@ -44,10 +46,11 @@ def _load_input(name: str, skip_invalid: bool = False, units: str | None = None)
             from ..iges import read_iges as read
         else:
             from ..step import read_step as read
-        res = read(name, skip_invalid=skip_invalid)
+        res = read(name, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
         _warn_skipped(res.skipped)
         case = Case(Path(name).stem, res.surfaces,
-                    units=_reader_units(getattr(res, "units", None)))
+                    units=_reader_units(getattr(res, "units", None)),
+                    skipped=list(res.skipped))
     else:
         case = load_case(name)
     if units is not None:

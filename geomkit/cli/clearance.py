@@ -50,7 +50,8 @@ def _cmd_clearance(args) -> int:
     from ..report import _clean, plot_clearance, write_clearance_csv, write_json
 
     stylus = parse_stylus(args.stylus)
-    case = _load_input(args.part, args.skip_invalid, args.units)
+    case = _load_input(args.part, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
     path = read_path(args.path)
     out = args.output or f"{Path(args.path).stem}-clearance"
     names = ["clearance.csv", "clearance_summary.json"]

@@ -100,7 +100,8 @@ def _cmd_deviation(args) -> int:
         names += ["deviation_map.png", "deviation_hist.png"]
     # inputs are read first (clear errors), then the folder is checked before the work
     # and created only when the reports are written
-    case = _load_input(args.nominal, args.skip_invalid, args.units)
+    case = _load_input(args.nominal, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
     pts = _load_points(args.points)
     names += _reports.names(args, "deviation")
     outputs = Outputs(out, names, args.overwrite, inputs=[args.nominal, args.points])
@@ -165,7 +166,8 @@ def _cmd_distance(args) -> int:
     from .. import project_points
     from ..report import _clean
 
-    case = _load_input(args.surface, args.skip_invalid, args.units)
+    case = _load_input(args.surface, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
     pts = _load_points(args.points)
     target = None
     if args.output:
@@ -233,7 +235,8 @@ def _cmd_section(args) -> int:
     if bad or not kinds:
         raise InvalidInputError(f"unknown format(s) {bad}; use csv, dxf, json, png",
                                 "--formats")
-    case = _load_input(args.surface, args.skip_invalid, args.units)
+    case = _load_input(args.surface, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
     stem = "section" if len(planes) == 1 else "section_{:03d}"
     names, per = [], []
     for k in range(len(planes)):
@@ -321,7 +324,8 @@ def _cmd_mesh(args) -> int:
         raise InvalidInputError(f"{out}: unknown mesh format {out.suffix or '(none)'!r}; "
                                 f"use {', '.join(MESH_FORMATS)}", "-o")
     out = _file_target(out, args.overwrite, inputs=[args.input])
-    case = _load_input(args.input, args.skip_invalid, args.units)
+    case = _load_input(args.input, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
     max_angle = math.radians(args.max_angle) if args.max_angle is not None else None
     mesh = tessellate(case.surfaces, args.tol, max_angle=max_angle, max_edge=args.max_edge)
     mesh.export(out, overwrite=args.overwrite)

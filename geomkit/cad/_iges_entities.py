@@ -1,0 +1,199 @@
+"""IGES curve and surface entities as exact NURBS (used by :mod:`geomkit.iges`).
+
+Each converter takes the reader (``rec``, ``type_of``, ``transform``) and a directory
+pointer.  Curves come back as ``(curve, fmap, (t0, t1))``: the NURBS ``(p, U, Pw)`` in
+model space (124 transform applied), the map from the entity's own parameter to the
+NURBS parameter (``None``: the same) and the entity's parameter range.  Surfaces come
+back as ``(args, fu, fv)``: :class:`~geomkit.Surface` arguments and the maps that carry
+the file's ``(u, v)`` (what its pcurves are written in) to the NURBS ``(u, v)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, ruled,
+                       transform_curve)
+from .loops import Unsupported
+
+READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
+                 122: "tabulated cylinder", 118: "ruled surface"}
+READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
+               112: "parametric spline curve"}
+
+
+def f_(x: str) -> float:
+    return float(x.replace("D", "E").replace("d", "e")) if x else 0.0
+
+
+def i_(x: str) -> int:
+    return int(float(x)) if x else 0
+
+
+def restrict(p, U, Pw, t0, t1):
+    """A NURBS curve (any dimension, homogeneous ``Pw``) restricted to ``[t0, t1]``
+    exactly, by knot insertion (The NURBS Book A5.1)."""
+    from .._kernels.bezier import insert_knot
+
+    U = np.asarray(U, float)
+    n = Pw.shape[0]
+    lo, hi = U[p], U[n]
+    t0 = max(t0, lo)
+    t1 = min(t1, hi) if t1 > t0 else hi
+    if t0 <= lo and t1 >= hi:
+        return U, Pw
+    Pw = np.ascontiguousarray(Pw, float)
+    for t in (t0, t1):
+        s = int(np.count_nonzero(U == t))
+        if s < p:
+            Pw, U = insert_knot(Pw, p, U, t, p - s)
+    first_a = int(np.nonzero(U == t0)[0][0])
+    start = first_a + int(np.count_nonzero(U == t0)) - 1 - p
+    first_b = int(np.nonzero(U == t1)[0][0])
+    newU = U[start: first_b + p + 1].copy()
+    newU[: p + 1] = t0
+    newU[-(p + 1):] = t1
+    return newU, Pw[start: first_b]
+
+
+def curve3d(rd, de: int):
+    """A model-space curve entity as ``(curve, fmap, (t0, t1))``."""
+    t = rd.type_of(de)
+    r = rd.rec(de)
+    if t == 110:
+        v = [f_(x) for x in r[1:7]]
+        c, fmap, rng = line_curve(v[:3], v[3:]), None, (0.0, 1.0)
+    elif t == 100:
+        zt, x1, y1, x2, y2, x3, y3 = (f_(x) for x in r[1:8])
+        rad = math.hypot(x2 - x1, y2 - y1)
+        a0 = math.atan2(y2 - y1, x2 - x1) % (2 * math.pi)
+        a1 = math.atan2(y3 - y1, x3 - x1) % (2 * math.pi)
+        if a1 <= a0 + 1e-12:
+            a1 += 2 * math.pi
+        c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
+        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(x, a0, a1)), (a0, a1)
+    elif t == 126:
+        K, M = i_(r[1]), i_(r[2])
+        prop3 = i_(r[5])
+        A = K + M + 1
+        a = 7
+        knots = np.array([f_(x) for x in r[a: a + A + 1]])
+        a += A + 1
+        W = np.array([f_(x) for x in r[a: a + K + 1]])
+        a += K + 1
+        P = np.array([f_(x) for x in r[a: a + 3 * (K + 1)]]).reshape(K + 1, 3)
+        a += 3 * (K + 1)
+        t0, t1 = f_(r[a]), f_(r[a + 1])
+        if prop3 == 1:
+            W = np.ones(K + 1)
+        U, Pw = restrict(M, knots, np.column_stack([P * W[:, None], W]), t0, t1)
+        c, fmap, rng = (M, U, Pw), None, (float(U[M]), float(U[-M - 1]))
+    elif t == 112:
+        c, fmap, rng = _spline112(r), None, None
+        rng = (float(c[1][0]), float(c[1][-1]))
+    else:
+        raise Unsupported(f"curve DE {de} is entity {t} (read: "
+                          + ", ".join(f"{k} {v}" for k, v in READ_CURVES.items()) + ")")
+    return transform_curve(c, rd.transform(de)), fmap, rng
+
+
+def _spline112(r):
+    """Entity 112 (piecewise cubic polynomial) as an exact cubic B-spline: each
+    segment's power form becomes its Bezier form; breakpoints become triple knots."""
+    N = i_(r[4])
+    T = [f_(x) for x in r[5: 5 + N + 1]]
+    a = 5 + N + 1
+    pts, knots = [], [T[0]] * 4
+    for k in range(N):
+        c = np.array([f_(x) for x in r[a: a + 12]]).reshape(3, 4)  # rows x, y, z: A B C D
+        a += 12
+        h = T[k + 1] - T[k]
+        A, B, C, D = c[:, 0], c[:, 1] * h, c[:, 2] * h * h, c[:, 3] * h ** 3
+        bez = [A, A + B / 3, A + 2 * B / 3 + C / 3, A + B + C + D]
+        if not pts:
+            pts.append(bez[0])
+        pts += bez[1:]
+        knots += [T[k + 1]] * 3
+    knots.append(T[-1])
+    P = np.array(pts)
+    return 3, np.array(knots), np.column_stack([P, np.ones(len(P))])
+
+
+def _normalised(c, rng, fmap):
+    """Reparametrise a curve linearly to [0, 1]; map from the entity's normalised
+    parameter to the NURBS parameter."""
+    p, U, Pw = c
+    a, b = float(U[0]), float(U[-1])
+    U2 = (np.asarray(U) - a) / (b - a)
+    if fmap is None:
+        return (p, U2, Pw), None
+    t0, t1 = rng
+    return (p, U2, Pw), (lambda s: (fmap(t0 + s * (t1 - t0)) - a) / (b - a))
+
+
+def surface(rd, de: int):
+    """A surface entity as ``(args, fu, fv)`` (see the module docstring)."""
+    t = rd.type_of(de)
+    r = rd.rec(de)
+    if t == 128:
+        return rd.surface128_args(de), None, None
+    if t == 120:
+        axis, _, _ = curve3d(rd, i_(r[1]))
+        if rd.type_of(i_(r[1])) != 110:
+            raise Unsupported(f"axis of surface of revolution DE {de} is not a line")
+        A = axis[2][:, :3] / axis[2][:, 3:]
+        gen, fu, _ = curve3d(rd, i_(r[2]))
+        sa, ta = f_(r[3]), f_(r[4])
+        args = revolve(gen, A[0], A[1] - A[0], sa, ta)
+        fv = lambda x, sa=sa, ta=ta: angle_to_param(x, sa, ta)  # noqa: E731
+    elif t == 122:
+        gen, fmap, rng = curve3d(rd, i_(r[1]))
+        gen, fu = _normalised(gen, rng, fmap)
+        L = np.array([f_(x) for x in r[2:5]])
+        p, U, Pw = gen
+        args, fv = extrude(gen, L - Pw[0, :3] / Pw[0, 3]), None
+    elif t == 118:
+        c1, m1, r1 = curve3d(rd, i_(r[1]))
+        c2, m2, r2 = curve3d(rd, i_(r[2]))
+        if m1 is not None or m2 is not None:
+            raise Unsupported(f"ruled surface DE {de} between arcs (normalised arc "
+                              "parameter is not linear in the NURBS parameter)")
+        c1, _ = _normalised(c1, r1, None)
+        c2, _ = _normalised(c2, r2, None)
+        if i_(r[3]) == 1:
+            p, U, Pw = c2
+            c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
+        c1, c2 = _compatible(c1, c2, de)
+        args, fu, fv = ruled(c1, c2), None, None
+    else:
+        raise Unsupported(f"surface DE {de} is entity {t} (read: "
+                          + ", ".join(f"{k} {v}" for k, v in READ_SURFACES.items()) + ")")
+    Mt = rd.transform(de)
+    if Mt is not None:
+        P = args[4] @ Mt[:3, :3].T + Mt[:3, 3]
+        args = args[:4] + (P,) + args[5:]
+    return args, fu, fv
+
+
+def _compatible(c1, c2, de):
+    """Two curves of equal degree brought to one knot vector (knot insertion)."""
+    from .._kernels.bezier import insert_knot
+
+    (p, U1, P1), (q, U2, P2) = c1, c2
+    if p != q:
+        raise Unsupported(f"ruled surface DE {de} between curves of degree {p} and {q} "
+                          "(degree elevation is not implemented)")
+    U1, U2 = np.asarray(U1, float), np.asarray(U2, float)
+    P1, P2 = np.ascontiguousarray(P1), np.ascontiguousarray(P2)
+    for k in np.unique(np.concatenate([U1, U2])):
+        need = max(np.count_nonzero(np.isclose(U1, k, rtol=0, atol=1e-13)),
+                   np.count_nonzero(np.isclose(U2, k, rtol=0, atol=1e-13)))
+        s1 = int(np.count_nonzero(np.isclose(U1, k, rtol=0, atol=1e-13)))
+        s2 = int(np.count_nonzero(np.isclose(U2, k, rtol=0, atol=1e-13)))
+        if s1 < need:
+            P1, U1 = insert_knot(P1, p, U1, float(k), need - s1)
+        if s2 < need:
+            P2, U2 = insert_knot(P2, p, U2, float(k), need - s2)
+    return (p, U1, P1), (p, U1, P2)

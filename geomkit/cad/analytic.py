@@ -1,0 +1,162 @@
+"""Exact rational NURBS constructions shared by the IGES and STEP readers.
+
+Curves are ``(degree, knots, Pw)`` with homogeneous control points ``Pw`` of shape
+``(n, 4)`` (``w x, w y, w z, w``).  Surfaces are returned as :class:`~geomkit.Surface`
+arguments ``(p, q, U, V, P, W)`` so the caller adds trims and a name.
+
+* Circular arcs: The NURBS Book, Algorithm A7.1 -- the sweep is split into equal arcs of
+  at most 90 degrees, each a rational quadratic with middle weight ``cos(d / 2)``.  The
+  knots are placed *at the arc's angles* (knot ``k`` = ``theta0 + k d``), so the NURBS
+  parameter equals the angle at every knot and :func:`angle_to_param` /
+  :func:`param_to_angle` convert between them in closed form in between: on a span,
+  ``tan(psi / 2) = tan(d / 4) (2 r - 1)`` with ``psi`` the angle from the span's middle
+  and ``r`` the span's local parameter in [0, 1].
+* Surfaces of revolution: Algorithm A8.1 (each control point of the generatrix sweeps
+  a circle about the axis; weights multiply).  ``u`` is the generatrix parameter, ``v``
+  the NURBS angle parameter.  Cylinder, cone, sphere and torus are revolutions of a
+  line or an arc, so they hold their closed forms to rounding.
+* Extrusion (tabulated cylinder): the curve in ``u`` and a degree-1 ``v`` in [0, 1].
+* Ruled surface between two curves of equal degree and knots (degree 1 in ``v``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
+           "angle_to_param", "param_to_angle", "arc_knots", "transform_curve"]
+
+
+def arc_knots(theta0: float, theta1: float):
+    """Number of spans, span angle and knot vector of the arc ``[theta0, theta1]``."""
+    sweep = theta1 - theta0
+    if not sweep > 0:
+        raise ValueError(f"arc sweep must be > 0, got {sweep!r}")
+    n = max(1, int(math.ceil(sweep / (0.5 * math.pi) - 1e-12)))
+    d = sweep / n
+    ks = theta0 + d * np.arange(n + 1)
+    ks[-1] = theta1
+    U = np.concatenate([[theta0] * 3, np.repeat(ks[1:-1], 2), [theta1] * 3])
+    return n, d, U
+
+
+def _arc_coeffs(theta0: float, theta1: float):
+    """``(a, b, w)`` per control point: point = O + r (a X + b Y), weight w."""
+    n, d, U = arc_knots(theta0, theta1)
+    wm = math.cos(d / 2)
+    a, b, w = [], [], []
+    for k in range(n):
+        t0 = theta0 + k * d
+        tm = t0 + d / 2
+        if k == 0:
+            a.append(math.cos(t0)); b.append(math.sin(t0)); w.append(1.0)
+        a.append(math.cos(tm) / wm); b.append(math.sin(tm) / wm); w.append(wm)
+        t1 = theta1 if k == n - 1 else t0 + d
+        a.append(math.cos(t1)); b.append(math.sin(t1)); w.append(1.0)
+    return np.array(a), np.array(b), np.array(w), U
+
+
+def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
+    """NURBS parameter of the arc built by :func:`arc_curve` at angle ``theta``."""
+    n, d, _ = arc_knots(theta0, theta1)
+    th = np.asarray(theta, float)
+    k = np.clip(np.floor((th - theta0) / d), 0, n - 1)
+    mid = theta0 + (k + 0.5) * d
+    r = 0.5 * (np.tan(0.5 * (th - mid)) / math.tan(d / 4) + 1.0)
+    return np.clip(theta0 + (k + r) * d, theta0, theta1)
+
+
+def param_to_angle(s, theta0: float, theta1: float) -> np.ndarray:
+    """Inverse of :func:`angle_to_param`."""
+    n, d, _ = arc_knots(theta0, theta1)
+    s = np.asarray(s, float)
+    k = np.clip(np.floor((s - theta0) / d), 0, n - 1)
+    r = (s - theta0) / d - k
+    mid = theta0 + (k + 0.5) * d
+    return mid + 2.0 * np.arctan(math.tan(d / 4) * (2 * r - 1))
+
+
+def arc_curve(center, xaxis, yaxis, radius: float, theta0: float, theta1: float):
+    """Exact rational quadratic arc ``center + radius (cos t X + sin t Y)``, ``t`` in
+    ``[theta0, theta1]`` (X, Y orthonormal); knots at the angles (see module doc)."""
+    a, b, w, U = _arc_coeffs(theta0, theta1)
+    C, X, Y = (np.asarray(v, float) for v in (center, xaxis, yaxis))
+    P = C + radius * (a[:, None] * X + b[:, None] * Y)
+    return 2, U, np.column_stack([P * w[:, None], w])
+
+
+def line_curve(p0, p1, t0: float = 0.0, t1: float = 1.0):
+    """The segment ``p0 + (t - t0) / (t1 - t0) (p1 - p0)`` as a degree-1 curve."""
+    P = np.array([p0, p1], float)
+    return 1, np.array([t0, t0, t1, t1], float), np.column_stack([P, np.ones(2)])
+
+
+def transform_curve(curve, M):
+    """Apply a 4x4 affine matrix to a curve (exact: affine maps commute with NURBS)."""
+    if M is None:
+        return curve
+    p, U, Pw = curve
+    w = Pw[:, 3]
+    P = Pw[:, :3] / w[:, None]
+    Q = P @ M[:3, :3].T + M[:3, 3]
+    return p, U, np.column_stack([Q * w[:, None], w])
+
+
+def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
+    """Surface of revolution (A8.1): the curve (``u``) rotated about the axis by the
+    angles ``[theta0, theta1]`` (``v``, right-handed about ``axis_dir``)."""
+    p, U, Pw = curve
+    S = np.asarray(axis_point, float)
+    T = np.asarray(axis_dir, float)
+    T = T / np.linalg.norm(T)
+    a, b, wa, V = _arc_coeffs(theta0, theta1)
+    wc = Pw[:, 3]
+    P = Pw[:, :3] / wc[:, None]
+    n, m = P.shape[0], a.size
+    out = np.empty((n, m, 3))
+    for j in range(n):
+        O = S + np.dot(P[j] - S, T) * T
+        X = P[j] - O
+        r = float(np.linalg.norm(X))
+        if r <= 1e-15 * max(1.0, float(np.abs(P[j]).max())):
+            out[j] = O
+            continue
+        X /= r
+        Y = np.cross(T, X)
+        out[j] = O + r * (a[:, None] * X + b[:, None] * Y)
+    W = wc[:, None] * wa[None, :]
+    return p, 2, np.asarray(U, float), V, out, W
+
+
+def extrude(curve, vector):
+    """``C(u) + v * vector``, ``v`` in [0, 1] (IGES 122, STEP extrusion)."""
+    p, U, Pw = curve
+    w = Pw[:, 3]
+    P = Pw[:, :3] / w[:, None]
+    out = np.stack([P, P + np.asarray(vector, float)], axis=1)
+    W = np.stack([w, w], axis=1)
+    return p, 1, np.asarray(U, float), np.array([0.0, 0.0, 1.0, 1.0]), out, W
+
+
+def ruled(c1, c2):
+    """``(1 - v) C1(u) + v C2(u)`` for curves of equal degree and knot vector."""
+    p1, U1, Pw1 = c1
+    p2, U2, Pw2 = c2
+    if p1 != p2 or len(U1) != len(U2) or not np.allclose(U1, U2, rtol=0, atol=1e-12):
+        raise ValueError("ruled surface between curves of different degree or knots")
+    Pw = np.stack([Pw1, Pw2], axis=1)
+    W = Pw[..., 3]
+    return p1, 1, np.asarray(U1, float), np.array([0.0, 0.0, 1.0, 1.0]), \
+        Pw[..., :3] / W[..., None], W
+
+
+def plane_patch(origin, xaxis, yaxis, u0: float, u1: float, v0: float, v1: float):
+    """The bilinear patch ``origin + u X + v Y`` over ``[u0, u1] x [v0, v1]``."""
+    O, X, Y = (np.asarray(v, float) for v in (origin, xaxis, yaxis))
+    P = np.empty((2, 2, 3))
+    for i, u in enumerate((u0, u1)):
+        for j, v in enumerate((v0, v1)):
+            P[i, j] = O + u * X + v * Y
+    return 1, 1, np.array([u0, u0, u1, u1]), np.array([v0, v0, v1, v1]), P, np.ones((2, 2))

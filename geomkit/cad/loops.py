@@ -1,0 +1,96 @@
+"""Closing trim loops whose pieces meet within the file's tolerance, not exactly.
+
+CAD files carry gaps of 1e-5 to 1e-3 of the parameter domain between consecutive
+pcurves of a boundary.  Each gap is bridged by a straight UV segment; the exact pieces
+are kept as they are.  A gap above :data:`GAP_TOL` x the domain size is not a rounding
+gap: the face is refused (:class:`Unsupported`), never guessed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..types import TrimCurve
+
+__all__ = ["close_gaps", "Unsupported", "GAP_TOL"]
+
+GAP_TOL = 1e-2
+"""Largest gap between the pieces of a trim loop that is bridged, relative to the
+parameter domain size."""
+
+
+class Unsupported(Exception):
+    """A face or entity that cannot be read exactly (the message says which and why)."""
+
+
+def close_gaps(pieces, domain, where: str):
+    """``(pieces with bridging segments, [gap sizes in UV])``."""
+    (u0, u1), (v0, v1) = domain
+    size = max(u1 - u0, v1 - v0)
+    out, gaps = [], []
+    for k, a in enumerate(pieces):
+        out.append(a)
+        b = pieces[(k + 1) % len(pieces)]
+        gap = float(np.hypot(*(a.end - b.start)))
+        if gap <= 1e-9 * size:
+            continue
+        if gap > GAP_TOL * size:
+            raise Unsupported(f"{where}: pieces {k} and {(k + 1) % len(pieces)} are "
+                              f"{gap:.3g} apart in UV (more than {GAP_TOL:g} of the domain)")
+        gaps.append(gap)
+        out.append(TrimCurve.polyline([a.end, b.start]))
+    return out, gaps
+
+
+def clip_to_domain(pieces, domain, rel: float, refit_rel: float = 0.0):
+    """Move control points that lie at most ``rel`` x the domain size outside the
+    parameter domain onto its edge (files round the domain ends: 0.011739075 vs
+    0.0117390748871053; OCC's pcurves overshoot by up to ~1e-5); the curve moves by at
+    most that much.  Points farther out are kept, and validation reports them.
+    With ``refit_rel``, a piece whose *points* leave the domain by at most
+    ``refit_rel`` x the domain size (OCC's re-approximated pcurves overshoot a
+    surface's domain by up to ~0.3 %: outside the domain there is no surface, so the
+    face ends at the domain edge) is re-fitted to its points clipped to the domain.
+    Returns ``(pieces, [distances moved])``."""
+    (u0, u1), (v0, v1) = domain
+    eps = rel * max(u1 - u0, v1 - v0)
+    out, moves = [], []
+    for c in pieces:
+        P = np.array(c.control_points)
+        Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
+        moved = float(np.abs(Q - P).max())
+        if moved > eps and refit_rel > 0:  # the polygon leaves; does the curve itself?
+            c, moved = _refit_clipped(c, (u0, u1, v0, v1),
+                                      refit_rel * max(u1 - u0, v1 - v0), eps)
+            P = np.array(c.control_points)
+            Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
+            moved = max(moved, float(np.abs(Q - P).max()))
+        if moved == 0 or moved > max(eps, refit_rel * max(u1 - u0, v1 - v0)):
+            out.append(c)
+            continue
+        moves.append(moved)
+        out.append(TrimCurve.create(c.degree, c.knots, Q,
+                                    None if np.all(c.weights == 1) else c.weights))
+    return out, moves
+
+
+def _refit_clipped(c, box, eps, fit_tol):
+    """A curve whose control polygon leaves the domain but whose points leave it by at
+    most ``eps``: re-fitted (cubic, within ``fit_tol / 100``) to its
+    points clipped to the domain.  Returns ``(curve, how far its points were out)``."""
+    from ..trimming import evaluate_trim_curve
+    from .uvmap import map_pcurve
+
+    u0, u1, v0, v1 = box
+    p = c.degree
+    t = np.linspace(c.knots[p], c.knots[-p - 1], 257)
+    X = evaluate_trim_curve(c, t)[:, 0, :]
+    out = max(0.0, float(u0 - X[:, 0].min()), float(X[:, 0].max() - u1),
+              float(v0 - X[:, 1].min()), float(X[:, 1].max() - v1))
+    if out > eps:
+        return c, np.inf
+    if out == 0:
+        return c, 0.0
+    m, err = map_pcurve(c, lambda u: np.clip(u, u0, u1), lambda v: np.clip(v, v0, v1),
+                        fit_tol / 100)
+    return m, out + err
