@@ -103,7 +103,6 @@ def test_distance_with_nothing_matched_says_so(capsys, far):
     assert "none matched within --max-distance 1" in o and "nan" not in o.lower()
 
 
-@pytest.mark.xfail(strict=False, reason="fixed in iges.py on cad14 branch")
 def test_empty_iges_file_is_one_line_exit_2(tmp_path, capsys):
     pytest.importorskip("pyiges")
     p = tmp_path / "empty.igs"

@@ -115,7 +115,6 @@ def test_iges_and_step_reader_units_reach_the_case(monkeypatch, tmp_path):
     assert _load_input(str(p), units="mm").units == "mm"
 
 
-@pytest.mark.xfail(strict=False, reason="IGES units are read in iges.py on cad14 branch")
 def test_impeller_iges_is_in_millimetres():
     examples = pytest.importorskip("pyiges.examples")
     from geomkit.cli._common import _load_input
