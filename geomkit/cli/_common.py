@@ -73,8 +73,30 @@ def _reader_units(units):
 
 def _warn_skipped(skipped):
     if skipped:
-        print(f"geomkit: warning: {len(skipped)} face(s) skipped, first: {skipped[0]}",
+        print(f"geomkit: warning: partial model: {len(skipped)} face(s) left out: "
+              + "; ".join(str(s) for s in skipped[:3])
+              + (f"; ... ({len(skipped) - 3} more in the summary)" if len(skipped) > 3 else ""),
               file=sys.stderr)
+
+
+def _model_info(case):
+    """What every report says of the model: ``(info, note)``.
+
+    ``info`` goes into the summary JSON (faces read, faces left out with their ids and
+    reasons, ``complete``); ``note`` is None for a whole model and otherwise a line for
+    the console, plot titles and report headers, so a result computed on part of a
+    model never looks complete."""
+    skipped = [str(s) for s in getattr(case, "skipped", None) or []]
+    n = len(case.surfaces)
+    info = {"faces": n, "faces_left_out": len(skipped), "complete": not skipped}
+    if not skipped:
+        return info, None
+    info["left_out"] = skipped
+    ids = [s.split(":", 1)[0] for s in skipped]
+    shown = ", ".join(ids[:6]) + (", ..." if len(ids) > 6 else "")
+    note = (f"PARTIAL MODEL: {len(skipped)} of {n + len(skipped)} faces left out "
+            f"(--skip-unsupported: {shown})")
+    return info, note
 
 
 def _load_points(path):

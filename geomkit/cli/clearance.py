@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from . import _reports
-from ._common import Outputs, _load_input, _progress, _unit
+from ._common import Outputs, _load_input, _model_info, _progress, _unit
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
                "optionally extension_radius, extension_length, body_radius, body_length) "
@@ -69,22 +69,27 @@ def _cmd_clearance(args) -> int:
             bar.stop()
     tips = path if path.ndim == 2 else path[:, :3, 3]
     u = case.units
+    model, note = _model_info(case)
+    rk = {"units": u, "model_note": note}
     targets = outputs.create()
     files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite,
-                                 units=u)]
+                                 **rk)]
     if not args.no_plots:
-        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite, units=u))
+        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite, **rk))
     files += _reports.write(args, "clearance", targets, res=res, surfaces=case.surfaces,
                             path_points=tips, stylus=stylus, part=args.part,
-                            axis=args.axis if path.ndim == 2 else None, units=u)
+                            axis=args.axis if path.ndim == 2 else None, **rk)
     summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
-               "units": _unit(u), "stylus": stylus.to_dict(), **res.summary(),
+               "units": _unit(u), "model": model, "stylus": stylus.to_dict(),
+               **res.summary(),
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
-    write_json(summary, targets["clearance_summary.json"], args.overwrite, units=u)
+    write_json(summary, targets["clearance_summary.json"], args.overwrite, **rk)
     if args.json:
         print(json.dumps(_clean(summary), indent=1))
     else:
         s = summary
+        if note:  # a pass on part of the part is not a pass on the part: say so first
+            print(note + "; clearance to the faces left out is NOT checked")
         print(f"{s['segments']} segment(s): {'PASS' if s['passed'] else 'FAIL'} "
               f"(margin {s['margin']:g} {s['units']}); min clearance {s['min_clearance']:.6g} "
               f"(certified >= {s['min_clearance_lower_bound']:.6g}) on segment "

@@ -9,8 +9,8 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from . import _reports
-from ._common import (Outputs, _file_target, _load_input, _load_points, _progress,
-                      _tolerance, _unit)
+from ._common import (Outputs, _file_target, _load_input, _load_points, _model_info,
+                      _progress, _tolerance, _unit)
 
 
 def _cmd_demo(args) -> int:
@@ -115,19 +115,22 @@ def _cmd_deviation(args) -> int:
             bar.stop()
     _require_matches(rep.summary()["valid"], len(rep), args.max_distance)
     u = case.units
+    model, note = _model_info(case)
+    rk = {"units": u, "model_note": note}
     targets = outputs.create()
-    files = [write_deviation_csv(rep, targets["deviation.csv"], args.overwrite, units=u)]
+    files = [write_deviation_csv(rep, targets["deviation.csv"], args.overwrite, **rk)]
     if not args.no_plots:
         files.append(plot_deviation_map(rep, case.surfaces, targets["deviation_map.png"],
-                                        args.overwrite, units=u))
+                                        args.overwrite, **rk))
         files.append(plot_histogram(rep, targets["deviation_hist.png"], args.overwrite,
-                                    units=u))
+                                    **rk))
     files += _reports.write(args, "deviation", targets, rep=rep, surfaces=case.surfaces,
-                            part=args.nominal, units=u)
+                            part=args.nominal, **rk)
     summary = {"nominal": args.nominal, "points_file": args.points,
-               "surfaces": len(case.surfaces), "units": _unit(u), **rep.summary(),
+               "surfaces": len(case.surfaces), "units": _unit(u), "model": model,
+               **rep.summary(),
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
-    write_json(summary, targets["summary.json"], args.overwrite, units=u)  # last
+    write_json(summary, targets["summary.json"], args.overwrite, **rk)  # last
     if args.json:
         from ..report import _clean
         print(json.dumps(_clean(summary), indent=1))
@@ -147,6 +150,8 @@ def _cmd_deviation(args) -> int:
         for row in a["transform"]:
             print("  " + " ".join(f"{x:14.9f}" for x in row))
     print(f"reports: {Path(out)}/ ({', '.join(Path(f).name for f in s['files'])})")
+    if note:
+        print(note)
     return 0
 
 
@@ -180,6 +185,7 @@ def _cmd_distance(args) -> int:
             bar.stop()
     ok = np.isfinite(pr.distance)
     u = _unit(case.units)
+    model, note = _model_info(case)
     if target is not None:
         from ..io import _atomic_write
         from ..results import STATUS_NAMES
@@ -200,7 +206,7 @@ def _cmd_distance(args) -> int:
         _atomic_write(target, lambda fh: fh.write(data))
     d = pr.distance[ok]
     info = {"surface_file": args.surface, "points_file": args.points, "points": len(pr),
-            "matched": int(ok.sum()), "counts": pr.counts(), "units": u,
+            "matched": int(ok.sum()), "counts": pr.counts(), "units": u, "model": model,
             "min": float(d.min()) if d.size else None,
             "max": float(d.max()) if d.size else None,
             "mean": float(d.mean()) if d.size else None,
@@ -209,6 +215,8 @@ def _cmd_distance(args) -> int:
         print(json.dumps(_clean(info), indent=1))
         return 0
     written = f"; written {target}" if target else ""
+    if note:
+        print(note)
     if not d.size:
         beyond = (f" within --max-distance {args.max_distance:g}"
                   if args.max_distance is not None else "")
@@ -250,6 +258,8 @@ def _cmd_section(args) -> int:
     names.append("section_summary.json")
     outputs = Outputs(args.output, names, args.overwrite, inputs=[args.surface])
     u = case.units
+    model, note = _model_info(case)
+    rk = {"units": u, "model_note": note}
     update, bar = _progress("sectioning")
     sections = []
     try:
@@ -266,7 +276,7 @@ def _cmd_section(args) -> int:
     rows, files = [], []
     for sec, t in zip(sections, per):
         written = write_section(sec, {kind: targets[n] for kind, n in t.items()},
-                                fit_tol=args.fit_tol, overwrite=args.overwrite, units=u)
+                                fit_tol=args.fit_tol, overwrite=args.overwrite, **rk)
         files += list(written.values())
         rows.append({"plane": sec.plane.tolist(), "curves": len(sec.curves),
                      "closed": int(sum(sec.closed)), "points": int(len(sec.points)),
@@ -274,13 +284,13 @@ def _cmd_section(args) -> int:
                      "max_residual": sec.max_residual,
                      "max_chord_error": sec.max_chord_error})
     if png:
-        files.append(str(plot_section(sections, targets[png], args.overwrite, units=u)))
+        files.append(str(plot_section(sections, targets[png], args.overwrite, **rk)))
     files += _reports.write(args, "section", targets, sections=sections,
-                            surfaces=case.surfaces, part=args.surface, units=u)
+                            surfaces=case.surfaces, part=args.surface, **rk)
     summary = {"surface_file": args.surface, "surfaces": len(case.surfaces),
-               "units": _unit(u), "tol": args.tol, "planes": rows,
+               "units": _unit(u), "model": model, "tol": args.tol, "planes": rows,
                "files": files + [str(targets["section_summary.json"])]}
-    write_json(summary, targets["section_summary.json"], args.overwrite, units=u)
+    write_json(summary, targets["section_summary.json"], args.overwrite, **rk)
     if args.json:
         print(json.dumps(_clean(summary), indent=1))
         return 0
@@ -291,6 +301,8 @@ def _cmd_section(args) -> int:
               f"point(s), max residual {r['max_residual']:.2g} {summary['units']}")
     print(f"reports: {Path(args.output)}/ ({len(summary['files'])} files; "
           f"units: {summary['units']})")
+    if note:
+        print(note)
     return 0
 
 
