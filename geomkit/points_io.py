@@ -16,7 +16,8 @@ direction), separated by commas, semicolons, tabs or spaces, and ``#`` comment l
 A row with a missing, non-numeric or non-finite value is an error naming its line:
 measured data are never silently dropped.
 
-STL and PLY files are read through trimesh; their vertices are the points (scans).
+STL files are read through trimesh (their unique vertices are the points); PLY,
+``.npy`` and LAS / LAZ scans through :mod:`geomkit.scan_io` (every vertex, in order).
 
 Files are only read, never modified.
 """
@@ -35,7 +36,7 @@ from .errors import FileFormatError, InvalidInputError
 __all__ = ["PointSet", "read_points", "TEXT_FORMATS", "SCAN_FORMATS"]
 
 TEXT_FORMATS = (".csv", ".xyz", ".txt", ".asc", ".pts")
-SCAN_FORMATS = (".stl", ".ply")
+SCAN_FORMATS = (".stl", ".ply", ".npy", ".las", ".laz")
 _SPLIT = re.compile(r"[,;\s]+")
 
 
@@ -278,7 +279,8 @@ def _read_scan(p: Path) -> PointSet:
 
 
 def read_points(path) -> PointSet:
-    """Read measured points from a text (CSV / XYZ) or scan (STL / PLY) file.
+    """Read measured points from a text (CSV / XYZ) or scan (STL / PLY / NPY / LAS) file
+(all in memory; :func:`geomkit.scan_io.iter_scan` streams).
 
     Parameters
     ----------
@@ -298,6 +300,12 @@ def read_points(path) -> PointSet:
     """
     p = _check_path(path)
     ext = p.suffix.lower()
+    if ext in (".ply", ".npy", ".las", ".laz"):
+        from .scan_io import iter_scan
+
+        parts = list(iter_scan(p))
+        N = None if parts[0][1] is None else np.concatenate([c[1] for c in parts])
+        return PointSet(np.concatenate([c[0] for c in parts]), N, str(p))
     if ext in SCAN_FORMATS:
         return _read_scan(p)
     if ext in TEXT_FORMATS or ext == "":
