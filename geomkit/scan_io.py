@@ -2,10 +2,11 @@
 
 Formats (by extension):
 
-* ``.npy``: a float array of shape (n, 3) (x y z) or (n, 6) (x y z i j k), memory-
-  mapped (``numpy.load(mmap_mode="r")``): only the current chunk is in memory.
+* ``.npy``: a float array of shape (n, 3) (x y z) or (n, 6) (x y z i j k), read chunk
+  by chunk at its offset (plain reads rather than ``numpy.load(mmap_mode="r")``: the
+  pages of a memory map stay resident and would grow the RSS to the file's size).
 * ``.ply``: binary (little / big endian) or ASCII; the ``vertex`` element's ``x y z``
-  (and ``nx ny nz`` when present) properties.  Binary vertices are memory-mapped.
+  (and ``nx ny nz`` when present) properties, read chunk by chunk.
 * ``.las`` / ``.laz``: through laspy (``laspy[lazrs]`` for LAZ), scaled coordinates,
   read with laspy's chunk iterator.
 * text (``.csv .xyz .txt .asc .pts``): :func:`geomkit.points_io.iter_text` (headers,
@@ -97,16 +98,19 @@ def _ply_vertices(p: Path):
     if have < n:
         raise FileFormatError(f"{p}: truncated PLY file: the header declares {n} vertices, "
                               f"the file holds {have} (vertex {have} is incomplete)")
-    return "binary", np.memmap(p, dtype=dt, mode="r", offset=hlen, shape=(n,)), has_n, n
+    return "binary", (hlen, dt), has_n, n
 
 
 def _iter_ply(p: Path, chunk: int):
     kind, data, has_n, n = _ply_vertices(p)
     cols = ["x", "y", "z"] + (["nx", "ny", "nz"] if has_n else [])
-    if kind == "binary":
-        for a in range(0, n, chunk):
-            rec = data[a:a + chunk]
-            yield a, np.column_stack([np.asarray(rec[c], dtype=np.float64) for c in cols])
+    if kind == "binary":  # plain reads (see _iter_npy)
+        hlen, dt = data
+        with open(p, "rb") as fh:
+            fh.seek(hlen)
+            for a in range(0, n, chunk):
+                rec = np.fromfile(fh, dtype=dt, count=min(chunk, n - a))
+                yield a, np.column_stack([rec[c].astype(np.float64) for c in cols])
         return
     hlen, names = data
     idx = [names.index(c) for c in cols]
@@ -171,22 +175,45 @@ def _iter_las(p: Path, chunk: int):
 
 # ------------------------------------------------------------------ NumPy
 def _npy(p: Path):
+    """(shape, dtype, fortran_order, data offset) of a .npy file, checked."""
+    from numpy.lib import format as npf
+
     try:
-        A = np.load(p, mmap_mode="r", allow_pickle=False)
+        with open(p, "rb") as fh:
+            version = npf.read_magic(fh)
+            read = npf.read_array_header_1_0 if version == (1, 0) else \
+                npf.read_array_header_2_0
+            shape, fortran, dtype = read(fh)
+            offset = fh.tell()
     except Exception as exc:
         raise FileFormatError(f"{p}: cannot read as .npy ({exc})") from None
-    if A.ndim != 2 or A.shape[1] not in (3, 6) or A.dtype.kind not in "fiu":
+    if len(shape) != 2 or shape[1] not in (3, 6) or dtype.kind not in "fiu":
         raise FileFormatError(f"{p}: expected a numeric array of shape (n, 3) or (n, 6), "
-                              f"got {A.dtype} {A.shape}")
-    if A.shape[0] == 0:
+                              f"got {dtype} {shape}")
+    if shape[0] == 0:
         raise FileFormatError(f"{p}: no points (empty array)")
-    return A
+    have = (p.stat().st_size - offset) // (dtype.itemsize * shape[1])
+    if have < shape[0]:
+        raise FileFormatError(f"{p}: truncated .npy file: the header declares {shape[0]} "
+                              f"rows, the file holds {have}")
+    return shape, dtype, fortran, offset
 
 
 def _iter_npy(p: Path, chunk: int):
-    A = _npy(p)
-    for a in range(0, A.shape[0], chunk):
-        yield a, np.array(A[a:a + chunk], dtype=np.float64)
+    shape, dtype, fortran, offset = _npy(p)
+    if fortran:  # column-major: a memory map reads each chunk's columns
+        A = np.load(p, mmap_mode="r")
+        for a in range(0, shape[0], chunk):
+            yield a, np.array(A[a:a + chunk], dtype=np.float64)
+        return
+    # plain reads, not a memory map: mapped pages would stay resident (they count in
+    # the process's RSS until the kernel needs them), reads keep only the chunk
+    with open(p, "rb") as fh:
+        fh.seek(offset)
+        for a in range(0, shape[0], chunk):
+            m = min(chunk, shape[0] - a)
+            A = np.fromfile(fh, dtype=dtype, count=m * shape[1])
+            yield a, A.reshape(m, shape[1]).astype(np.float64, copy=False)
 
 
 # ------------------------------------------------------------------ public
@@ -196,7 +223,7 @@ def scan_length(path) -> int | None:
     p = _check_path(path)
     ext = p.suffix.lower()
     if ext == ".npy":
-        return int(_npy(p).shape[0])
+        return int(_npy(p)[0][0])
     if ext == ".ply":
         return int(_ply_vertices(p)[3])
     if ext in (".las", ".laz"):

@@ -45,6 +45,9 @@ def _cmd_demo(args) -> int:
 
 
 def _cmd_deviation(args) -> int:
+    from .scale import run_scaled, wants_scale  # issue 16: streamed / folder / Dask runs
+    if wants_scale(args):
+        return run_scaled(args)
     from ..deviation import deviation
     from ..report import (plot_deviation_map, plot_histogram, prepare_outputs,
                           write_deviation_csv, write_json)
