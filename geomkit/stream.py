@@ -21,7 +21,7 @@ import numpy as np
 from .deviation import _apply, _as_tolerance, _check_settings, _compensate, align_rigid
 from .dev_stats import DeviationStats
 from .errors import InvalidInputError, MissingDependencyError
-from .projection import STEP_TOL, _cached_projector
+from .projection import _cached_projector
 from .results import STATUS_NAMES
 from .scan_io import DEFAULT_CHUNK, iter_scan
 
@@ -48,9 +48,7 @@ def deviation_chunk(projector, P0, N, T, probe_radius, max_distance, offset):
     P = _apply(T, P0) if aligned else P0
     Nt = None if N is None else (N @ T[:3, :3].T if aligned else N)
     md = None if max_distance is None else max_distance + probe_radius
-    step_tol = STEP_TOL * projector.size
-    pr = projector._chunk(np.ascontiguousarray(P), math.inf if md is None else md,
-                          step_tol)
+    [pr] = projector.iter_project(P, md, chunk_size=max(1, P.shape[0]))
     dev, status, edge = _compensate(pr, Nt, probe_radius, max_distance)
     m = P0.shape[0]
     out = {"index": np.arange(offset, offset + m, dtype=np.int64)}

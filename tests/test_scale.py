@@ -262,6 +262,29 @@ def test_stream_csv_round_trips(torus_scan):
     assert np.array_equal(dev, rep.deviation, equal_nan=True)
 
 
+def test_csv_writer_without_pyarrow_same_values(torus_scan):
+    from geomkit.projection import Projector
+    from geomkit.stream import CSVWriter, deviation_chunk
+
+    d, P, N = torus_scan
+    cols = deviation_chunk(Projector(samples.load("torus")), P[:200], None, None, 0.0,
+                           1.0, 0)
+    texts = []
+    for arrow in (True, False):
+        buf = io.BytesIO()
+        w = CSVWriter(buf)
+        w.arrow = arrow
+        w.write(cols)
+        texts.append(buf.getvalue().decode().splitlines())
+    a, b = texts
+    assert a[0] == b[0] and len(a) == len(b) == 201
+    for ra, rb in zip(a[1:], b[1:]):
+        fa, fb = ra.split(","), rb.split(",")
+        assert fa[18:] == fb[18:]
+        assert [float(x) if x else None for x in fa[:18]] == \
+            [float(x) if x else None for x in fb[:18]]
+
+
 def test_stream_align_on_subsample(tmp_path):
     ff = samples.load("freeform_1")
     s = ff[0]
