@@ -4,6 +4,7 @@ lost or duplicated row.  Tiny inputs and the cheap sphere (each worker process l
 the numba cache once)."""
 
 import io
+import json
 import os
 import signal
 
@@ -72,14 +73,18 @@ def test_dask_worker_killed_mid_run(client, scan):
     assert got == ref                          # no row lost, none duplicated
     idx = [int(r.split(b",")[0]) for r in got.splitlines()[1:]]
     assert idx == list(range(3000))
-    client.wait_for_workers(2, timeout=60)     # the nanny restarted it
+    client.wait_for_workers(2, timeout=180)    # the nanny restarted it
     assert victim not in client.run(os.getpid).values()
 
 
-def test_cli_workers(tmp_path, scan):
+def test_cli_scheduler(client, tmp_path, scan):
+    # the CLI on the running cluster (--workers N builds the same Client through
+    # geomkit.distributed.make_client, as the fixture does)
     out = tmp_path / "rep"
-    r = cli("deviation", "sphere", scan, "-o", out, "--workers", "1", "--chunk-size",
-            "1000", "--tolerance", "0.04", "--probe-radius", "0.25", timeout=240)
+    r = cli("deviation", "sphere", scan, "-o", out, "--scheduler",
+            client.scheduler.address, "--chunk-size", "1000", "--tolerance", "0.04",
+            "--probe-radius", "0.25", timeout=240)
     assert r.returncode == 0, r.stderr
     ref, _ = _run(scan)                        # other chunk size, same rows
     assert (out / "deviation.csv").read_bytes() == ref
+    assert json.loads((out / "summary.json").read_text())["workers"] == 2
