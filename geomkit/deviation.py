@@ -250,6 +250,43 @@ def deviation(surfaces, points, normals=None, probe_radius: float = 0.0,
     """
     t0 = time.perf_counter()
     P0, N = as_points(points, normals)
+    probe_radius, max_distance = _check_settings(probe_radius, max_distance)
+    tol = _as_tolerance(tolerance)
+    md = None if max_distance is None else max_distance + probe_radius
+    align_info = None
+    T = np.eye(4)
+    if align:
+        align_info = align_rigid(surfaces, P0, N, probe_radius, md)
+        T = align_info["transform"]
+    P = _apply(T, P0) if align else P0
+    Nt = None if N is None else N @ T[:3, :3].T
+    pr = project_points(surfaces, P, md, progress=progress)
+    dev, status, edge = _compensate(pr, Nt, probe_radius, max_distance)
+    rep = DeviationReport(points=P0, aligned=P, foot=pr.point, uv=pr.uv, surface=pr.surface,
+                          normal=pr.normal, signed_distance=pr.signed_distance, deviation=dev,
+                          status=status, edge=edge, transform=T, tolerance=tol,
+                          probe_radius=probe_radius)
+    rep.stats = _statistics(rep, align_info, max_distance, time.perf_counter() - t0)
+    return rep
+
+
+def _compensate(pr, Nt, probe_radius, max_distance):
+    """Probe compensation and the max-distance cut of a projection: ``(deviation,
+    status, edge)``; shared by :func:`deviation` and the streamed job
+    (:mod:`geomkit.stream`), so both give the same values bit for bit."""
+    side = _side(Nt, np.nan_to_num(pr.normal))
+    dev = pr.signed_distance - side * probe_radius
+    status = pr.status.copy()
+    if max_distance is not None:
+        far = np.isfinite(dev) & (np.abs(dev) > max_distance)
+        status[far] = R.BEYOND
+        dev[far] = np.nan
+    dev[(status == R.BEYOND) | (status == R.FAILED)] = np.nan
+    edge = (status == R.DOMAIN_EDGE) | (status == R.TRIM_EDGE)
+    return dev, status, edge
+
+
+def _check_settings(probe_radius, max_distance):
     try:
         probe_radius = float(probe_radius)
     except (TypeError, ValueError):
@@ -261,60 +298,21 @@ def deviation(surfaces, points, normals=None, probe_radius: float = 0.0,
         max_distance = float(max_distance)
         if not (max_distance >= 0):
             raise InvalidInputError(f"must be >= 0, got {max_distance!r}", "max_distance")
-    tol = _as_tolerance(tolerance)
-    md = None if max_distance is None else max_distance + probe_radius
-    align_info = None
-    T = np.eye(4)
-    if align:
-        align_info = align_rigid(surfaces, P0, N, probe_radius, md)
-        T = align_info["transform"]
-    P = _apply(T, P0) if align else P0
-    Nt = None if N is None else N @ T[:3, :3].T
-    pr = project_points(surfaces, P, md, progress=progress)
-    side = _side(Nt, np.nan_to_num(pr.normal))
-    dev = pr.signed_distance - side * probe_radius
-    status = pr.status.copy()
-    if max_distance is not None:
-        far = np.isfinite(dev) & (np.abs(dev) > max_distance)
-        status[far] = R.BEYOND
-        dev[far] = np.nan
-    dev[(status == R.BEYOND) | (status == R.FAILED)] = np.nan
-    edge = (status == R.DOMAIN_EDGE) | (status == R.TRIM_EDGE)
-    rep = DeviationReport(points=P0, aligned=P, foot=pr.point, uv=pr.uv, surface=pr.surface,
-                          normal=pr.normal, signed_distance=pr.signed_distance, deviation=dev,
-                          status=status, edge=edge, transform=T, tolerance=tol,
-                          probe_radius=probe_radius)
-    rep.stats = _statistics(rep, align_info, max_distance, time.perf_counter() - t0)
-    return rep
+    return probe_radius, max_distance
 
 
 def _statistics(rep: DeviationReport, align_info, max_distance, seconds) -> dict:
-    d = rep.deviation
-    ok = np.isfinite(d)
-    v = d[ok]
-    n_ok = int(v.size)
-    st = {"points": len(rep), "valid": n_ok,
-          "edge": int(np.count_nonzero(rep.edge)),
-          "beyond": int(np.count_nonzero(rep.status == R.BEYOND)),
-          "failed": int(np.count_nonzero(rep.status == R.FAILED)),
-          "probe_radius": rep.probe_radius, "max_distance": max_distance,
-          "tolerance": list(rep.tolerance) if rep.tolerance else None}
-    if n_ok:
-        st.update(min=float(v.min()), max=float(v.max()), mean=float(v.mean()),
-                  rms=float(np.sqrt(np.mean(v * v))), std=float(v.std()),
-                  max_abs=float(np.abs(v).max()),
-                  argmax_abs=int(np.nonzero(ok)[0][np.argmax(np.abs(v))]))
-    else:
-        st.update(min=float("nan"), max=float("nan"), mean=float("nan"), rms=float("nan"),
-                  std=float("nan"), max_abs=float("nan"), argmax_abs=-1)
-    if rep.tolerance:
-        lo, hi = rep.tolerance
-        n_in = int(np.count_nonzero((v >= lo) & (v <= hi)))
-        n_over = int(np.count_nonzero(v > hi))
-        n_under = int(np.count_nonzero(v < lo))
-        pct = (lambda k: 100.0 * k / n_ok) if n_ok else (lambda k: float("nan"))
-        st.update(within=n_in, over=n_over, under=n_under, pct_within=pct(n_in),
-                  pct_over=pct(n_over), pct_under=pct(n_under))
+    from .dev_stats import DeviationStats
+
+    acc = DeviationStats(rep.tolerance)
+    acc.update(rep.deviation, rep.status, rep.edge)
+    st = acc.result()
+    st.update(probe_radius=rep.probe_radius, max_distance=max_distance,
+              tolerance=list(rep.tolerance) if rep.tolerance else None)
+    return _alignment_info(st, align_info, seconds)
+
+
+def _alignment_info(st, align_info, seconds) -> dict:
     st["alignment"] = None
     if align_info is not None:
         st["alignment"] = {"transform": np.asarray(align_info["transform"]).tolist(),

@@ -105,6 +105,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
                    help="tolerance band: T (meaning -T..T) or LOWER UPPER")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
+    from .scale import add_deviation_options  # issue 16: streamed / folder / Dask runs
+    add_deviation_options(p)
     p.set_defaults(func=_cmd_deviation)
     p = sub.add_parser("distance", parents=[common],
                        help="exact distances of points to surfaces",

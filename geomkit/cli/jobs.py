@@ -89,6 +89,9 @@ _DEMO_LINES = {"deviation": _demo_deviation, "alignment": _demo_alignment,
 
 
 def _cmd_deviation(args) -> int:
+    from .scale import run_scaled, wants_scale  # issue 16: streamed / folder / Dask runs
+    if wants_scale(args):
+        return run_scaled(args)
     from ..deviation import deviation
     from ..report import (plot_deviation_map, plot_histogram, write_deviation_csv,
                           write_json)
