@@ -76,3 +76,21 @@ def test_whole_model_summary_says_complete(tmp_path, capsys):
     assert "PARTIAL" not in capsys.readouterr().out
     doc = json.loads((out / "summary.json").read_text())
     assert doc["model"] == {"faces": 1, "faces_left_out": 0, "complete": True}
+
+
+def test_streamed_deviation_carries_units_and_the_partial_model(tmp_path, capsys, partial,
+                                                                monkeypatch):
+    import numpy as np
+
+    from geomkit.cli import scale
+
+    monkeypatch.setattr(scale, "_load_input", jobs._load_input)
+    pts = tmp_path / "p.npy"
+    np.save(pts, np.array([[0, 0, 10.5], [0, 10.2, 0]]))
+    out = tmp_path / "st"
+    rc = main(["deviation", "sphere", str(pts), "-o", str(out), "--units", "mm"])
+    stdout, err = capsys.readouterr()
+    assert rc == 0, err
+    assert stdout.startswith("PARTIAL MODEL: 2 of 3 faces left out")
+    doc = json.loads((out / "summary.json").read_text())
+    assert doc["units"] == "mm" and doc["model"]["faces_left_out"] == 2

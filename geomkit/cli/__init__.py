@@ -35,9 +35,11 @@ EXAMPLES = """examples:
                                             triangulate within 0.01 (STL/PLY/OBJ)
   geomkit samples                           list the bundled sample cases
 
-Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges: entities 128 and 144),
-STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name.  Points: CSV/XYZ
-(x y z [i j k]) or STL/PLY scans.  Units: the model's own (IGES/STEP/JSON state
+Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges; see docs/guide_cad.md for
+the entities read), STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name;
+faces that cannot be read are an error unless --skip-unsupported.  Points: CSV/XYZ
+(x y z [i j k], named headers, decimal commas), PLY, STL, NPY, LAS/LAZ, or a folder
+of scans (streamed; --workers N on Dask).  Units: the model's own (IGES/STEP/JSON state
 them; --units overrides), written in every report.  Errors: one line on stderr,
 exit code 2.
 `geomkit COMMAND --help` shows each command's options and an example.
@@ -93,7 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog="example:\n  geomkit deviation part.igs cmm.csv "
                               "--probe-radius 1.5 --tolerance -0.05 0.05 --align -o rep")
     p.add_argument("nominal", help="nominal surfaces: JSON, IGES, STEP or a sample name")
-    p.add_argument("points", help="measured points: CSV/XYZ (x y z [i j k]) or STL/PLY")
+    p.add_argument("points", help="measured points: CSV/XYZ (x y z [i j k], named "
+                                  "headers), PLY, STL, NPY, LAS/LAZ, or a folder of scans")
     p.add_argument("-o", "--output", default=None,
                    help="report folder (default ./<points name>-deviation)")
     p.add_argument("--probe-radius", type=_positive_or_zero, default=0.0,

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InvalidInputError
-from ._common import _load_input, _progress, _tolerance
+from ._common import _load_input, _model_info, _progress, _tolerance, _unit
 
 STREAM_BYTES = 64 << 20
 """Point files larger than this are streamed (no plots) without being asked."""
@@ -73,14 +73,18 @@ def run_scaled(args) -> int:
     if not pts.exists():
         raise InvalidInputError(f"{pts}: no such file or folder", "points")
     out = Path(args.output or f"{pts.stem}-deviation")
-    case = _load_input(args.nominal, args.skip_invalid)
+    case = _load_input(args.nominal, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
+    model, note = _model_info(case)
+    u = _unit(case.units)
     client = cluster = None
     if args.workers is not None or args.scheduler:
         from ..distributed import make_client
         client, cluster = make_client(args.workers, args.scheduler)
     existed = out.exists()
     kw = dict(fmt=fmt, overwrite=args.overwrite, inputs=[args.nominal],
-              extra={"nominal": args.nominal, "surfaces": len(case.surfaces)},
+              extra={"nominal": args.nominal, "surfaces": len(case.surfaces),
+                     "units": u, "model": model},
               probe_radius=args.probe_radius, align=args.align,
               max_distance=args.max_distance, tolerance=tol, chunk_size=chunk,
               client=client)
@@ -104,6 +108,8 @@ def run_scaled(args) -> int:
         from ..report import _clean
         print(json.dumps(_clean(s), indent=1))
         return 0
+    if note:
+        print(note)
     if pts.is_dir():
         print(f"{len(s['parts'])} parts: {s['passed']} pass, {s['failed']} fail, "
               f"{s['errors']} with errors; table {out / 'parts.csv'}")
@@ -115,9 +121,9 @@ def run_scaled(args) -> int:
           f"{s['beyond']} beyond max distance), {s['chunks']} chunks, "
           f"{s['seconds']:.1f} s")
     print(f"deviation: min {s['min']:.6g}  max {s['max']:.6g}  mean {s['mean']:.6g}  "
-          f"rms {s['rms']:.6g}  std {s['std']:.6g}")
+          f"rms {s['rms']:.6g}  std {s['std']:.6g} {u}")
     if tol:
-        print(f"tolerance [{tol[0]:g}, {tol[1]:g}]: in {s['pct_within']:.2f}%  "
+        print(f"tolerance [{tol[0]:g}, {tol[1]:g}] {u}: in {s['pct_within']:.2f}%  "
               f"over {s['pct_over']:.2f}%  under {s['pct_under']:.2f}%")
     print(f"reports: {out}/ ({', '.join(Path(f).name for f in s['files'])})")
     return 0
