@@ -168,6 +168,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--skip-invalid", action="store_true",
                    help="IGES/STEP: skip faces that fail validation (counted) "
                         "instead of stopping")
+    p.add_argument("--skip-unsupported", action="store_true",
+                   help="IGES/STEP: leave out faces geomkit cannot convert (listed) "
+                        "instead of stopping")
     p.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
                    help=UNITS_HELP)
     p.set_defaults(func=_cmd_mesh)

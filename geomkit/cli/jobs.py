@@ -344,7 +344,9 @@ def _cmd_mesh(args) -> int:
     max_angle = math.radians(args.max_angle) if args.max_angle is not None else None
     mesh = tessellate(case.surfaces, args.tol, max_angle=max_angle, max_edge=args.max_edge)
     mesh.export(out, overwrite=args.overwrite)
+    model, note = _model_info(case)
     info = {"input": args.input, "output": str(out), "surfaces": len(case.surfaces),
+            "model": model,
             "vertices": int(mesh.vertices.shape[0]), "faces": int(mesh.faces.shape[0]),
             "units": _unit(case.units), "tol": args.tol,
             "max_deviation": mesh.max_deviation, "area": mesh.area,
@@ -356,6 +358,8 @@ def _cmd_mesh(args) -> int:
               f"{info['surfaces']} surface(s); measured max deviation "
               f"{info['max_deviation']:.3g} <= tol {args.tol:g} {info['units']}; "
               f"{info['seconds']:.2f} s")
+        if note:
+            print(note)
     return 0
 
 
