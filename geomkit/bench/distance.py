@@ -104,7 +104,8 @@ def continuum_cases():
     (r 10) centred on the torus's axis in its hole (R 20, r 5: every point of the
     circle of radius 15 is a minimum, 5); coaxial quarter cylinders r 10 and 15 (5);
     concentric spheres r 10 and 20 (10); the plate with a hole and its copy 3 above
-    (parallel trimmed planes, 3)."""
+    (parallel trimmed planes, 3); the sphere on the torus's axis 3 above its plane
+    (a circle of minima, sqrt(409) - 15, where no sphere / axis separator is exact)."""
     sph = samples.load("sphere")[0]
     tor = samples.load("torus")[0]
     cyl = samples.load("cylinder_quarter")[0]
@@ -112,7 +113,9 @@ def continuum_cases():
     return [("torus_sphere_axis", sph, tor, 5.0),
             ("coaxial_cylinders", cyl, _scaled(cyl, 1.5, 1.5, 1.0), 5.0),
             ("concentric_spheres", sph, _scaled(sph, 2.0, 2.0, 2.0), 10.0),
-            ("parallel_trimmed_planes", plate, _moved(plate, (0.0, 0.0, 3.0)), 3.0)]
+            ("parallel_trimmed_planes", plate, _moved(plate, (0.0, 0.0, 3.0)), 3.0),
+            ("torus_sphere_axis_offset", _moved(sph, (0.0, 0.0, 3.0)), tor,
+             math.sqrt(409.0) - 15.0)]
 
 
 cases_ = cases
