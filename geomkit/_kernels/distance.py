@@ -44,8 +44,8 @@ from .distance_nodes import (  # noqa: F401  (layout re-exported for geomkit.dis
     _grow1, _grow2, _max_loops, _node_box, _patch_eval, _split_dir, _split_into, _uv_inside,
     init_nodes, pair_lower_bound)
 from .distance_newton import alternate_feet, newton4
-from .distance_sep import (NSEP, SEP_W, curvature_separators, sep_bounds, sep_lower_bound,
-                           sphere_fit_separator)
+from .distance_sep import (NSEP, SEP_W, curvature_separators, keep_level_separators,
+                           sep_bounds, sep_lower_bound, sphere_fit_separator)
 
 # stop codes
 STOP_CERTIFIED = 0
@@ -148,8 +148,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     # curved separators (points / lines) from the principal curvatures at the feet
     sep = np.zeros((NSEP, SEP_W))
     nsep = 0
+    extent = 0.0
     if best_a >= 0:
-        extent = 0.0
         for k in range(n_nodes):
             extent = max(extent, nf[k, F_SIZE])
         nsep = sphere_fit_separator(ctrl, ni[best_a, I_OFF], ni[best_a, I_P],
@@ -158,8 +158,12 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                                     ni[best_b, I_Q], bin_, sep, nsep, extent)
         nsep = curvature_separators(SA, sep, nsep, extent)
         nsep = curvature_separators(SB, sep, nsep, extent)
-    ph = np.zeros((ni.shape[0], 2 * NSEP))
+    ph = np.zeros((max(2, ni.shape[0]), 2 * NSEP))
     Zs = np.empty(((maxdeg + 1) * (maxdeg + 1), 4))
+    if nsep > 0:
+        nsep = keep_level_separators(ctrl, ni[best_a, I_OFF], ni[best_a, I_P],
+                                     ni[best_a, I_Q], ni[best_b, I_OFF], ni[best_b, I_P],
+                                     ni[best_b, I_Q], sep, nsep, bin_, Zs, ph, extent)
     if nsep > 0:
         for k in range(n_nodes):
             sep_bounds(ctrl, ni[k, I_OFF], ni[k, I_P], ni[k, I_Q], sep, nsep, bin_, Zs, ph, k)

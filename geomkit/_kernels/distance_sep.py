@@ -24,7 +24,9 @@ plane separator can never be along a curved continuum of minima.
 The separators are chosen from the feet of the first Newton run: at each foot the two
 centres of principal curvature (points) and the lines through them along the other
 principal direction (the axis of a cylinder, of a surface of revolution at its
-equator).  Rounding: each ratio is widened by ``(8 n + 64) eps S^2`` (``n`` control
+equator), and the centre of a sphere fitted exactly to a root patch of the best pair;
+only those on a level set of which one of the two best root patches lies are kept
+(so freeform pairs pay nothing).  Rounding: each ratio is widened by ``(8 n + 64) eps S^2`` (``n`` control
 points, ``S`` = largest ``|X / w| + |c|``), a bound on the error of the sums, and the
 square roots are widened by a further 4 ulps.
 """
@@ -288,6 +290,25 @@ def sep_bounds(ctrl, off, p, q, sep, nsep, bin_, Z, ph, k):
         if not (np.isfinite(rlo) and np.isfinite(rhi)):
             ph[k, 2 * s] = 0.0
             ph[k, 2 * s + 1] = np.inf
+
+
+@jit
+def keep_level_separators(ctrl, offa, pa, qa, offb, pb, qb, sep, nsep, bin_, Z, ph, extent):
+    """Keep only the separators on a level set of which one of the two patches lies
+    (distance range narrower than ``1e-7 * extent``): elsewhere a separator cannot beat
+    the plane bounds by much along a continuum, and it costs time on every node.
+    Uses rows 0 and 1 of ``ph`` as scratch; returns the new count."""
+    sep_bounds(ctrl, offa, pa, qa, sep, nsep, bin_, Z, ph, 0)
+    sep_bounds(ctrl, offb, pb, qb, sep, nsep, bin_, Z, ph, 1)
+    m = 0
+    for s in range(nsep):
+        wa = ph[0, 2 * s + 1] - ph[0, 2 * s]
+        wb = ph[1, 2 * s + 1] - ph[1, 2 * s]
+        if min(wa, wb) <= 1e-7 * extent:
+            for c in range(sep.shape[1]):
+                sep[m, c] = sep[s, c]
+            m += 1
+    return m
 
 
 @jit
