@@ -36,60 +36,35 @@ def test_continuum_interval_contains_truth(name):
 
 
 CERTIFIED = ("torus_sphere_axis", "coaxial_cylinders", "concentric_spheres",
-             "parallel_trimmed_planes")
+             "parallel_trimmed_planes", "torus_sphere_axis_offset")
 
 
 @pytest.mark.parametrize("name", CERTIFIED)
 @pytest.mark.parametrize("tol", [1e-6, 1e-9])
 def test_continuum_certified(name, tol):
-    """The curved separators (sphere centre, axis line) are exact on these surfaces:
-    certified at the root or after a few splits, with a small work cap."""
+    """The curved separators (sphere centre, axis line) are exact on these surfaces, or
+    exact along the circle of minima once the torus is split across its tube only:
+    certified with a small work cap."""
     a, b, truth = CASES[name]
     for x, y in ((a, b), (b, a)):                             # both orders
-        r = surface_distance(x, y, tol=tol, max_pairs=200)
+        r = surface_distance(x, y, tol=tol, max_pairs=2000)
         assert r.certified and r.upper - r.lower <= tol, (r.lower, r.upper, r.stats)
         assert r.lower <= truth <= r.upper                    # zero slack
         assert abs(r.distance - truth) <= tol
-        assert r.stats["pairs_examined"] <= 50
+        assert r.stats["pairs_examined"] <= (50 if name != "torus_sphere_axis_offset"
+                                             else 1000)
 
 
-def test_off_plane_circle_of_minima_stays_honest():
-    """Sphere on the torus axis but 3 above its plane: no exact separator, so the
-    search runs out of budget and says so; the interval still holds the truth."""
+@pytest.mark.parametrize("max_pairs", [1, 30, 100])
+def test_budget_out_stays_honest(max_pairs):
+    """Sphere on the torus axis 3 above its plane (a circle of minima that needs
+    splits across the tube): when the budget runs out the answer says so, and the
+    interval still holds the truth."""
     a, b, truth = CASES["torus_sphere_axis_offset"]
-    r = surface_distance(a, b, tol=1e-9, max_pairs=2000)
+    r = surface_distance(a, b, tol=1e-9, max_pairs=max_pairs)
     assert not r.certified and r.stats["stop"] == "max_pairs"
     assert r.lower <= truth <= r.upper
     assert r.upper - truth <= 1e-12 + 1e-9                   # the upper side is sharp
-
-
-class _Approx(Surface):
-    """A Surface carrying ``approx_error`` whether or not geomkit.types.Surface has the
-    attribute itself."""
-
-
-def _with_error(s, e):
-    x = _Approx(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points, s.weights)
-    object.__setattr__(x, "approx_error", e)
-    assert getattr(x, "approx_error", 0.0) == e
-    return x
-
-
-def test_approx_error_widens_the_interval():
-    a, b = samples.load("sphere_pair")
-    exact = surface_distance(a, b, tol=1e-9)
-    assert exact.certified
-    e_a, e_b = 1e-3, 2.5e-3
-    r = surface_distance([_with_error(a, e_a)], _with_error(b, e_b), tol=1e-9)
-    assert r.distance == exact.distance                     # the faces given
-    assert r.lower == pytest.approx(exact.lower - (e_a + e_b), abs=1e-15)
-    assert r.upper == pytest.approx(exact.upper + (e_a + e_b), abs=1e-15)
-    assert not r.certified                                  # wider than tol now
-    # a true face anywhere within the errors stays inside the interval: 5 -/+ 3.5e-3
-    assert r.lower <= 5.0 - 3.5e-3 + 1e-12 and r.upper >= 5.0 + 3.5e-3 - 1e-12
-    # the widening is at most what the faces declare: with a loose tol it certifies
-    r2 = surface_distance(_with_error(a, e_a), b, tol=1e-2)
-    assert r2.certified and r2.upper - r2.lower <= 1e-2
 
 
 @pytest.mark.parametrize("d", [1e-12, 1e-10, 1e-7, 0.3, 3.0])

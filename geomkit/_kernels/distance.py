@@ -158,15 +158,18 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                                     ni[best_b, I_Q], bin_, sep, nsep, extent)
         nsep = curvature_separators(SA, sep, nsep, extent)
         nsep = curvature_separators(SB, sep, nsep, extent)
-    ph = np.zeros((max(2, ni.shape[0]), 2 * NSEP))
+    ph = np.zeros((max(2, ni.shape[0]), 2 * NSEP + 1))
     Zs = np.empty(((maxdeg + 1) * (maxdeg + 1), 4))
+    Rs = np.empty((2 * maxdeg + 1, 2 * maxdeg + 1))
     if nsep > 0:
         nsep = keep_level_separators(ctrl, ni[best_a, I_OFF], ni[best_a, I_P],
                                      ni[best_a, I_Q], ni[best_b, I_OFF], ni[best_b, I_P],
-                                     ni[best_b, I_Q], sep, nsep, bin_, Zs, ph, extent)
+                                     ni[best_b, I_Q], sep, nsep, bin_, Zs, Rs, ph,
+                                     extent)
     if nsep > 0:
         for k in range(n_nodes):
-            sep_bounds(ctrl, ni[k, I_OFF], ni[k, I_P], ni[k, I_Q], sep, nsep, bin_, Zs, ph, k)
+            sep_bounds(ctrl, ni[k, I_OFF], ni[k, I_P], ni[k, I_Q], sep, nsep, bin_, Zs, Rs,
+                       ph, k)
     for ia in range(nodes_a.shape[0]):
         a = nodes_a[ia]
         for ib in range(nodes_b.shape[0]):
@@ -283,6 +286,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
             if ctrl_top + 2 * m > ctrl.shape[0]:
                 ctrl = _grow1(ctrl, ctrl_top + 2 * m)
             dirn = _split_dir(ctrl, ni[k, I_OFF], p, q)
+            if nsep > 0 and ph[k, 2 * NSEP] >= 0.0:
+                dirn = np.int64(ph[k, 2 * NSEP])  # the separators ask for this one
             _split_into(ctrl, ni[k, I_OFF], p, q, dirn, ctrl_top, ctrl_top + m)
             s = ni[k, I_SURF]
             for h in range(2):
@@ -333,7 +338,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                                     stack, depths, tleft, tright)
                 ni[c, I_REPOK] = 1 if ok else 0
                 if nsep > 0:
-                    sep_bounds(ctrl, ni[c, I_OFF], p, q, sep, nsep, bin_, Zs, ph, c)
+                    sep_bounds(ctrl, ni[c, I_OFF], p, q, sep, nsep, bin_, Zs, Rs, ph, c)
             ni[k, I_C0] = kids[0]
             ni[k, I_C1] = kids[1]
             ni[k, I_DIR] = dirn

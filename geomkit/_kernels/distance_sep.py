@@ -231,11 +231,16 @@ def sphere_fit_separator(ctrl, off, p, q, bin_, sep, nsep, extent):
 
 
 @jit
-def sep_bounds(ctrl, off, p, q, sep, nsep, bin_, Z, ph, k):
+def sep_bounds(ctrl, off, p, q, sep, nsep, bin_, Z, R, ph, k):
     """``ph[k, 2 j : 2 j + 2]`` = certified [min, max] of the distance to separator
     ``j`` over the patch at ``off`` (degrees p, q).  ``Z`` scratch of >= (p+1)(q+1)
-    rows x 4, ``bin_`` a binomial table to at least max(p, q)."""
+    rows x 4, ``R`` of >= (2p+1, 2q+1), ``bin_`` a binomial table to at least
+    max(p, q).  ``ph[k, 2 NSEP]`` = the split direction the separators ask for: 1 (v)
+    when some separator's coefficient ratios are constant along u (the patch spins
+    about the separator: splitting in u cannot tighten it), 0 (u) symmetrically,
+    -1 otherwise."""
     n = (p + 1) * (q + 1)
+    ph[k, 2 * NSEP] = -1.0
     for s in range(nsep):
         kind = sep[s, 0]
         c0 = sep[s, 1]
@@ -281,9 +286,31 @@ def sep_bounds(ctrl, off, p, q, sep, nsep, bin_, Z, ph, k):
                                        + Z[r1, 2] * Z[r2, 2])
                         den += beta * (Z[r1, 3] * Z[r2, 3])
                 r = num / den
+                R[kk, ll] = r
                 rlo = min(rlo, r)
                 rhi = max(rhi, r)
         err = (8.0 * n + 64.0) * EPS * S * S
+        if ph[k, 2 * NSEP] < 0.0:
+            su = 0.0
+            for ll in range(2 * q + 1):
+                a0 = np.inf
+                a1 = -np.inf
+                for kk in range(2 * p + 1):
+                    a0 = min(a0, R[kk, ll])
+                    a1 = max(a1, R[kk, ll])
+                su = max(su, a1 - a0)
+            sv = 0.0
+            for kk in range(2 * p + 1):
+                a0 = np.inf
+                a1 = -np.inf
+                for ll in range(2 * q + 1):
+                    a0 = min(a0, R[kk, ll])
+                    a1 = max(a1, R[kk, ll])
+                sv = max(sv, a1 - a0)
+            if su <= 1e-6 * sv and sv > 1e3 * err:
+                ph[k, 2 * NSEP] = 1.0
+            elif sv <= 1e-6 * su and su > 1e3 * err:
+                ph[k, 2 * NSEP] = 0.0
         lo = rlo - err
         ph[k, 2 * s] = math.sqrt(lo) * (1.0 - 4.0 * EPS) if lo > 0.0 else 0.0
         ph[k, 2 * s + 1] = math.sqrt(max(0.0, rhi + err)) * (1.0 + 4.0 * EPS)
@@ -293,13 +320,14 @@ def sep_bounds(ctrl, off, p, q, sep, nsep, bin_, Z, ph, k):
 
 
 @jit
-def keep_level_separators(ctrl, offa, pa, qa, offb, pb, qb, sep, nsep, bin_, Z, ph, extent):
+def keep_level_separators(ctrl, offa, pa, qa, offb, pb, qb, sep, nsep, bin_, Z, R, ph,
+                          extent):
     """Keep only the separators on a level set of which one of the two patches lies
     (distance range narrower than ``1e-7 * extent``): elsewhere a separator cannot beat
     the plane bounds by much along a continuum, and it costs time on every node.
     Uses rows 0 and 1 of ``ph`` as scratch; returns the new count."""
-    sep_bounds(ctrl, offa, pa, qa, sep, nsep, bin_, Z, ph, 0)
-    sep_bounds(ctrl, offb, pb, qb, sep, nsep, bin_, Z, ph, 1)
+    sep_bounds(ctrl, offa, pa, qa, sep, nsep, bin_, Z, R, ph, 0)
+    sep_bounds(ctrl, offb, pb, qb, sep, nsep, bin_, Z, R, ph, 1)
     m = 0
     for s in range(nsep):
         wa = ph[0, 2 * s + 1] - ph[0, 2 * s]
