@@ -21,7 +21,9 @@ its Cartesian control points, so for any unit direction d
 
 and also >= the gap between the control points' axis boxes.  The lower bound of a
 pair is the largest of these (d along the box centres and along the two
-representative surface points).  Upper bounds are distances between real surface
+representative surface points), and the curved separators of
+:mod:`geomkit._kernels.distance_sep` (distance to a point / line: ``|x - y| >=
+phi(y) - phi(x)``) when the first Newton feet suggest one.  Upper bounds are distances between real surface
 points (patch centres by de Casteljau, then Newton) that lie inside their trimmed
 faces.  A pair whose lower bound is >= upper - tol cannot improve the answer by more
 than tol and is discarded; the search stops when the smallest open lower bound is
