@@ -11,7 +11,11 @@ certificate Paper 1 does not give):
    of a pair is the separation of the two control nets (axis-box gap, and the slab
    gap along the box-centre and representative-point directions) — a proven bound,
    since with positive weights each patch lies in the convex hull of its control
-   points; the upper bound is the distance of real face points (patch centres by de
+   points — and the gap of curved 1-Lipschitz separators (distance to a sphere centre
+   or an axis found at the first Newton feet, bounded over each patch by Bernstein
+   coefficient ratios; exact on spheres / cylinders about them, which certifies
+   continua of minima such as concentric spheres at the root,
+   :mod:`geomkit._kernels.distance_sep`); the upper bound is the distance of real face points (patch centres by de
    Casteljau, inside the trimmed face);
 3. whenever a pair's centres improve the upper bound, a 4-unknown Newton on
    |S_a(u, v) - S_b(s, t)|^2 (exact Hessian, Levenberg damping, active set on the

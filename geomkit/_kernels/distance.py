@@ -21,7 +21,9 @@ its Cartesian control points, so for any unit direction d
 
 and also >= the gap between the control points' axis boxes.  The lower bound of a
 pair is the largest of these (d along the box centres and along the two
-representative surface points).  Upper bounds are distances between real surface
+representative surface points), and the curved separators of
+:mod:`geomkit._kernels.distance_sep` (distance to a point / line: ``|x - y| >=
+phi(y) - phi(x)``) when the first Newton feet suggest one.  Upper bounds are distances between real surface
 points (patch centres by de Casteljau, then Newton) that lie inside their trimmed
 faces.  A pair whose lower bound is >= upper - tol cannot improve the answer by more
 than tol and is discarded; the search stops when the smallest open lower bound is
@@ -44,6 +46,8 @@ from .distance_nodes import (  # noqa: F401  (layout re-exported for geomkit.dis
     _grow1, _grow2, _max_loops, _node_box, _patch_eval, _split_dir, _split_into, _uv_inside,
     init_nodes, pair_lower_bound)
 from .distance_newton import alternate_feet, newton4
+from .distance_sep import (NSEP, SEP_W, curvature_separators, keep_level_separators,
+                           sep_bounds, sep_lower_bound, sphere_fit_separator)
 
 # stop codes
 STOP_CERTIFIED = 0
@@ -143,11 +147,36 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 bx[5 + c] = SB[0, 0, c]
             for c in range(4):
                 bx[8 + c] = x4[c]
+    # curved separators (points / lines) from the principal curvatures at the feet
+    sep = np.zeros((NSEP, SEP_W))
+    nsep = 0
+    extent = 0.0
+    if best_a >= 0:
+        for k in range(n_nodes):
+            extent = max(extent, nf[k, F_SIZE])
+        nsep = sphere_fit_separator(ctrl, ni[best_a, I_OFF], ni[best_a, I_P],
+                                    ni[best_a, I_Q], bin_, sep, nsep, extent)
+        nsep = sphere_fit_separator(ctrl, ni[best_b, I_OFF], ni[best_b, I_P],
+                                    ni[best_b, I_Q], bin_, sep, nsep, extent)
+        nsep = curvature_separators(SA, sep, nsep, extent)
+        nsep = curvature_separators(SB, sep, nsep, extent)
+    ph = np.zeros((max(2, ni.shape[0]), 2 * NSEP + 1))
+    Zs = np.empty(((maxdeg + 1) * (maxdeg + 1), 4))
+    Rs = np.empty((2 * maxdeg + 1, 2 * maxdeg + 1))
+    if nsep > 0:
+        nsep = keep_level_separators(ctrl, ni[best_a, I_OFF], ni[best_a, I_P],
+                                     ni[best_a, I_Q], ni[best_b, I_OFF], ni[best_b, I_P],
+                                     ni[best_b, I_Q], sep, nsep, bin_, Zs, Rs, ph,
+                                     extent)
+    if nsep > 0:
+        for k in range(n_nodes):
+            sep_bounds(ctrl, ni[k, I_OFF], ni[k, I_P], ni[k, I_Q], sep, nsep, bin_, Zs, Rs,
+                       ph, k)
     for ia in range(nodes_a.shape[0]):
         a = nodes_a[ia]
         for ib in range(nodes_b.shape[0]):
             b = nodes_b[ib]
-            lb = pair_lower_bound(ctrl, ni, nf, a, b)
+            lb = max(pair_lower_bound(ctrl, ni, nf, a, b), sep_lower_bound(ph, nsep, a, b))
             if lb >= upper - tol:
                 pruned += 1
                 pruned_min = min(pruned_min, lb)
@@ -252,12 +281,15 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
             if need > ni.shape[0]:
                 ni = _grow2(ni, need)
                 nf = _grow2(nf, need)
+                ph = _grow2(ph, ni.shape[0])
             p = ni[k, I_P]
             q = ni[k, I_Q]
             m = (p + 1) * (q + 1) * 4
             if ctrl_top + 2 * m > ctrl.shape[0]:
                 ctrl = _grow1(ctrl, ctrl_top + 2 * m)
             dirn = _split_dir(ctrl, ni[k, I_OFF], p, q)
+            if nsep > 0 and ph[k, 2 * NSEP] >= 0.0:
+                dirn = np.int64(ph[k, 2 * NSEP])  # the separators ask for this one
             _split_into(ctrl, ni[k, I_OFF], p, q, dirn, ctrl_top, ctrl_top + m)
             s = ni[k, I_SURF]
             for h in range(2):
@@ -307,6 +339,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                                     nf[c, F_REPUV], nf[c, F_REPUV + 1], uv_tol, winding,
                                     stack, depths, tleft, tright)
                 ni[c, I_REPOK] = 1 if ok else 0
+                if nsep > 0:
+                    sep_bounds(ctrl, ni[c, I_OFF], p, q, sep, nsep, bin_, Zs, Rs, ph, c)
             ni[k, I_C0] = kids[0]
             ni[k, I_C1] = kids[1]
             ni[k, I_DIR] = dirn
@@ -319,7 +353,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 continue
             ca = c if k == a else other
             cb = other if k == a else c
-            lb2 = pair_lower_bound(ctrl, ni, nf, ca, cb)
+            lb2 = max(pair_lower_bound(ctrl, ni, nf, ca, cb),
+                      sep_lower_bound(ph, nsep, ca, cb))
             if lb2 < lb:
                 lb2 = lb  # the parent's bound holds for the child too
             if lb2 >= upper - tol:

@@ -11,7 +11,9 @@
    bound creates against the triangles / memory of :func:`geomkit.tessellate` at the
    same accuracy (the mesh route of Paper 1).
 
-Usage: ``python -m geomkit.bench.distance [--repeat 5]``
+4. ``--continuum``: only the continuum-minimum cases (issue 15) against OCC.
+
+Usage: ``python -m geomkit.bench.distance [--repeat 5] [--continuum]``
 """
 
 from __future__ import annotations
@@ -104,7 +106,8 @@ def continuum_cases():
     (r 10) centred on the torus's axis in its hole (R 20, r 5: every point of the
     circle of radius 15 is a minimum, 5); coaxial quarter cylinders r 10 and 15 (5);
     concentric spheres r 10 and 20 (10); the plate with a hole and its copy 3 above
-    (parallel trimmed planes, 3)."""
+    (parallel trimmed planes, 3); the sphere on the torus's axis 3 above its plane
+    (a circle of minima, sqrt(409) - 15, where no sphere / axis separator is exact)."""
     sph = samples.load("sphere")[0]
     tor = samples.load("torus")[0]
     cyl = samples.load("cylinder_quarter")[0]
@@ -112,7 +115,9 @@ def continuum_cases():
     return [("torus_sphere_axis", sph, tor, 5.0),
             ("coaxial_cylinders", cyl, _scaled(cyl, 1.5, 1.5, 1.0), 5.0),
             ("concentric_spheres", sph, _scaled(sph, 2.0, 2.0, 2.0), 10.0),
-            ("parallel_trimmed_planes", plate, _moved(plate, (0.0, 0.0, 3.0)), 3.0)]
+            ("parallel_trimmed_planes", plate, _moved(plate, (0.0, 0.0, 3.0)), 3.0),
+            ("torus_sphere_axis_offset", _moved(sph, (0.0, 0.0, 3.0)), tor,
+             math.sqrt(409.0) - 15.0)]
 
 
 cases_ = cases
@@ -178,10 +183,46 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=3):
     return rows
 
 
+def continuum_table(repeat=5, tol=1e-9):
+    """Continuum-minimum cases only (issue 15): median time of ``surface_distance``
+    (after warm-up) and of OCC ``DistShapeShape`` on the same faces in this run, the
+    interval width and whether it certified; prints a markdown table."""
+    from ._common import occ_or_none
+
+    occ = occ_or_none()
+    a, b = samples.load("sphere_pair")
+    surface_distance(a, b)                                    # JIT warm-up
+    print(f"| case | truth | geomkit ms | width | certified | pairs | OCC ms | OCC error "
+          f"| OCC / geomkit |   (tol {tol:g}, median of {repeat})")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, sa, sb, truth in continuum_cases():
+        surface_distance(sa, sb, tol=tol)
+        r, t = _time(lambda: surface_distance(sa, sb, tol=tol), repeat)
+        assert r.lower <= truth <= r.upper, (name, r.lower, r.upper, truth)
+        tocc = eocc = ratio = "n/a"
+        if occ is not None:
+            fa, fb = _face(occ, sa), _face(occ, sb)
+            ts = []
+            for _ in range(repeat):
+                d_occ, _, _, sec = occ.distance_shapes(fa, fb, deflection=tol)
+                ts.append(sec)
+            t_occ = float(np.median(ts))
+            tocc, eocc, ratio = (f"{1e3 * t_occ:.3g}", f"{abs(d_occ - truth):.1g}",
+                                 f"{t_occ / t:.3g}")
+        print(f"| {name} | {truth:.6g} | {1e3 * t:.3g} | {r.upper - r.lower:.2g} | "
+              f"{r.certified} | {r.stats['pairs_examined']} | {tocc} | {eocc} | {ratio} |",
+              flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--continuum", action="store_true",
+                    help="only the continuum-minimum cases against OCC")
     args = ap.parse_args(argv)
+    if args.continuum:
+        continuum_table(args.repeat)
+        return
     try:
         from geomkit.oracles import occ
         occ._require_ocp("bench")
