@@ -51,7 +51,7 @@ DEVIATION_SAFETY = 2.0
 (they are measured at samples, not proven)."""
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
-MAX_STARTS = 8
+MAX_STARTS = 16
 """Newton runs per point at most (distinct basins among the candidates)."""
 MAX_STARTS_TRIMMED = 16
 """The same with trimmed faces: an untrimmed Newton foot that lies outside its face
