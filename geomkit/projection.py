@@ -8,8 +8,8 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    surface piece can hold the nearest point: with d_t the point–triangle distance
    and e_t the triangle's deviation bound, every t with
    ``d_t - e_t <= min(d_t' + e_t')``; ``min(d_t - e_t)`` is the reported lower bound;
-3. from the nearest candidates (skipping starts inside the basin of a foot already
-   found, and every candidate whose lower bound exceeds the best foot) a
+3. from every candidate whose lower bound is below the best bound so far (the mesh
+   upper bound, then the nearest foot on an untrimmed surface) a
    safeguarded Newton iteration on the exact surface finds the foot
    (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
    active set on the domain box, backtracking);
@@ -52,11 +52,11 @@ DEVIATION_SAFETY = 2.0
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
 MAX_STARTS = 16
-"""Newton runs per point at most (distinct basins among the candidates)."""
+"""Newton runs per point in the first pass (a point left with an untried candidate
+that could hold a nearer point is run again with :data:`RERUN_STARTS`)."""
 MAX_STARTS_TRIMMED = 16
-"""The same with trimmed faces: an untrimmed Newton foot that lies outside its face
-bounds nothing, so more candidates stay open (seen on pyiges' impeller: the nearest
-face was the 9th start for points far from the model)."""
+"""The same with trimmed faces (their feet prune no candidate: a foot may lie
+outside its face)."""
 RERUN_STARTS = 64
 """Newton runs per point at most in the second pass, for the points whose first pass
 hit the start cap with a candidate left that could hold a nearer point (64 is the

@@ -464,7 +464,10 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
     ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
-    nearest first.  ``out_lb[i]`` is the mesh lower bound of the point's distance
+    nearest first: every candidate whose lower bound is below the best bound so far
+    is tried, up to ``max_starts``; ``out_rest[i]`` is the smallest lower bound of the
+    candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
+    lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
     more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
