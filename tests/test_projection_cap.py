@@ -5,7 +5,8 @@ is tried (issue 14/15 misses).
   minimum of single-face projections (an oracle independent of the multi-face
   candidate search) at the issue's reproducer, at 15 points that got a farther face
   before the fix (found on 2 x 20,000 scan/box points of the mesh benchmark, up to
-  0.104 too far) and at 300 random points near the model.
+  0.104 too far) and at 300 random points near the model; every single-face
+  projection finds a foot (a flat face's only candidate was skipped before).
 * freeform_1 (untrimmed): four box points (found among 200,000) that ended in a
   local minimum up to 0.027 farther than the nearest, against a dense-grid +
   L-BFGS-B oracle.
@@ -81,7 +82,11 @@ def test_impeller_equals_the_per_face_minimum(impeller):
     pr = geomkit.project_points(impeller, P)
     best = np.full(len(P), np.inf)
     for s in impeller:
-        best = np.fmin(best, geomkit.project_points(s, P).distance)
+        d = geomkit.project_points(s, P).distance
+        # every face has a nearest point (no max_distance): never BEYOND / NaN (a
+        # flat face's nearest triangle, lower bound == mesh upper bound, was skipped)
+        assert np.isfinite(d).all()
+        best = np.minimum(best, d)
     assert abs(pr.distance[0] - 1.426759745704516) < 1e-9  # issue 14's reproducer
     diff = pr.distance - best
     assert np.abs(diff).max() < 1e-9, (P[np.abs(diff) >= 1e-9], diff[np.abs(diff) >= 1e-9])

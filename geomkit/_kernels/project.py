@@ -407,9 +407,11 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         for c in range(k):
             t = ct[c]
             lbc = cd[c] - fdev[t]
-            if lbc >= best:
+            if lbc > best:
                 # candidates are sorted by triangle distance, not by lower bound (the
-                # deviation bounds differ): a later one may still hold a nearer point
+                # deviation bounds differ): a later one may still hold a nearer point.
+                # Equality is tried: on a flat face (deviation 0) the nearest
+                # triangle's lower bound equals the mesh upper bound
                 continue
             if nf >= K or nf >= max_starts:
                 # over the start cap: this candidate is not tried, the answer is
