@@ -8,8 +8,8 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    surface piece can hold the nearest point: with d_t the point–triangle distance
    and e_t the triangle's deviation bound, every t with
    ``d_t - e_t <= min(d_t' + e_t')``; ``min(d_t - e_t)`` is the reported lower bound;
-3. from the nearest candidates (skipping starts inside the basin of a foot already
-   found, and every candidate whose lower bound exceeds the best foot) a
+3. from every candidate whose lower bound is below the best bound so far (the mesh
+   upper bound, then the nearest foot on an untrimmed surface) a
    safeguarded Newton iteration on the exact surface finds the foot
    (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
    active set on the domain box, backtracking);
@@ -51,12 +51,16 @@ DEVIATION_SAFETY = 2.0
 (they are measured at samples, not proven)."""
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
-MAX_STARTS = 8
-"""Newton runs per point at most (distinct basins among the candidates)."""
+MAX_STARTS = 16
+"""Newton runs per point in the first pass (a point left with an untried candidate
+that could hold a nearer point is run again with :data:`RERUN_STARTS`)."""
 MAX_STARTS_TRIMMED = 16
-"""The same with trimmed faces: an untrimmed Newton foot that lies outside its face
-bounds nothing, so more candidates stay open (seen on pyiges' impeller: the nearest
-face was the 9th start for points far from the model)."""
+"""The same with trimmed faces (their feet prune no candidate: a foot may lie
+outside its face)."""
+RERUN_STARTS = 64
+"""Newton runs per point at most in the second pass, for the points whose first pass
+hit the start cap with a candidate left that could hold a nearer point (64 is the
+candidate buffer: every candidate is tried)."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
 CHUNK_SIZE = 1 << 16
@@ -230,16 +234,20 @@ class Projector:
                 f"candidate triangles, {self.grid!r}>")
 
     # ------------------------------------------------------------------ one chunk
-    def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float) -> Projection:
+    def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float,
+               K: int | None = None) -> Projection:
         t0 = time.perf_counter()
         n = P.shape[0]
-        K = MAX_STARTS_TRIMMED if self.trims else MAX_STARTS
+        first = K is None
+        if first:
+            K = MAX_STARTS_TRIMMED if self.trims else MAX_STARTS
         fs = np.full((n, K), -1, dtype=np.int64)
         fuv = np.zeros((n, K, 2))
         fd = np.full((n, K), np.inf)
         fst = np.zeros((n, K), dtype=np.int64)
         nf = np.zeros(n, dtype=np.int64)
         lb = np.zeros(n)
+        rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
         work = np.zeros((n, 2), dtype=np.int64)
         g = self.grid
@@ -252,12 +260,12 @@ class Projector:
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, step_tol, max_distance, K, fs, fuv, fd,
                           fst, nf, lb,
-                          flags, work)
+                          rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
-            fs, fuv, fd, fst, nf, lb, flags, work = (a[inv] for a in (fs, fuv, fd, fst, nf,
-                                                                     lb, flags, work))
+            fs, fuv, fd, fst, nf, lb, rest, flags, work = (
+                a[inv] for a in (fs, fuv, fd, fst, nf, lb, rest, flags, work))
         t1 = time.perf_counter()
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
@@ -355,19 +363,37 @@ class Projector:
             # approximated faces (e.g. IGES offset surfaces): the true face lies within
             # its approx_error of the one projected on
             lower = np.maximum(0.0, lower - self.approx_error)
-        return Projection(point=foot, uv=uv, surface=surf, distance=dist,
-                          signed_distance=signed, normal=nrm, status=status,
-                          lower_bound=lower, residual=resid,
-                          feet_tried=np.minimum(nf, 127).astype(np.int8),
-                          stats={"candidate_overflow": int(np.count_nonzero(flags & 1)),
+        # the start cap left candidates untried whose lower bound is below the
+        # answer: those points again with every candidate tried (the cap only
+        # bounds the first pass's work), else they are counted as not proven
+        open_ = rest < np.where(ok, dist, np.inf) - TIE_TOL * self.size
+        reruns = int(np.count_nonzero(open_)) if first else 0
+        n_open = 0 if first else int(np.count_nonzero(open_))
+        out = Projection(point=foot, uv=uv, surface=surf, distance=dist,
+                         signed_distance=signed, normal=nrm, status=status,
+                         lower_bound=lower, residual=resid,
+                         feet_tried=np.minimum(nf, 127).astype(np.int8),
+                         stats={"candidate_overflow": int(np.count_nonzero(flags & 1)),
                                  "cells_opened": int(work[:, 0].sum()),
                                  "triangles_tested": int(work[:, 1].sum()),
                                  "newton_runs": int(nf.sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
                                  "approx_error": self.approx_error,
+                                 "start_cap_reruns": reruns,
+                                 "not_proven": n_open,
                                  "time_kernel": t1 - t0, "time_trim": t2 - t1,
                                  "time_finish": time.perf_counter() - t2})
+        if reruns:
+            rows = np.flatnonzero(open_)
+            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol,
+                              RERUN_STARTS)
+            for f in ("point", "uv", "surface", "distance", "signed_distance", "normal",
+                      "status", "lower_bound", "residual", "feet_tried"):
+                getattr(out, f)[rows] = getattr(sub, f)
+            for k_ in ("newton_runs", "not_proven"):
+                out.stats[k_] += sub.stats[k_]
+        return out
 
     # ------------------------------------------------------------------ public
     def iter_project(self, points, max_distance: float | None = None,

@@ -28,7 +28,6 @@ from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
 from .voxel import point_candidates
 
 MAX_ITER = 100
-FLAT_RATIO = 0.1
 FOOT_OK = 0
 FOOT_NOT_CONVERGED = 1
 PROJECT_CHUNK = 64
@@ -365,7 +364,7 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
                    trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv,
-                   out_d, out_st, out_nf, out_lb, out_flags, out_work):
+                   out_d, out_st, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -404,12 +403,21 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         best = UB
         if k == 0:
             flags |= 2
+        rest = np.inf
         for c in range(k):
-            if nf >= K or nf >= max_starts:
-                break
             t = ct[c]
-            if cd[c] - fdev[t] >= best:
-                break  # sorted by distance: no later candidate can win either
+            lbc = cd[c] - fdev[t]
+            if lbc > best:
+                # candidates are sorted by triangle distance, not by lower bound (the
+                # deviation bounds differ): a later one may still hold a nearer point.
+                # Equality is tried: on a flat face (deviation 0) the nearest
+                # triangle's lower bound equals the mesh upper bound
+                continue
+            if nf >= K or nf >= max_starts:
+                # over the start cap: this candidate is not tried, the answer is
+                # proven only if it is no farther than ``rest``
+                rest = min(rest, lbc)
+                continue
             s = face_surf[t]
             sw = cs[c]
             ww = cw[c]
@@ -417,34 +425,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                 + ww * (face_uv[t, 2, 0] - face_uv[t, 0, 0])
             v0 = face_uv[t, 0, 1] + sw * (face_uv[t, 1, 1] - face_uv[t, 0, 1]) \
                 + ww * (face_uv[t, 2, 1] - face_uv[t, 0, 1])
-            # a start inside the basin of a foot already found is skipped: within
-            # two UV diameters of its triangle from that foot
-            du0 = max(abs(face_uv[t, 1, 0] - face_uv[t, 0, 0]),
-                      max(abs(face_uv[t, 2, 0] - face_uv[t, 0, 0]),
-                          abs(face_uv[t, 2, 0] - face_uv[t, 1, 0])))
-            dv0 = max(abs(face_uv[t, 1, 1] - face_uv[t, 0, 1]),
-                      max(abs(face_uv[t, 2, 1] - face_uv[t, 0, 1]),
-                          abs(face_uv[t, 2, 1] - face_uv[t, 1, 1])))
-            # ... but only on a nearly flat triangle (deviation <= FLAT_RATIO x its
-            # 3-D diameter): a curved piece may hold a second basin
-            diam = 0.0
-            for e0 in range(3):
-                e1 = (e0 + 1) % 3
-                ex = V[F[t, e0], 0] - V[F[t, e1], 0]
-                ey = V[F[t, e0], 1] - V[F[t, e1], 1]
-                ez = V[F[t, e0], 2] - V[F[t, e1], 2]
-                diam = max(diam, ex * ex + ey * ey + ez * ez)
-            flat = fdev[t] <= FLAT_RATIO * math.sqrt(diam)
-            dup = False
-            for j in range(nf):
-                if not flat:
-                    break
-                if out_s[i, j] == s and abs(out_uv[i, j, 0] - u0) <= 2.0 * du0 \
-                        and abs(out_uv[i, j, 1] - v0) <= 2.0 * dv0:
-                    dup = True
-                    break
-            if dup:
-                continue
+            # every candidate whose lower bound is below the best bound so far is
+            # tried: no start is skipped as "inside the basin of a foot already
+            # found" (that heuristic lost the nearer of two close basins on
+            # freeform_1, a Newton start from there costs a few iterations)
             Pw, p, q, U, Vk = _surface(Pw_all, U_all, V_all, meta, s)
             bu = brk_all[brk_off[s, 0]:brk_off[s, 0] + brk_off[s, 1]]
             bv = brk_all[brk_off[s, 2]:brk_off[s, 2] + brk_off[s, 3]]
@@ -469,19 +453,23 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             if trimmed[s] == 0:
                 best = min(best, d)
         out_nf[i] = nf
+        out_rest[i] = rest
         out_flags[i] = flags
 
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
                   brk_off, step_tol, max_dist,
-                  max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_flags,
+                  max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_rest, out_flags,
                   out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
     ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
-    nearest first.  ``out_lb[i]`` is the mesh lower bound of the point's distance
+    nearest first: every candidate whose lower bound is below the best bound so far
+    is tried, up to ``max_starts``; ``out_rest[i]`` is the smallest lower bound of the
+    candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
+    lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
     more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
@@ -490,7 +478,7 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
          closed, trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
-         out_st, out_nf, out_lb, out_flags, out_work)
+         out_st, out_nf, out_lb, out_rest, out_flags, out_work)
 
 
 @jit
