@@ -41,6 +41,7 @@ from .cad._iges_entities import Unsupported as _Skip
 from .cad._iges_entities import f_ as _f
 from .cad._iges_entities import i_ as _i
 from .cad._iges_entities import restrict, surface as _surface_entity
+from .cad.brep import ANALYTIC, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
 from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
@@ -316,6 +317,13 @@ class _Reader:
             raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
         return self._close_gaps(self._clip(pieces, domain), de, domain)
 
+    def analytic_face(self, srf: int, edges, where: str) -> Surface:
+        """A face on an analytic surface bounded by model-space edge loops
+        (:func:`geomkit.cad.brep.face_surface`)."""
+        args, uv_loops, dom = face_surface(self, srf, edges, PCURVE_TOL)
+        loops = [self._close_gaps(self._clip(lp, dom), srf, dom) for lp in uv_loops]
+        return Surface(*args, loops, name=where)
+
     def _clip(self, pieces, domain):
         """Snap control points within ``CLIP_TOL`` outside the domain onto it."""
         if domain is None:
@@ -402,6 +410,14 @@ def read_iges(path, skip_invalid: bool = False,
         try:
             if rd.transform(de) is not None:
                 raise _Skip("transformation matrix on the trimmed surface itself")
+            if rd.type_of(pts) in ANALYTIC:
+                if not (n1 == 1 and pto):
+                    raise _Skip(f"analytic surface DE {pts} is unbounded (144 without an "
+                                "outer boundary)")
+                edges = [curve_loop_142(rd, k) for k in [pto] + pti]
+                surfaces.append(rd.analytic_face(pts, edges, where))
+                entities.append(de)
+                continue
             args, fu, fv = _surface_entity(rd, pts)
             base = rd.make_surface(pts, args, name=where)
             loops = []
@@ -420,6 +436,29 @@ def read_iges(path, skip_invalid: bool = False,
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: trimmed surface 144 at DE {de}: {exc}") \
                     from None
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+            continue
+        surfaces.append(s)
+        entities.append(de)
+    for de, e in sorted(rd.dir.items()):
+        if int(e.d["entity_type_number"]) != 510:
+            continue
+        r = rd.rec(de)
+        srf, nl = _i(r[1]), _i(r[2])
+        used.add(srf)
+        where = f"510@{de}"
+        try:
+            if rd.type_of(srf) not in ANALYTIC:
+                raise _Skip(f"face on surface entity {rd.type_of(srf)} (B-rep faces are "
+                            "read on 108 / 190-198 surfaces)")
+            edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
+            s = rd.analytic_face(srf, edges, where)
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
+            continue
+        except InvalidInputError as exc:
+            if not skip_invalid:
+                raise InvalidSurfaceError(f"{p}: face 510 at DE {de}: {exc}") from None
             skipped.append(Skipped(where, f"invalid: {exc}"))
             continue
         surfaces.append(s)
@@ -466,8 +505,8 @@ def read_iges(path, skip_invalid: bool = False,
 
 
 UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface", 140: "offset surface",
-                   143: "bounded surface", 186: "manifold solid B-rep object",
+                   143: "bounded surface",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
-                   198: "toroidal surface", 510: "face", 514: "shell"}
+                   198: "toroidal surface"}
 """Surface entities listed as skipped when they are not under a 144 that was read."""
