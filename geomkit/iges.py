@@ -296,7 +296,7 @@ class _Reader:
         raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110 and 102 "
                     "are read exactly)")
 
-    def loop142(self, de: int, where: str, domain=None, fu=None, fv=None):
+    def loop142(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         if self.type_of(de) != 142:
             raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 142")
         r = self.rec(de)
@@ -315,7 +315,7 @@ class _Reader:
             pieces = mapped
         if not pieces:
             raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
-        return self._close_gaps(self._clip(pieces, domain), de, domain)
+        return self._close_gaps(self._clip(pieces, domain), de, domain, base)
 
     def analytic_face(self, srf: int, edges, where: str) -> Surface:
         """A face on an analytic surface bounded by model-space edge loops
@@ -332,11 +332,24 @@ class _Reader:
         self.clipped += len(moves)
         return out
 
-    def _close_gaps(self, pieces, de, domain):
-        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`)."""
+    def _close_gaps(self, pieces, de, domain, base=None):
+        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`); on
+        ``base``, also gaps whose ends are one model point (poles)."""
         if domain is None:
             return pieces
-        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}")
+        same = None
+        if base is not None:
+            from .evaluation import evaluate
+
+            P = base.control_points.reshape(-1, 3)
+            eps = SAME_POINT_TOL * float(np.ptp(P, axis=0).max())
+            (u0, u1), (v0, v1) = domain
+
+            def same(a, b):
+                uv = np.clip(np.array([a, b]), [u0, v0], [u1, v1])
+                X = evaluate(base, uv)
+                return float(np.linalg.norm(X[0] - X[1])) <= eps
+        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}", same)
         self.gaps += gaps
         return out
 
@@ -344,6 +357,9 @@ class _Reader:
 PCURVE_TOL = 1e-10
 """UV error (relative to the domain size) allowed where a pcurve is re-fitted through a
 reparametrisation of its surface."""
+SAME_POINT_TOL = 1e-9
+"""Two UV points whose model points are this close (x the surface size) are one point:
+a gap between them (a pole) is bridged whatever its size in UV."""
 CLIP_TOL = 1e-7
 """Trim control points this close outside the domain (relative) are moved onto it."""
 
@@ -422,12 +438,12 @@ def read_iges(path, skip_invalid: bool = False,
             base = rd.make_surface(pts, args, name=where)
             loops = []
             if n1 == 1 and pto:
-                loops.append(rd.loop142(pto, where, base.domain, fu, fv))
+                loops.append(rd.loop142(pto, where, base.domain, fu, fv, base))
             elif n2:
                 (u0, u1), (v0, v1) = base.domain
                 loops.append([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])
             for k in pti:
-                loops.append(rd.loop142(k, where, base.domain, fu, fv))
+                loops.append(rd.loop142(k, where, base.domain, fu, fv, base))
             s = rd.make_surface(pts, args, trim=loops or None, name=where)
         except _Skip as why:
             skipped.append(Skipped(where, str(why)))

@@ -73,7 +73,9 @@ def curve3d(rd, de: int):
         if a1 <= a0 + 1e-12:
             a1 += 2 * math.pi
         c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
-        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(x, a0, a1)), (a0, a1)
+        # the file's angles may be written in another turn ([-pi/2, 0] for [3pi/2, 2pi])
+        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(_turn(x, a0, a1), a0, a1)), \
+            (a0, a1)
     elif t == 126:
         K, M = i_(r[1]), i_(r[2])
         prop3 = i_(r[5])
@@ -97,6 +99,13 @@ def curve3d(rd, de: int):
         raise Unsupported(f"curve DE {de} is entity {t} (read: "
                           + ", ".join(f"{k} {v}" for k, v in READ_CURVES.items()) + ")")
     return transform_curve(c, rd.transform(de)), fmap, rng
+
+
+def _turn(x, a0, a1):
+    """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit."""
+    x = np.asarray(x, float)
+    w = a0 + np.mod(x - a0 + 1e-9, 2 * math.pi) - 1e-9
+    return np.where((x < a0 - 1e-9) | (x > a1 + 1e-9), w, x)
 
 
 def _spline112(r):
