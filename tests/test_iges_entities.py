@@ -1,0 +1,228 @@
+"""IGES B-rep (186/514/510/508/504/502), analytic surfaces (108, 190-198) and OCC's
+faces mode (144 over 108/120), checked against Open CASCADE as the oracle.
+
+Open CASCADE writes every file inside the test (a box, cylinder, cone, sphere, torus
+and a filleted box, each in B-rep mode 1 and faces mode 0); the test first checks
+which entity types the file holds, so it exercises what it claims.  Then: the face
+count equals OCC's (IGESControl_Reader), every face lies on its analytic shape, the
+total area equals OCC's (the trims are right), and the distances of random points equal
+OCC's BRepExtrema_DistShapeShape on OCC's reading of the same file.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyiges")
+pytest.importorskip("OCP", reason="Open CASCADE (OCP) writes the test files")
+
+from geomkit.evaluation import evaluate  # noqa: E402
+from geomkit.iges import read_iges  # noqa: E402
+
+AX_O = np.array([1.0, 2.0, 3.0])
+AX_D = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0])
+SHAPES = ["box", "cyl", "cone", "sphere", "torus", "fillet"]
+# entity types each file must hold (B-rep mode 1 / faces mode 0)
+EXPECT = {
+    1: {"box": {186, 514, 510, 508, 504, 502, 190}, "cyl": {186, 510, 190, 192},
+        "cone": {186, 510, 190, 194}, "sphere": {186, 510, 196},
+        "torus": {186, 510, 198}, "fillet": {186, 510, 190, 192, 196}},
+    0: {"box": {144, 108}, "cyl": {144, 108, 120}, "cone": {144, 108, 120},
+        "sphere": {144, 120}, "torus": {144, 120}, "fillet": {144, 108, 120}},
+}
+
+
+def _shapes():
+    from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+    from OCP.BRepPrimAPI import (BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCone,
+                                 BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakeSphere,
+                                 BRepPrimAPI_MakeTorus)
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    ax = gp_Ax2(gp_Pnt(*AX_O), gp_Dir(*AX_D))
+    box = BRepPrimAPI_MakeBox(gp_Pnt(1, 2, 3), 10, 20, 30).Shape()
+    mf = BRepFilletAPI_MakeFillet(box)
+    ex = TopExp_Explorer(box, TopAbs_EDGE)
+    while ex.More():
+        mf.Add(2.0, TopoDS.Edge(ex.Current()))
+        ex.Next()
+    return {"box": box, "cyl": BRepPrimAPI_MakeCylinder(ax, 5, 12).Shape(),
+            "cone": BRepPrimAPI_MakeCone(ax, 5, 2, 12).Shape(),
+            "sphere": BRepPrimAPI_MakeSphere(gp_Pnt(*AX_O), 7).Shape(),
+            "torus": BRepPrimAPI_MakeTorus(ax, 10, 3).Shape(), "fillet": mf.Shape()}
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    from OCP.IGESControl import IGESControl_Controller, IGESControl_Writer
+    from OCP.Interface import Interface_Static
+
+    IGESControl_Controller.Init_s()
+    d = tmp_path_factory.mktemp("occ_iges")
+    out = {}
+    for mode in (0, 1):
+        Interface_Static.SetIVal_s("write.iges.brep.mode", mode)
+        for name, shape in _shapes().items():
+            w = IGESControl_Writer("MM", mode)
+            w.AddShape(shape)
+            w.ComputeModel()
+            path = d / f"{name}{mode}.igs"
+            assert w.Write(str(path))
+            out[name, mode] = path
+    return out
+
+
+def _types(path) -> set:
+    lines = [ln for ln in path.read_text().splitlines() if len(ln) >= 73 and ln[72] == "D"]
+    return {int(ln[:8]) for ln in lines[::2]}
+
+
+def _occ_shape(path):
+    from OCP.IGESControl import IGESControl_Reader
+
+    r = IGESControl_Reader()
+    assert r.ReadFile(str(path)) == 1
+    r.TransferRoots()
+    return r.OneShape()
+
+
+def _face_compound(shape):
+    """The faces of a shape as a compound: distances to their surfaces (a solid's
+    distance is 0 inside it)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS_Compound
+
+    b, c = BRep_Builder(), TopoDS_Compound()
+    b.MakeCompound(c)
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        b.Add(c, ex.Current())
+        ex.Next()
+    return c
+
+
+def _occ_faces(shape) -> int:
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+
+    n, ex = 0, TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        n += 1
+        ex.Next()
+    return n
+
+
+CASES = [(n, m) for m in (1, 0) for n in SHAPES]
+
+
+@pytest.mark.parametrize("name,mode", CASES)
+def test_file_holds_the_entities_and_every_face_is_read(files, name, mode):
+    path = files[name, mode]
+    held = _types(path)
+    assert EXPECT[mode][name] <= held, f"{path.name}: holds {sorted(held)}"
+    res = read_iges(path)
+    assert not res.skipped
+    assert len(res.surfaces) == _occ_faces(_occ_shape(path))
+
+
+def _residual(name, X):
+    """Distance-like residual of points to the shape's analytic pieces (per piece: the
+    largest over the points; the face's residual is the smallest over the pieces)."""
+    d = X - AX_O
+    h = d @ AX_D
+    rho = np.linalg.norm(d - h[:, None] * AX_D, axis=1)
+    if name == "box":
+        return min(float(np.abs(X[:, k] - c).max()) for k, cs in
+                   enumerate(((1, 11), (2, 22), (3, 33))) for c in cs)
+    planes = [float(np.abs(h - c).max()) for c in (0.0, 12.0)]
+    if name == "cyl":
+        return min(planes + [float(np.abs(rho - 5).max())])
+    if name == "cone":
+        return min(planes + [float(np.abs(rho - (5 - 3 * h / 12)).max()) * math.cos(
+            math.atan(0.25))])
+    if name == "sphere":
+        return float(np.abs(np.linalg.norm(d, axis=1) - 7).max())
+    return float(np.abs(np.hypot(rho - 10, h) - 3).max())
+
+
+@pytest.mark.parametrize("name,mode", [c for c in CASES if c[0] != "fillet"])
+def test_faces_lie_on_their_analytic_shape(files, name, mode):
+    """Every converted face holds the closed form it was written from: exactly (1e-12
+    x size) for the file's own frame in B-rep mode, and to the file's 9 written digits
+    (1e-8 x size) for the shape OCC made."""
+    res = read_iges(files[name, mode])
+    size = 33.0 if name == "box" else 26.0
+    for s in res.surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        uv = np.stack(np.meshgrid(np.linspace(u0, u1, 9), np.linspace(v0, v1, 9)),
+                      -1).reshape(-1, 2)
+        X = evaluate(s, uv)
+        assert _residual(name, X) <= 1e-8 * size, s.name
+
+
+@pytest.mark.parametrize("name", ["cyl", "cone", "sphere", "torus"])
+def test_brep_surfaces_hold_the_files_closed_form(files, name):
+    import pyiges
+
+    from geomkit.cad.brep import analytic
+    from geomkit.iges import _Reader
+
+    path = files[name, 1]
+    rd = _Reader(path, pyiges.read(str(path)))
+    res = read_iges(path)
+    for s, de in zip(res.surfaces, res.entities):
+        srf = analytic(rd, int(rd.rec(de)[1]))
+        (u0, u1), (v0, v1) = s.domain
+        uv = np.stack(np.meshgrid(np.linspace(u0, u1, 11), np.linspace(v0, v1, 11)),
+                      -1).reshape(-1, 2)
+        d = evaluate(s, uv) - srf.O
+        h = d @ srf.A
+        rho = np.linalg.norm(d - h[:, None] * srf.A, axis=1)
+        if srf.kind == "plane":
+            err = np.abs(h)
+        elif srf.kind == "cylinder":
+            err = np.abs(rho - srf.R)
+        elif srf.kind == "cone":
+            err = np.abs(rho - (srf.R + h * math.tan(srf.alpha)))
+        elif srf.kind == "sphere":
+            err = np.abs(np.hypot(rho, h) - srf.R)
+        else:
+            err = np.abs(np.hypot(rho - srf.R, h) - srf.r)
+        assert float(err.max()) <= 1e-12 * 26, (s.name, srf.kind, float(err.max()))
+
+
+@pytest.mark.parametrize("name,mode", CASES)
+def test_area_and_distances_equal_occs(files, name, mode):
+    """Trims: the total area equals OCC's; 100 random points: distances equal OCC's
+    BRepExtrema_DistShapeShape within 1e-6."""
+    import geomkit
+    from geomkit.oracles.occ import area, distance_shapes  # noqa: F401
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from OCP.gp import gp_Pnt
+
+    path = files[name, mode]
+    res = read_iges(path)
+    shape = _face_compound(_occ_shape(path))
+    mesh = geomkit.tessellate(res.surfaces, 1e-3)
+    a_occ = area(shape, 1e-6)
+    assert abs(mesh.area - a_occ) <= 1e-3 * a_occ, (mesh.area, a_occ)
+    lo, hi = mesh.vertices.min(0), mesh.vertices.max(0)
+    rng = np.random.default_rng(14)
+    P = lo - 3 + rng.random((100, 3)) * (hi - lo + 6)
+    d = geomkit.project_points(res.surfaces, P).distance
+    occ = np.empty(len(P))
+    for k, p in enumerate(P):
+        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*p)).Vertex()
+        ds = BRepExtrema_DistShapeShape(v, shape)
+        occ[k] = ds.Value()
+    err = np.abs(d - occ)
+    assert err.max() <= 1e-6, (float(err.max()), P[np.argmax(err)].tolist())
