@@ -303,7 +303,31 @@ class _Reader:
         bptr = _i(r[3])
         if bptr == 0:
             raise _Skip(f"boundary 142 at DE {de} has no parameter-space curve")
-        pieces = self.pcurve_pieces(bptr, where)
+        return self.uv_loop(self.pcurve_pieces(bptr, where), f"boundary 142 at DE {de}",
+                            domain, fu, fv, base)
+
+    def loop508(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
+        """A 508 loop from its edges' pcurves (each reversed where the loop runs
+        against its edge; vertex entries dropped: poles are bridged)."""
+        from .cad.loops import reverse
+
+        r = self.rec(de)
+        n, a, pieces = _i(r[1]), 2, []
+        for _ in range(n):
+            typ, of, k = _i(r[a]), _i(r[a + 3]), _i(r[a + 4])
+            ptr = _i(r[a + 6]) if k >= 1 else 0
+            a += 5 + 2 * k
+            if typ == 1:
+                continue
+            if not ptr:
+                raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve "
+                            "on a surface that is not analytic")
+            ps = self.pcurve_pieces(ptr, where)
+            pieces += ps if of == 1 else [reverse(c) for c in ps[::-1]]
+        return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, fu, fv, base)
+
+    def uv_loop(self, pieces, what, domain, fu, fv, base):
+        """Pcurve pieces carried through ``fu, fv``, clipped, gaps closed."""
         if (fu is not None or fv is not None) and pieces:
             (u0, u1), (v0, v1) = domain
             tol = PCURVE_TOL * max(u1 - u0, v1 - v0)
@@ -314,14 +338,15 @@ class _Reader:
                 mapped.append(m)
             pieces = mapped
         if not pieces:
-            raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
-        return self._close_gaps(self._clip(pieces, domain), de, domain, base)
+            raise _Skip(f"{what} has an empty parameter-space curve")
+        return self._close_gaps(self._clip(pieces, domain), what, domain, base)
 
     def analytic_face(self, srf: int, edges, where: str) -> Surface:
         """A face on an analytic surface bounded by model-space edge loops
         (:func:`geomkit.cad.brep.face_surface`)."""
         args, uv_loops, dom = face_surface(self, srf, edges, PCURVE_TOL)
-        loops = [self._close_gaps(self._clip(lp, dom), srf, dom) for lp in uv_loops]
+        loops = [self._close_gaps(self._clip(lp, dom), f"face on surface DE {srf}", dom)
+                 for lp in uv_loops]
         return Surface(*args, loops, name=where)
 
     def _clip(self, pieces, domain):
@@ -332,7 +357,7 @@ class _Reader:
         self.clipped += len(moves)
         return out
 
-    def _close_gaps(self, pieces, de, domain, base=None):
+    def _close_gaps(self, pieces, what, domain, base=None):
         """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`); on
         ``base``, also gaps whose ends are one model point (poles)."""
         if domain is None:
@@ -349,7 +374,7 @@ class _Reader:
                 uv = np.clip(np.array([a, b]), [u0, v0], [u1, v1])
                 X = evaluate(base, uv)
                 return float(np.linalg.norm(X[0] - X[1])) <= eps
-        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}", same)
+        out, gaps = close_gaps(pieces, domain, what, same)
         self.gaps += gaps
         return out
 
@@ -464,11 +489,15 @@ def read_iges(path, skip_invalid: bool = False,
         used.add(srf)
         where = f"510@{de}"
         try:
-            if rd.type_of(srf) not in ANALYTIC:
-                raise _Skip(f"face on surface entity {rd.type_of(srf)} (B-rep faces are "
-                            "read on 108 / 190-198 surfaces)")
-            edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
-            s = rd.analytic_face(srf, edges, where)
+            if rd.type_of(srf) in ANALYTIC:
+                edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
+                s = rd.analytic_face(srf, edges, where)
+            else:
+                args, fu, fv = _surface_entity(rd, srf)
+                base = rd.make_surface(srf, args, name=where)
+                loops = [rd.loop508(_i(x), where, base.domain, fu, fv, base)
+                         for x in r[4: 4 + nl]]
+                s = rd.make_surface(srf, args, trim=loops, name=where)
         except _Skip as why:
             skipped.append(Skipped(where, str(why)))
             continue
