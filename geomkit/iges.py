@@ -41,7 +41,7 @@ from .cad._iges_entities import Unsupported as _Skip
 from .cad._iges_entities import f_ as _f
 from .cad._iges_entities import i_ as _i
 from .cad._iges_entities import restrict, surface as _surface_entity
-from .cad.brep import ANALYTIC, curve_loop_142, edge_loop_508, face_surface
+from .cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
 from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
@@ -326,6 +326,23 @@ class _Reader:
             pieces += ps if of == 1 else [reverse(c) for c in ps[::-1]]
         return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, fu, fv, base)
 
+    def loop141(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
+        """A 141 boundary from its parameter-space curves (``SENSE = 2``: reversed)."""
+        from .cad.loops import reverse
+
+        if self.type_of(de) != 141:
+            raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 141")
+        r = self.rec(de)
+        n, a, pieces = _i(r[4]), 5, []
+        for _ in range(n):
+            sense, k = _i(r[a + 1]), _i(r[a + 2])
+            if k < 1:
+                raise _Skip(f"boundary 141 at DE {de} has no parameter-space curve")
+            ps = self.pcurve_pieces(_i(r[a + 3]), where)
+            pieces += ps if sense != 2 else [reverse(c) for c in ps[::-1]]
+            a += 3 + k
+        return self.uv_loop(pieces, f"boundary 141 at DE {de}", domain, fu, fv, base)
+
     def uv_loop(self, pieces, what, domain, fu, fv, base):
         """Pcurve pieces carried through ``fu, fv``, clipped, gaps closed."""
         if (fu is not None or fv is not None) and pieces:
@@ -482,6 +499,35 @@ def read_iges(path, skip_invalid: bool = False,
         surfaces.append(s)
         entities.append(de)
     for de, e in sorted(rd.dir.items()):
+        if int(e.d["entity_type_number"]) != 143:
+            continue
+        r = rd.rec(de)
+        srf, nb = _i(r[2]), _i(r[3])
+        bd = [_i(x) for x in r[4: 4 + nb]]
+        used.add(srf)
+        where = f"143@{de}"
+        try:
+            if not bd:
+                raise _Skip("bounded surface 143 without boundaries")
+            if rd.type_of(srf) in ANALYTIC:
+                s = rd.analytic_face(srf, [curve_loop_141(rd, k) for k in bd], where)
+            else:
+                args, fu, fv = _surface_entity(rd, srf)
+                base = rd.make_surface(srf, args, name=where)
+                loops = [rd.loop141(k, where, base.domain, fu, fv, base) for k in bd]
+                s = rd.make_surface(srf, args, trim=loops, name=where)
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
+            continue
+        except InvalidInputError as exc:
+            if not skip_invalid:
+                raise InvalidSurfaceError(f"{p}: bounded surface 143 at DE {de}: {exc}") \
+                    from None
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+            continue
+        surfaces.append(s)
+        entities.append(de)
+    for de, e in sorted(rd.dir.items()):
         if int(e.d["entity_type_number"]) != 510:
             continue
         r = rd.rec(de)
@@ -550,7 +596,6 @@ def read_iges(path, skip_invalid: bool = False,
 
 
 UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface", 140: "offset surface",
-                   143: "bounded surface",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
                    198: "toroidal surface"}

@@ -262,3 +262,45 @@ def test_impeller_written_in_brep_mode_equals_the_original(tmp_path):
     d = geomkit.project_points(res.surfaces, P).distance
     d0 = geomkit.project_points(ref.surfaces, P).distance
     assert np.abs(d - d0).max() <= 1e-7
+
+
+def _as_143(src, dst):
+    """A faces-mode file with its 144 / 142 (one-line records) rewritten as 143 / 141
+    (bounded surface / boundary; OCC writes no 143)."""
+    out = []
+    for ln in src.read_text().splitlines():
+        if len(ln) >= 73 and ln[72] == "P":
+            body = ln[:64].rstrip()
+            f = body.rstrip(";").split(",")
+            if f[0] == "144":
+                body = (f"143,0,{f[1]},{int(f[3]) + 1},{f[4]}"
+                        + "".join(f",{x}" for x in f[5:]) + ";")
+            elif f[0] == "142":  # 142: CRTN, SPTR, BPTR, CPTR, PREF
+                pc = f",1,{f[3]}" if int(f[3]) else ",0"
+                body = f"141,{1 if int(f[3]) else 0},{f[5]},{f[2]},1,{f[4]},1{pc};"
+            assert len(body) <= 64
+            ln = body.ljust(64) + ln[64:]
+        elif len(ln) >= 73 and ln[72] == "D" and ln[:8].strip() in ("144", "142"):
+            ln = f"{int(ln[:8]) - 1:8d}" + ln[8:]
+        out.append(ln)
+    dst.write_text("\n".join(out) + "\n")
+
+
+@pytest.mark.parametrize("name", ["box", "cyl", "cone", "fillet"])
+def test_bounded_surfaces_143(files, shapes, name, tmp_path):
+    """143 / 141 over 108 planes (model-space boundaries) and 120 revolutions
+    (parameter-space boundaries): the same faces, area and distances as the 144 file."""
+    import geomkit
+
+    path = tmp_path / f"{name}143.igs"
+    _as_143(files[name, 0], path)
+    assert {143, 141} <= _types(path) and not {144, 142} & _types(path)
+    res = read_iges(path)
+    ref = read_iges(files[name, 0])
+    assert not res.skipped and len(res.surfaces) == len(ref.surfaces)
+    assert all(s.name.startswith("143@") for s in res.surfaces)
+    a, a0 = (geomkit.tessellate(r.surfaces, 1e-3).area for r in (res, ref))
+    assert abs(a - a0) <= 1e-6 * a0
+    P = np.random.default_rng(7).random((50, 3)) * 40 - 5
+    d, d0 = (geomkit.project_points(r.surfaces, P).distance for r in (res, ref))
+    assert np.abs(d - d0).max() <= 1e-9

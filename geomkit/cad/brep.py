@@ -33,7 +33,8 @@ from .analytic import angle_to_param, arc_curve, line_curve, plane_patch, revolv
 from .loops import Unsupported
 from .uvmap import map_pcurve
 
-__all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_142", "face_surface"]
+__all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
+           "face_surface"]
 
 ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical surface",
             194: "right circular conical surface", 196: "spherical surface",
@@ -221,6 +222,37 @@ def curve_loop_142(rd, de: int):
         raise Unsupported(f"boundary 142 at DE {de} has neither a parameter-space nor a "
                           "model-space curve")
     return walk(cptr)
+
+
+def curve_loop_141(rd, de: int):
+    """The model-space curves of a 141 boundary as oriented edges (``SENSE = 2``:
+    reversed)."""
+    from ._iges_entities import curve3d, i_
+
+    if rd.type_of(de) != 141:
+        raise Unsupported(f"boundary DE {de} is entity {rd.type_of(de)}, expected 141")
+    r = rd.rec(de)
+    n, a, out = i_(r[4]), 5, []
+    for _ in range(n):
+        crv, sense, k = i_(r[a]), i_(r[a + 1]), i_(r[a + 2])
+        a += 3 + k
+        parts = []
+
+        def walk(c):
+            if rd.type_of(c) == 102:
+                rc = rd.rec(c)
+                for j in range(i_(rc[1])):
+                    walk(i_(rc[2 + j]))
+            else:
+                parts.append(_Edge(curve3d(rd, c)[0], ("c", c), False))
+
+        walk(crv)
+        if sense == 2:
+            parts = [_Edge(e.curve, e.key, True) for e in parts[::-1]]
+        out += parts
+    if not out:
+        raise Unsupported(f"boundary 141 at DE {de} has no curves")
+    return out
 
 
 def _chain(srf, loop, size):
