@@ -10,6 +10,13 @@ from the file's P section, so every value is taken exactly as written.
   A8.1); their angle parameter becomes a rational one, and the face's pcurves are
   carried through that map (:mod:`geomkit.cad.uvmap`: exact for iso-parametric
   segments, else a cubic interpolant within ``PCURVE_TOL`` x the domain).
+* Analytic surfaces 108 (plane), 190 (plane), 192 / 194 / 196 / 198 (cylinder, cone,
+  sphere, torus) as exact bilinear patches and revolutions over each face's boundary,
+  which is read from the model-space edges (:mod:`geomkit.cad.brep`).
+* B-rep faces: every 510 (under 514 shells / 186 solids) on an analytic surface bounded
+  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 by the loops' pcurves.
+* 143 (bounded surface) with 141 boundaries: model-space curves on analytic surfaces,
+  parameter-space curves on the others.
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
   line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
@@ -43,20 +50,15 @@ from .cad._iges_entities import i_ as _i
 from .cad._iges_entities import restrict, surface as _surface_entity
 from .cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
+from .cad._iges_file import UNIT_FLAGS  # noqa: F401 (re-exported)
+from .cad._iges_file import param_records as _param_records
+from .cad._iges_file import units as _units
 from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                      MissingDependencyError)
 from .types import Surface, TrimCurve
 
 __all__ = ["read_iges", "IgesResult", "Skipped"]
-
-UNIT_FLAGS = {1: "in", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um",
-              10: "cm", 11: "uin"}
-"""IGES global parameter 14 (unit flag) to a unit name."""
-_UNIT_NAMES = {"IN": "in", "INCH": "in", "MM": "mm", "FT": "ft", "MI": "mi", "M": "m",
-               "KM": "km", "MIL": "mil", "UM": "um", "MICRON": "um", "CM": "cm",
-               "UIN": "uin"}
-
 
 class Skipped(NamedTuple):
     """One face or entity left out of a read: its id (``"<type>@<DE>"`` or
@@ -108,80 +110,6 @@ def _import_pyiges():
     return pyiges
 
 
-def _global_fields(glob: str, psep: str, rsep: str) -> list:
-    """The global section's fields, Hollerith strings (``3HABC``) decoded."""
-    out, k, n = [], 0, len(glob)
-    while k < n:
-        j = k
-        while j < n and glob[j].isdigit():
-            j += 1
-        if j < n and j > k and glob[j] == "H":
-            m = int(glob[k:j])
-            out.append(glob[j + 1: j + 1 + m])
-            k = j + 1 + m
-        else:
-            e = k
-            while e < n and glob[e] not in (psep, rsep):
-                e += 1
-            out.append(glob[k:e].strip())
-            k = e
-        if k < n and glob[k] == rsep:
-            break
-        k += 1
-    return out
-
-
-def _param_records(path: Path) -> tuple[dict, list]:
-    """``({DE pointer: [fields]}, global fields)`` from the P and G sections."""
-    text = path.read_text(encoding="latin-1")
-    lines = text.splitlines()
-    glob = "".join(ln[:72] for ln in lines if len(ln) >= 73 and ln[72] == "G")
-    psep, rsep = ",", ";"
-    if glob.startswith("1H"):
-        psep = glob[2]
-        rest = glob[3:]
-        if rest.startswith("1H"):
-            rsep = rest[2]
-    elif glob.startswith(","):
-        if glob[1:3] == "1H":
-            rsep = glob[3]
-    chunks: dict = {}
-    for ln in lines:
-        if len(ln) >= 73 and ln[72] == "P":
-            try:
-                de = int(ln[64:72])
-            except ValueError:
-                raise FileFormatError(f"{path}: bad parameter line {ln.strip()[:40]!r}") \
-                    from None
-            chunks.setdefault(de, []).append(ln[:64])
-    recs = {}
-    for de, parts in chunks.items():
-        s = "".join(parts).strip()
-        if rsep in s:
-            s = s[: s.index(rsep)]
-        recs[de] = [f.strip() for f in s.split(psep)]
-    return recs, _global_fields(glob, psep, rsep)
-
-
-def _units(gf: list):
-    """``(units, resolution)`` from global parameters 14, 15 and 19 (1-based)."""
-    units = res = None
-    if len(gf) >= 15:
-        name = gf[14].strip().upper().replace(".", "")
-        units = _UNIT_NAMES.get(name)
-        if units is None and gf[13]:
-            try:
-                units = UNIT_FLAGS.get(int(float(gf[13])))
-            except ValueError:
-                units = None
-    if len(gf) >= 19 and gf[18]:
-        try:
-            res = _f(gf[18])
-        except ValueError:
-            res = None
-    return units, res
-
-
 class _Reader:
     def __init__(self, path: Path, iges):
         self.path = path
@@ -190,6 +118,7 @@ class _Reader:
         self.gaps = []
         self.pcurve_error = 0.0
         self.clipped = 0
+        self.approx = {}  # DE -> achieved error of an approximated (offset) surface
         for e in iges.items:
             self.dir[e.sequence_number] = e
 
@@ -252,7 +181,7 @@ class _Reader:
 
     def make_surface(self, de: int, args, trim=None, name=None) -> Surface:
         try:
-            return Surface(*args, trim, name=name)
+            return Surface(*args, trim, name=name, approx_error=self.approx.get(de, 0.0))
         except InvalidInputError as exc:
             if trim is not None:
                 raise
@@ -535,7 +464,8 @@ def read_iges(path, skip_invalid: bool = False,
         used.add(srf)
         where = f"510@{de}"
         try:
-            if rd.type_of(srf) in ANALYTIC:
+            if rd.type_of(srf) in ANALYTIC or (rd.type_of(srf) == 140 and rd.type_of(
+                    _i(rd.rec(srf)[5])) in ANALYTIC):
                 edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
                 s = rd.analytic_face(srf, edges, where)
             else:
@@ -556,7 +486,7 @@ def read_iges(path, skip_invalid: bool = False,
         entities.append(de)
     for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
-        if t not in (128, 120, 122, 118) or de in used:
+        if t not in (128, 120, 122, 118, 140) or de in used:
             continue
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
@@ -595,7 +525,7 @@ def read_iges(path, skip_invalid: bool = False,
                       max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
 
 
-UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface", 140: "offset surface",
+UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
                    198: "toroidal surface"}

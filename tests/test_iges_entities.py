@@ -304,3 +304,50 @@ def test_bounded_surfaces_143(files, shapes, name, tmp_path):
     P = np.random.default_rng(7).random((50, 3)) * 40 - 5
     d, d0 = (geomkit.project_points(r.surfaces, P).distance for r in (res, ref))
     assert np.abs(d - d0).max() <= 1e-9
+
+
+@pytest.mark.parametrize("mode", [0, 1])
+def test_offset_surface_140(tmp_path, mode):
+    """A face on an offset (0.7) of a torus (R 10, r 3): OCC writes 140 over 120
+    (faces mode: approximated, ``approx_error`` recorded and within 1e-6 x the base's
+    size) or over 198 (B-rep mode: the offset of a torus is a torus, read exactly).
+    The face holds the closed form of the r = 3.7 torus (within its approx_error) and,
+    read exactly, its distances equal OCC's."""
+    import geomkit
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeVertex
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from OCP.Geom import Geom_OffsetSurface, Geom_ToroidalSurface
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+    from OCP.IGESControl import IGESControl_Controller, IGESControl_Writer
+    from OCP.Interface import Interface_Static
+
+    IGESControl_Controller.Init_s()
+    base = Geom_ToroidalSurface(gp_Ax3(gp_Pnt(1, 2, 3), gp_Dir(0, 0, 1)), 10, 3)
+    face = BRepBuilderAPI_MakeFace(Geom_OffsetSurface(base, 0.7), 0.2, 2.0, 0.1, 1.9,
+                                   1e-7).Face()
+    Interface_Static.SetIVal_s("write.iges.brep.mode", mode)
+    w = IGESControl_Writer("MM", mode)
+    w.AddShape(face)
+    w.ComputeModel()
+    path = tmp_path / f"offset{mode}.igs"
+    assert w.Write(str(path))
+    assert 140 in _types(path)
+    res = read_iges(path)
+    (s,) = res.surfaces
+    if mode == 0:
+        assert 0 < s.approx_error <= 1e-6 * 2 * math.sqrt(2 * 13 ** 2 + 3 ** 2)
+    else:
+        assert s.approx_error == 0
+    (u0, u1), (v0, v1) = s.domain
+    uv = np.stack(np.meshgrid(np.linspace(u0, u1, 25), np.linspace(v0, v1, 25)),
+                  -1).reshape(-1, 2)
+    X = evaluate(s, uv) - AX_O
+    err = np.abs(np.hypot(np.hypot(X[:, 0], X[:, 1]) - 10, X[:, 2]) - 3.7)
+    assert err.max() <= max(1e-12 * 30, s.approx_error)
+    if mode == 0:  # the approximation has ~256 x 256 patches: projection is slow
+        return
+    P = np.random.default_rng(9).random((60, 3)) * 40 - 20 + AX_O
+    d = geomkit.project_points(res.surfaces, P).distance
+    occ = np.array([BRepExtrema_DistShapeShape(
+        BRepBuilderAPI_MakeVertex(gp_Pnt(*p)).Vertex(), face).Value() for p in P])
+    assert np.abs(d - occ).max() <= 1e-6 + s.approx_error

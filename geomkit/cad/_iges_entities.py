@@ -19,7 +19,8 @@ from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, 
 from .loops import Unsupported
 
 READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
-                 122: "tabulated cylinder", 118: "ruled surface"}
+                 122: "tabulated cylinder", 118: "ruled surface",
+                 140: "offset surface (approximated)"}
 READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
                112: "parametric spline curve"}
 
@@ -176,6 +177,17 @@ def surface(rd, de: int):
             c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
         c1, c2 = _compatible(c1, c2, de)
         args, fu, fv = ruled(c1, c2), None, None
+    elif t == 140:
+        from ..types import Surface
+        from .offset import offset_args
+
+        base_de = i_(r[5])
+        bargs, fu, fv = surface(rd, base_de)
+        if rd.transform(de) is not None:
+            raise Unsupported(f"offset surface DE {de} with its own transformation")
+        args, err = offset_args(Surface(*bargs), f_(r[4]))
+        rd.approx[de] = err
+        return args, fu, fv
     else:
         raise Unsupported(f"surface DE {de} is entity {t} (read: "
                           + ", ".join(f"{k} {v}" for k, v in READ_SURFACES.items()) + ")")

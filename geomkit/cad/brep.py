@@ -85,6 +85,31 @@ class Analytic:
             a = np.arctan2(z, rho - self.R)
         return np.column_stack([a, th]), rho
 
+    def residual(self, P):
+        """Distance of points from the surface (closed form)."""
+        d = np.asarray(P, float) - self.O
+        h = d @ self.A
+        rho = np.linalg.norm(d - h[:, None] * self.A, axis=1)
+        if self.kind == "plane":
+            return np.abs(h)
+        if self.kind == "cylinder":
+            return np.abs(rho - self.R)
+        if self.kind == "cone":
+            return np.abs(rho - self.R - h * math.tan(self.alpha)) * math.cos(self.alpha)
+        if self.kind == "sphere":
+            return np.abs(np.hypot(rho, h) - self.R)
+        return np.abs(np.hypot(rho - self.R, h) - self.r)
+
+    def offset(self, d):
+        """The surface offset by ``d`` along the radial / normal direction (exact: the
+        offset of these surfaces is one of the same kind)."""
+        if self.kind == "plane":
+            return Analytic("plane", self.O + d * self.A, self.A, self.X)
+        if self.kind == "torus":
+            return Analytic("torus", self.O, self.A, self.X, self.R, self.r + d)
+        R = self.R + (d / math.cos(self.alpha) if self.kind == "cone" else d)
+        return Analytic(self.kind, self.O, self.A, self.X, R, self.r, self.alpha)
+
     def build(self, ra, rb):
         """Surface arguments over local ranges ``ra x rb`` and the maps ``fu, fv`` from
         local coordinates to the NURBS parameters."""
@@ -344,10 +369,20 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
     """``(surface args, [loops of TrimCurve pieces], domain)`` of one face: the
     analytic surface ``srf_de`` over the range of its boundary ``loops`` (lists of
     :class:`_Edge`, outer first)."""
-    srf = analytic(rd, srf_de)
     P = np.concatenate([_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
                         for e in lp])
     size = float(np.ptp(P, axis=0).max()) or 1.0
+    if rd.type_of(srf_de) == 140:  # offset of an analytic surface: exact, the side
+        from ._iges_entities import f_, i_  # that holds the face's edges
+
+        r = rd.rec(srf_de)
+        if rd.transform(srf_de) is not None:
+            raise Unsupported(f"offset surface DE {srf_de} with its own transformation")
+        base = analytic(rd, i_(r[5]))
+        cands = [base.offset(f_(r[4])), base.offset(-f_(r[4]))]
+        srf = min(cands, key=lambda c: float(c.residual(P).max()))
+    else:
+        srf = analytic(rd, srf_de)
     chains = [_chain(srf, lp, size) for lp in loops]
     outer = np.concatenate(chains[0])
     for ch in chains[1:]:  # inner loops: same turn as the outer one

@@ -54,8 +54,8 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     """``(pieces with bridging segments, [gap sizes in UV])``.
 
     With ``same_point(uv_a, uv_b) -> bool`` (the two UV points are one model point: a
-    pole, a degenerate edge), a loop that does not close in the given order is first
-    re-chained (:func:`chain`) when some gap is neither small nor one point, and a larger gap whose ends are one model point is
+    pole, a degenerate edge), a loop with a gap that is neither small nor one point is
+    first re-chained (:func:`chain`), and a larger gap whose ends are one model point is
     bridged too (the segment maps to that point)."""
     (u0, u1), (v0, v1) = domain
     size = max(u1 - u0, v1 - v0)
