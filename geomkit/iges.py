@@ -10,6 +10,13 @@ from the file's P section, so every value is taken exactly as written.
   A8.1); their angle parameter becomes a rational one, and the face's pcurves are
   carried through that map (:mod:`geomkit.cad.uvmap`: exact for iso-parametric
   segments, else a cubic interpolant within ``PCURVE_TOL`` x the domain).
+* Analytic surfaces 108 (plane), 190 (plane), 192 / 194 / 196 / 198 (cylinder, cone,
+  sphere, torus) as exact bilinear patches and revolutions over each face's boundary,
+  which is read from the model-space edges (:mod:`geomkit.cad.brep`).
+* B-rep faces: every 510 (under 514 shells / 186 solids) on an analytic surface bounded
+  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 by the loops' pcurves.
+* 143 (bounded surface) with 141 boundaries: model-space curves on analytic surfaces,
+  parameter-space curves on the others.
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
   line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
@@ -41,21 +48,17 @@ from .cad._iges_entities import Unsupported as _Skip
 from .cad._iges_entities import f_ as _f
 from .cad._iges_entities import i_ as _i
 from .cad._iges_entities import restrict, surface as _surface_entity
+from .cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
+from .cad._iges_file import UNIT_FLAGS  # noqa: F401 (re-exported)
+from .cad._iges_file import param_records as _param_records
+from .cad._iges_file import units as _units
 from .cad.uvmap import map_pcurve
 from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                      MissingDependencyError)
 from .types import Surface, TrimCurve
 
 __all__ = ["read_iges", "IgesResult", "Skipped"]
-
-UNIT_FLAGS = {1: "in", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um",
-              10: "cm", 11: "uin"}
-"""IGES global parameter 14 (unit flag) to a unit name."""
-_UNIT_NAMES = {"IN": "in", "INCH": "in", "MM": "mm", "FT": "ft", "MI": "mi", "M": "m",
-               "KM": "km", "MIL": "mil", "UM": "um", "MICRON": "um", "CM": "cm",
-               "UIN": "uin"}
-
 
 class Skipped(NamedTuple):
     """One face or entity left out of a read: its id (``"<type>@<DE>"`` or
@@ -107,80 +110,6 @@ def _import_pyiges():
     return pyiges
 
 
-def _global_fields(glob: str, psep: str, rsep: str) -> list:
-    """The global section's fields, Hollerith strings (``3HABC``) decoded."""
-    out, k, n = [], 0, len(glob)
-    while k < n:
-        j = k
-        while j < n and glob[j].isdigit():
-            j += 1
-        if j < n and j > k and glob[j] == "H":
-            m = int(glob[k:j])
-            out.append(glob[j + 1: j + 1 + m])
-            k = j + 1 + m
-        else:
-            e = k
-            while e < n and glob[e] not in (psep, rsep):
-                e += 1
-            out.append(glob[k:e].strip())
-            k = e
-        if k < n and glob[k] == rsep:
-            break
-        k += 1
-    return out
-
-
-def _param_records(path: Path) -> tuple[dict, list]:
-    """``({DE pointer: [fields]}, global fields)`` from the P and G sections."""
-    text = path.read_text(encoding="latin-1")
-    lines = text.splitlines()
-    glob = "".join(ln[:72] for ln in lines if len(ln) >= 73 and ln[72] == "G")
-    psep, rsep = ",", ";"
-    if glob.startswith("1H"):
-        psep = glob[2]
-        rest = glob[3:]
-        if rest.startswith("1H"):
-            rsep = rest[2]
-    elif glob.startswith(","):
-        if glob[1:3] == "1H":
-            rsep = glob[3]
-    chunks: dict = {}
-    for ln in lines:
-        if len(ln) >= 73 and ln[72] == "P":
-            try:
-                de = int(ln[64:72])
-            except ValueError:
-                raise FileFormatError(f"{path}: bad parameter line {ln.strip()[:40]!r}") \
-                    from None
-            chunks.setdefault(de, []).append(ln[:64])
-    recs = {}
-    for de, parts in chunks.items():
-        s = "".join(parts).strip()
-        if rsep in s:
-            s = s[: s.index(rsep)]
-        recs[de] = [f.strip() for f in s.split(psep)]
-    return recs, _global_fields(glob, psep, rsep)
-
-
-def _units(gf: list):
-    """``(units, resolution)`` from global parameters 14, 15 and 19 (1-based)."""
-    units = res = None
-    if len(gf) >= 15:
-        name = gf[14].strip().upper().replace(".", "")
-        units = _UNIT_NAMES.get(name)
-        if units is None and gf[13]:
-            try:
-                units = UNIT_FLAGS.get(int(float(gf[13])))
-            except ValueError:
-                units = None
-    if len(gf) >= 19 and gf[18]:
-        try:
-            res = _f(gf[18])
-        except ValueError:
-            res = None
-    return units, res
-
-
 class _Reader:
     def __init__(self, path: Path, iges):
         self.path = path
@@ -189,6 +118,7 @@ class _Reader:
         self.gaps = []
         self.pcurve_error = 0.0
         self.clipped = 0
+        self.approx = {}  # DE -> achieved error of an approximated (offset) surface
         for e in iges.items:
             self.dir[e.sequence_number] = e
 
@@ -251,7 +181,7 @@ class _Reader:
 
     def make_surface(self, de: int, args, trim=None, name=None) -> Surface:
         try:
-            return Surface(*args, trim, name=name)
+            return Surface(*args, trim, name=name, approx_error=self.approx.get(de, 0.0))
         except InvalidInputError as exc:
             if trim is not None:
                 raise
@@ -295,14 +225,55 @@ class _Reader:
         raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110 and 102 "
                     "are read exactly)")
 
-    def loop142(self, de: int, where: str, domain=None, fu=None, fv=None):
+    def loop142(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         if self.type_of(de) != 142:
             raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 142")
         r = self.rec(de)
         bptr = _i(r[3])
         if bptr == 0:
             raise _Skip(f"boundary 142 at DE {de} has no parameter-space curve")
-        pieces = self.pcurve_pieces(bptr, where)
+        return self.uv_loop(self.pcurve_pieces(bptr, where), f"boundary 142 at DE {de}",
+                            domain, fu, fv, base)
+
+    def loop508(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
+        """A 508 loop from its edges' pcurves (each reversed where the loop runs
+        against its edge; vertex entries dropped: poles are bridged)."""
+        from .cad.loops import reverse
+
+        r = self.rec(de)
+        n, a, pieces = _i(r[1]), 2, []
+        for _ in range(n):
+            typ, of, k = _i(r[a]), _i(r[a + 3]), _i(r[a + 4])
+            ptr = _i(r[a + 6]) if k >= 1 else 0
+            a += 5 + 2 * k
+            if typ == 1:
+                continue
+            if not ptr:
+                raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve "
+                            "on a surface that is not analytic")
+            ps = self.pcurve_pieces(ptr, where)
+            pieces += ps if of == 1 else [reverse(c) for c in ps[::-1]]
+        return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, fu, fv, base)
+
+    def loop141(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
+        """A 141 boundary from its parameter-space curves (``SENSE = 2``: reversed)."""
+        from .cad.loops import reverse
+
+        if self.type_of(de) != 141:
+            raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 141")
+        r = self.rec(de)
+        n, a, pieces = _i(r[4]), 5, []
+        for _ in range(n):
+            sense, k = _i(r[a + 1]), _i(r[a + 2])
+            if k < 1:
+                raise _Skip(f"boundary 141 at DE {de} has no parameter-space curve")
+            ps = self.pcurve_pieces(_i(r[a + 3]), where)
+            pieces += ps if sense != 2 else [reverse(c) for c in ps[::-1]]
+            a += 3 + k
+        return self.uv_loop(pieces, f"boundary 141 at DE {de}", domain, fu, fv, base)
+
+    def uv_loop(self, pieces, what, domain, fu, fv, base):
+        """Pcurve pieces carried through ``fu, fv``, clipped, gaps closed."""
         if (fu is not None or fv is not None) and pieces:
             (u0, u1), (v0, v1) = domain
             tol = PCURVE_TOL * max(u1 - u0, v1 - v0)
@@ -313,8 +284,16 @@ class _Reader:
                 mapped.append(m)
             pieces = mapped
         if not pieces:
-            raise _Skip(f"boundary 142 at DE {de} has an empty parameter-space curve")
-        return self._close_gaps(self._clip(pieces, domain), de, domain)
+            raise _Skip(f"{what} has an empty parameter-space curve")
+        return self._close_gaps(self._clip(pieces, domain), what, domain, base)
+
+    def analytic_face(self, srf: int, edges, where: str) -> Surface:
+        """A face on an analytic surface bounded by model-space edge loops
+        (:func:`geomkit.cad.brep.face_surface`)."""
+        args, uv_loops, dom = face_surface(self, srf, edges, PCURVE_TOL)
+        loops = [self._close_gaps(self._clip(lp, dom), f"face on surface DE {srf}", dom)
+                 for lp in uv_loops]
+        return Surface(*args, loops, name=where)
 
     def _clip(self, pieces, domain):
         """Snap control points within ``CLIP_TOL`` outside the domain onto it."""
@@ -324,11 +303,24 @@ class _Reader:
         self.clipped += len(moves)
         return out
 
-    def _close_gaps(self, pieces, de, domain):
-        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`)."""
+    def _close_gaps(self, pieces, what, domain, base=None):
+        """Bridge rounding gaps between consecutive pieces (:func:`close_gaps`); on
+        ``base``, also gaps whose ends are one model point (poles)."""
         if domain is None:
             return pieces
-        out, gaps = close_gaps(pieces, domain, f"boundary 142 at DE {de}")
+        same = None
+        if base is not None:
+            from .evaluation import evaluate
+
+            P = base.control_points.reshape(-1, 3)
+            eps = SAME_POINT_TOL * float(np.ptp(P, axis=0).max())
+            (u0, u1), (v0, v1) = domain
+
+            def same(a, b):
+                uv = np.clip(np.array([a, b]), [u0, v0], [u1, v1])
+                X = evaluate(base, uv)
+                return float(np.linalg.norm(X[0] - X[1])) <= eps
+        out, gaps = close_gaps(pieces, domain, what, same)
         self.gaps += gaps
         return out
 
@@ -336,6 +328,9 @@ class _Reader:
 PCURVE_TOL = 1e-10
 """UV error (relative to the domain size) allowed where a pcurve is re-fitted through a
 reparametrisation of its surface."""
+SAME_POINT_TOL = 1e-9
+"""Two UV points whose model points are this close (x the surface size) are one point:
+a gap between them (a pole) is bridged whatever its size in UV."""
 CLIP_TOL = 1e-7
 """Trim control points this close outside the domain (relative) are moved onto it."""
 
@@ -402,16 +397,24 @@ def read_iges(path, skip_invalid: bool = False,
         try:
             if rd.transform(de) is not None:
                 raise _Skip("transformation matrix on the trimmed surface itself")
+            if rd.type_of(pts) in ANALYTIC:
+                if not (n1 == 1 and pto):
+                    raise _Skip(f"analytic surface DE {pts} is unbounded (144 without an "
+                                "outer boundary)")
+                edges = [curve_loop_142(rd, k) for k in [pto] + pti]
+                surfaces.append(rd.analytic_face(pts, edges, where))
+                entities.append(de)
+                continue
             args, fu, fv = _surface_entity(rd, pts)
             base = rd.make_surface(pts, args, name=where)
             loops = []
             if n1 == 1 and pto:
-                loops.append(rd.loop142(pto, where, base.domain, fu, fv))
+                loops.append(rd.loop142(pto, where, base.domain, fu, fv, base))
             elif n2:
                 (u0, u1), (v0, v1) = base.domain
                 loops.append([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])
             for k in pti:
-                loops.append(rd.loop142(k, where, base.domain, fu, fv))
+                loops.append(rd.loop142(k, where, base.domain, fu, fv, base))
             s = rd.make_surface(pts, args, trim=loops or None, name=where)
         except _Skip as why:
             skipped.append(Skipped(where, str(why)))
@@ -425,8 +428,65 @@ def read_iges(path, skip_invalid: bool = False,
         surfaces.append(s)
         entities.append(de)
     for de, e in sorted(rd.dir.items()):
+        if int(e.d["entity_type_number"]) != 143:
+            continue
+        r = rd.rec(de)
+        srf, nb = _i(r[2]), _i(r[3])
+        bd = [_i(x) for x in r[4: 4 + nb]]
+        used.add(srf)
+        where = f"143@{de}"
+        try:
+            if not bd:
+                raise _Skip("bounded surface 143 without boundaries")
+            if rd.type_of(srf) in ANALYTIC:
+                s = rd.analytic_face(srf, [curve_loop_141(rd, k) for k in bd], where)
+            else:
+                args, fu, fv = _surface_entity(rd, srf)
+                base = rd.make_surface(srf, args, name=where)
+                loops = [rd.loop141(k, where, base.domain, fu, fv, base) for k in bd]
+                s = rd.make_surface(srf, args, trim=loops, name=where)
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
+            continue
+        except InvalidInputError as exc:
+            if not skip_invalid:
+                raise InvalidSurfaceError(f"{p}: bounded surface 143 at DE {de}: {exc}") \
+                    from None
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+            continue
+        surfaces.append(s)
+        entities.append(de)
+    for de, e in sorted(rd.dir.items()):
+        if int(e.d["entity_type_number"]) != 510:
+            continue
+        r = rd.rec(de)
+        srf, nl = _i(r[1]), _i(r[2])
+        used.add(srf)
+        where = f"510@{de}"
+        try:
+            if rd.type_of(srf) in ANALYTIC or (rd.type_of(srf) == 140 and rd.type_of(
+                    _i(rd.rec(srf)[5])) in ANALYTIC):
+                edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
+                s = rd.analytic_face(srf, edges, where)
+            else:
+                args, fu, fv = _surface_entity(rd, srf)
+                base = rd.make_surface(srf, args, name=where)
+                loops = [rd.loop508(_i(x), where, base.domain, fu, fv, base)
+                         for x in r[4: 4 + nl]]
+                s = rd.make_surface(srf, args, trim=loops, name=where)
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
+            continue
+        except InvalidInputError as exc:
+            if not skip_invalid:
+                raise InvalidSurfaceError(f"{p}: face 510 at DE {de}: {exc}") from None
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+            continue
+        surfaces.append(s)
+        entities.append(de)
+    for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
-        if t not in (128, 120, 122, 118) or de in used:
+        if t not in (128, 120, 122, 118, 140) or de in used:
             continue
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
@@ -465,9 +525,8 @@ def read_iges(path, skip_invalid: bool = False,
                       max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
 
 
-UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface", 140: "offset surface",
-                   143: "bounded surface", 186: "manifold solid B-rep object",
+UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
-                   198: "toroidal surface", 510: "face", 514: "shell"}
+                   198: "toroidal surface"}
 """Surface entities listed as skipped when they are not under a 144 that was read."""

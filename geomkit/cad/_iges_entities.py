@@ -19,7 +19,8 @@ from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, 
 from .loops import Unsupported
 
 READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
-                 122: "tabulated cylinder", 118: "ruled surface"}
+                 122: "tabulated cylinder", 118: "ruled surface",
+                 140: "offset surface (approximated)"}
 READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
                112: "parametric spline curve"}
 
@@ -73,7 +74,9 @@ def curve3d(rd, de: int):
         if a1 <= a0 + 1e-12:
             a1 += 2 * math.pi
         c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
-        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(x, a0, a1)), (a0, a1)
+        # the file's angles may be written in another turn ([-pi/2, 0] for [3pi/2, 2pi])
+        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(_turn(x, a0, a1), a0, a1)), \
+            (a0, a1)
     elif t == 126:
         K, M = i_(r[1]), i_(r[2])
         prop3 = i_(r[5])
@@ -97,6 +100,13 @@ def curve3d(rd, de: int):
         raise Unsupported(f"curve DE {de} is entity {t} (read: "
                           + ", ".join(f"{k} {v}" for k, v in READ_CURVES.items()) + ")")
     return transform_curve(c, rd.transform(de)), fmap, rng
+
+
+def _turn(x, a0, a1):
+    """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit."""
+    x = np.asarray(x, float)
+    w = a0 + np.mod(x - a0 + 1e-9, 2 * math.pi) - 1e-9
+    return np.where((x < a0 - 1e-9) | (x > a1 + 1e-9), w, x)
 
 
 def _spline112(r):
@@ -167,6 +177,17 @@ def surface(rd, de: int):
             c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
         c1, c2 = _compatible(c1, c2, de)
         args, fu, fv = ruled(c1, c2), None, None
+    elif t == 140:
+        from ..types import Surface
+        from .offset import offset_args
+
+        base_de = i_(r[5])
+        bargs, fu, fv = surface(rd, base_de)
+        if rd.transform(de) is not None:
+            raise Unsupported(f"offset surface DE {de} with its own transformation")
+        args, err = offset_args(Surface(*bargs), f_(r[4]))
+        rd.approx[de] = err
+        return args, fu, fv
     else:
         raise Unsupported(f"surface DE {de} is entity {t} (read: "
                           + ", ".join(f"{k} {v}" for k, v in READ_SURFACES.items()) + ")")

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..types import TrimCurve
 
-__all__ = ["close_gaps", "Unsupported", "GAP_TOL"]
+__all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL"]
 
 GAP_TOL = 1e-2
 """Largest gap between the pieces of a trim loop that is bridged, relative to the
@@ -23,10 +23,49 @@ class Unsupported(Exception):
     """A face or entity that cannot be read exactly (the message says which and why)."""
 
 
-def close_gaps(pieces, domain, where: str):
-    """``(pieces with bridging segments, [gap sizes in UV])``."""
+def reverse(c: TrimCurve) -> TrimCurve:
+    """The same trim curve traversed the other way."""
+    U = np.asarray(c.knots)
+    return TrimCurve.create(c.degree, U[0] + U[-1] - U[::-1], c.control_points[::-1],
+                            None if np.all(c.weights == 1) else c.weights[::-1])
+
+
+def chain(pieces, size):
+    """Pieces reordered and reversed so that each starts nearest where the previous
+    one ends (files that list a composite's pieces against its direction, e.g. OCC's
+    pcurves on periodic surfaces).  Greedy from the first piece."""
+    rest = list(pieces[1:])
+    out = [pieces[0]]
+    while rest:
+        end = out[-1].end
+        best = None
+        for k, c in enumerate(rest):
+            for rev in (False, True):
+                d = float(np.hypot(*((c.end if rev else c.start) - end)))
+                if best is None or d < best[0] - 1e-12 * size:
+                    best = (d, k, rev)
+        _, k, rev = best
+        c = rest.pop(k)
+        out.append(reverse(c) if rev else c)
+    return out
+
+
+def close_gaps(pieces, domain, where: str, same_point=None):
+    """``(pieces with bridging segments, [gap sizes in UV])``.
+
+    With ``same_point(uv_a, uv_b) -> bool`` (the two UV points are one model point: a
+    pole, a degenerate edge), a loop with a gap that is neither small nor one point is
+    first re-chained (:func:`chain`), and a larger gap whose ends are one model point is
+    bridged too (the segment maps to that point)."""
     (u0, u1), (v0, v1) = domain
     size = max(u1 - u0, v1 - v0)
+    def bad(a, b):
+        return float(np.hypot(*(a.end - b.start))) > GAP_TOL * size and \
+            not same_point(a.end, b.start)
+
+    if same_point is not None and len(pieces) > 1 and any(
+            bad(a, pieces[(k + 1) % len(pieces)]) for k, a in enumerate(pieces)):
+        pieces = chain(pieces, size)
     out, gaps = [], []
     for k, a in enumerate(pieces):
         out.append(a)
@@ -34,10 +73,11 @@ def close_gaps(pieces, domain, where: str):
         gap = float(np.hypot(*(a.end - b.start)))
         if gap <= 1e-9 * size:
             continue
-        if gap > GAP_TOL * size:
+        if gap > GAP_TOL * size and not (same_point and same_point(a.end, b.start)):
             raise Unsupported(f"{where}: pieces {k} and {(k + 1) % len(pieces)} are "
                               f"{gap:.3g} apart in UV (more than {GAP_TOL:g} of the domain)")
-        gaps.append(gap)
+        if gap <= GAP_TOL * size:  # a pole bridge is not a rounding gap
+            gaps.append(gap)
         out.append(TrimCurve.polyline([a.end, b.start]))
     return out, gaps
 

@@ -1,0 +1,407 @@
+"""IGES B-rep faces (186 / 514 / 510 / 508 / 504 / 502) and analytic surfaces
+(108, 190 plane, 192 cylinder, 194 cone, 196 sphere, 198 torus) as exact NURBS.
+
+The analytic surfaces are unbounded; each face's surface is built over the range of
+its own boundary (:func:`face_surface`).  Boundaries are read from the *model-space*
+edge curves (504 edges, 142 ``CPTR``), not from the file's pcurves (their
+parametrisation conventions differ between writers: OCC writes angles in degrees):
+
+* Each edge point is inverted in closed form to local coordinates ``(a, b)``: plane
+  ``(x, y)`` in the plane's frame; cylinder / cone ``(height, angle)``; sphere
+  ``(latitude, longitude)``; torus ``(minor angle, major angle)``.  Angles are unwrapped
+  along each edge and chained from edge to edge; the second use of a seam edge in a
+  loop is shifted by a full turn.
+* On a plane the map is affine, so the pcurve is the edge's own NURBS with mapped
+  control points (exact).  On the others an edge that is an iso-line (a circle or a
+  generator line: all of OCC's primitives and fillets) is a straight UV segment,
+  carried exactly through the angle reparametrisation; any other edge is a cubic
+  interpolant within ``PCURVE_TOL`` (:func:`geomkit.cad.uvmap.map_pcurve`).
+* Consecutive pieces that do not meet in UV (a pole, a degenerate edge) are joined by
+  a straight UV segment, which maps to one point there.
+* The surfaces are revolutions (:func:`geomkit.cad.analytic.revolve`) of a line or an
+  arc, so they hold their closed forms to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..types import TrimCurve
+from .analytic import angle_to_param, arc_curve, line_curve, plane_patch, revolve
+from .loops import Unsupported
+from .uvmap import map_pcurve
+
+__all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
+           "face_surface"]
+
+ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical surface",
+            194: "right circular conical surface", 196: "spherical surface",
+            198: "toroidal surface"}
+_NS = 65  # samples per edge for the inversion
+ISO_TOL = 1e-7
+"""An edge whose local coordinate varies by at most this x the face size is an
+iso-line (files write 124 matrices and points to ~9 digits)."""
+TWO_PI = 2 * math.pi
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    n = np.linalg.norm(v)
+    if not n > 0:
+        raise Unsupported("zero direction vector")
+    return v / n
+
+
+class Analytic:
+    """An analytic surface: frame ``O, X, Y, A`` and its kind's parameters."""
+
+    def __init__(self, kind, O, A, X, R=0.0, r=0.0, alpha=0.0):
+        self.kind, self.O = kind, np.asarray(O, float)
+        self.A = _unit(A)
+        X = np.asarray(X, float) - np.dot(X, self.A) * self.A
+        self.X = _unit(X)
+        self.Y = np.cross(self.A, self.X)
+        self.R, self.r, self.alpha = R, r, alpha
+        self.periodic = {"plane": (False, False), "cylinder": (False, True),
+                         "cone": (False, True), "sphere": (False, True),
+                         "torus": (True, True)}[kind]
+
+    def local(self, P):
+        """Closed-form inverse: model points (n, 3) to local ``(a, b)`` (n, 2) and the
+        distance of each point from the axis (0 for planes)."""
+        d = np.asarray(P, float) - self.O
+        x, y, z = d @ self.X, d @ self.Y, d @ self.A
+        if self.kind == "plane":
+            return np.column_stack([x, y]), np.ones(len(d))
+        rho = np.hypot(x, y)
+        th = np.arctan2(y, x)
+        if self.kind in ("cylinder", "cone"):
+            a = z
+        elif self.kind == "sphere":
+            a = np.arctan2(z, rho)
+        else:
+            a = np.arctan2(z, rho - self.R)
+        return np.column_stack([a, th]), rho
+
+    def residual(self, P):
+        """Distance of points from the surface (closed form)."""
+        d = np.asarray(P, float) - self.O
+        h = d @ self.A
+        rho = np.linalg.norm(d - h[:, None] * self.A, axis=1)
+        if self.kind == "plane":
+            return np.abs(h)
+        if self.kind == "cylinder":
+            return np.abs(rho - self.R)
+        if self.kind == "cone":
+            return np.abs(rho - self.R - h * math.tan(self.alpha)) * math.cos(self.alpha)
+        if self.kind == "sphere":
+            return np.abs(np.hypot(rho, h) - self.R)
+        return np.abs(np.hypot(rho - self.R, h) - self.r)
+
+    def offset(self, d):
+        """The surface offset by ``d`` along the radial / normal direction (exact: the
+        offset of these surfaces is one of the same kind)."""
+        if self.kind == "plane":
+            return Analytic("plane", self.O + d * self.A, self.A, self.X)
+        if self.kind == "torus":
+            return Analytic("torus", self.O, self.A, self.X, self.R, self.r + d)
+        R = self.R + (d / math.cos(self.alpha) if self.kind == "cone" else d)
+        return Analytic(self.kind, self.O, self.A, self.X, R, self.r, self.alpha)
+
+    def build(self, ra, rb):
+        """Surface arguments over local ranges ``ra x rb`` and the maps ``fu, fv`` from
+        local coordinates to the NURBS parameters."""
+        (a0, a1), (b0, b1) = ra, rb
+        O, X, A = self.O, self.X, self.A
+        if self.kind == "plane":
+            return plane_patch(O, X, self.Y, a0, a1, b0, b1), None, None
+        fv = lambda t, b0=b0, b1=b1: angle_to_param(t, b0, b1)  # noqa: E731
+        if self.kind in ("cylinder", "cone"):
+            ta = math.tan(self.alpha)
+            gen = line_curve(O + (self.R + a0 * ta) * X + a0 * A,
+                             O + (self.R + a1 * ta) * X + a1 * A, a0, a1)
+            fu = None
+        elif self.kind == "sphere":
+            gen = arc_curve(O, X, A, self.R, a0, a1)
+            fu = lambda t, a0=a0, a1=a1: angle_to_param(t, a0, a1)  # noqa: E731
+        else:
+            gen = arc_curve(O + self.R * X, X, A, self.r, a0, a1)
+            fu = lambda t, a0=a0, a1=a1: angle_to_param(t, a0, a1)  # noqa: E731
+        return revolve(gen, O, A, b0, b1), fu, fv
+
+
+def analytic(rd, de: int) -> Analytic:
+    """Entity 108 / 190-198 as an :class:`Analytic` (its 124 transform applied)."""
+    t = rd.type_of(de)
+    r = rd.rec(de)
+    from ._iges_entities import f_, i_
+
+    def pt(k):
+        return np.array([f_(x) for x in rd.rec(k)[1:4]])
+
+    if t == 108:
+        a, b, c, d = (f_(x) for x in r[1:5])
+        n = np.array([a, b, c])
+        nn = float(np.dot(n, n))
+        if not nn > 0:
+            raise Unsupported(f"plane 108 at DE {de} has a zero normal")
+        O = n * d / nn
+        ref = np.eye(3)[int(np.argmin(np.abs(n)))]
+        s = Analytic("plane", O, n, ref)
+    elif t == 190:
+        O, N = pt(i_(r[1])), pt(i_(r[2]))
+        ref = pt(i_(r[3])) if len(r) > 3 and i_(r[3]) else np.eye(3)[int(np.argmin(np.abs(N)))]
+        s = Analytic("plane", O, N, ref)
+    elif t in (192, 194, 196, 198):
+        O = pt(i_(r[1]))
+        A = pt(i_(r[2])) if t != 196 else None
+        if t == 192:
+            R, ref = f_(r[3]), i_(r[4]) if len(r) > 4 else 0
+            kw = dict(R=R)
+        elif t == 194:
+            R, ang, ref = f_(r[3]), f_(r[4]), i_(r[5]) if len(r) > 5 else 0
+            kw = dict(R=R, alpha=math.radians(ang))
+        elif t == 196:  # 196: centre, radius, axis, refdir
+            R = f_(r[2])
+            A = pt(i_(r[3])) if len(r) > 3 and i_(r[3]) else np.array([0.0, 0.0, 1.0])
+            ref = i_(r[4]) if len(r) > 4 else 0
+            kw = dict(R=R)
+        else:
+            R, rr, ref = f_(r[3]), f_(r[4]), i_(r[5]) if len(r) > 5 else 0
+            kw = dict(R=R, r=rr)
+        refv = pt(ref) if ref else np.eye(3)[int(np.argmin(np.abs(A)))]
+        kind = {192: "cylinder", 194: "cone", 196: "sphere", 198: "torus"}[t]
+        s = Analytic(kind, O, A, refv, **kw)
+    else:
+        raise Unsupported(f"surface DE {de} is entity {t}, not an analytic surface")
+    M = rd.transform(de)
+    if M is not None:
+        s = Analytic(s.kind, M[:3, :3] @ s.O + M[:3, 3], M[:3, :3] @ s.A,
+                     M[:3, :3] @ s.X, s.R, s.r, s.alpha)
+    return s
+
+
+# --------------------------------------------------------------------- edges
+def _eval(curve, t):
+    from .._kernels.bezier import curve_points
+
+    p, U, Pw = curve
+    out = np.empty((len(t), 1, 3))
+    curve_points(np.ascontiguousarray(Pw, float), p, np.asarray(U, float),
+                 np.ascontiguousarray(t, float), 0, out)
+    return out[:, 0, :]
+
+
+class _Edge:
+    """One oriented model-space edge: its NURBS curve and parameter direction."""
+
+    def __init__(self, curve, key, reverse):
+        self.curve, self.key, self.reverse = curve, key, reverse
+        p, U, _ = curve
+        self.t0, self.t1 = float(U[p]), float(U[-p - 1])
+
+    def ts(self, s):
+        s = np.asarray(s, float)
+        if self.reverse:
+            s = 1.0 - s
+        return self.t0 + s * (self.t1 - self.t0)
+
+
+def edge_loop_508(rd, de: int):
+    """The oriented model-space edges of a 508 loop (vertex entries are dropped)."""
+    from ._iges_entities import curve3d, i_
+
+    r = rd.rec(de)
+    n = i_(r[1])
+    a, out = 2, []
+    for _ in range(n):
+        typ, lst, ndx, of, k = (i_(x) for x in r[a: a + 5])
+        a += 5 + 2 * k
+        if typ == 1:
+            continue
+        e = rd.rec(lst)
+        cde = i_(e[2 + 5 * (ndx - 1)])
+        curve, _, _ = curve3d(rd, cde)
+        out.append(_Edge(curve, (lst, ndx), of == 0))
+    if not out:
+        raise Unsupported(f"loop 508 at DE {de} has no edges")
+    return out
+
+
+def curve_loop_142(rd, de: int):
+    """The model-space curve ``CPTR`` of a 142 as oriented edges (102 composites
+    split)."""
+    from ._iges_entities import curve3d, i_
+
+    def walk(c):
+        if rd.type_of(c) == 102:
+            r = rd.rec(c)
+            return [x for k in range(i_(r[1])) for x in walk(i_(r[2 + k]))]
+        curve, _, _ = curve3d(rd, c)
+        return [_Edge(curve, ("c", c), False)]
+
+    cptr = i_(rd.rec(de)[4])
+    if not cptr:
+        raise Unsupported(f"boundary 142 at DE {de} has neither a parameter-space nor a "
+                          "model-space curve")
+    return walk(cptr)
+
+
+def curve_loop_141(rd, de: int):
+    """The model-space curves of a 141 boundary as oriented edges (``SENSE = 2``:
+    reversed)."""
+    from ._iges_entities import curve3d, i_
+
+    if rd.type_of(de) != 141:
+        raise Unsupported(f"boundary DE {de} is entity {rd.type_of(de)}, expected 141")
+    r = rd.rec(de)
+    n, a, out = i_(r[4]), 5, []
+    for _ in range(n):
+        crv, sense, k = i_(r[a]), i_(r[a + 1]), i_(r[a + 2])
+        a += 3 + k
+        parts = []
+
+        def walk(c):
+            if rd.type_of(c) == 102:
+                rc = rd.rec(c)
+                for j in range(i_(rc[1])):
+                    walk(i_(rc[2 + j]))
+            else:
+                parts.append(_Edge(curve3d(rd, c)[0], ("c", c), False))
+
+        walk(crv)
+        if sense == 2:
+            parts = [_Edge(e.curve, e.key, True) for e in parts[::-1]]
+        out += parts
+    if not out:
+        raise Unsupported(f"boundary 141 at DE {de} has no curves")
+    return out
+
+
+def _chain(srf, loop, size):
+    """Local coordinates of every edge's samples, unwrapped and chained."""
+    s = np.linspace(0.0, 1.0, _NS)
+    out, first, prev, prev_pole = [], {}, None, False
+    for e in loop:
+        ab, rho = srf.local(_eval(e.curve, e.ts(s)))
+        pole = rho <= 1e-9 * size
+        if pole.all():
+            raise Unsupported("an edge lies on the surface's axis")
+        if pole.any():  # angle undefined on the axis: take the neighbour's
+            good = np.nonzero(~pole)[0]
+            idx = good[np.clip(np.searchsorted(good, np.arange(len(s))), 0, len(good) - 1)]
+            ab[pole, 1] = ab[idx[pole], 1]
+        shift = np.zeros(2)
+        for c in (0, 1):
+            if not srf.periodic[c]:
+                continue
+            ab[:, c] = np.unwrap(ab[:, c])
+            if prev is None:
+                continue
+            if c == 1 and prev_pole and e.key in first:
+                cand = first[e.key][0, 1] + np.array([TWO_PI, -TWO_PI])
+                shift[c] = cand[0] - ab[0, c]
+            else:
+                shift[c] = TWO_PI * round((prev[c] - ab[0, c]) / TWO_PI)
+        ab = ab + shift
+        first.setdefault(e.key, ab)
+        out.append(ab)
+        prev, prev_pole = ab[-1], bool(pole[-1])
+    return out
+
+
+def _pieces(srf, loop, chains, fu, fv, tol, size):
+    pieces = []
+    for e, ab in zip(loop, chains):
+        if srf.kind == "plane":
+            p, U, Pw = e.curve
+            w = Pw[:, 3]
+            d = Pw[:, :3] / w[:, None] - srf.O
+            Q = np.column_stack([d @ srf.X, d @ srf.Y])
+            if e.reverse:
+                U = (U[0] + U[-1]) - np.asarray(U)[::-1]
+                Q, w = Q[::-1], w[::-1]
+            c = TrimCurve.create(p, U, Q, None if np.all(w == w[0]) else w)
+        else:
+            dev = np.abs(ab - ab[0])
+            iso = [float(dev[:, k].max()) <= ISO_TOL * max(size, 1.0) for k in (0, 1)]
+            if iso[0] or iso[1]:
+                q = np.array([ab[0], ab[-1]])
+                for k in (0, 1):
+                    if iso[k]:
+                        q[:, k] = ab[0, k]
+                c, _ = map_pcurve(TrimCurve.polyline(q), fu, fv, tol)
+            else:
+                c = _fit(srf, e, ab, fu, fv, tol)
+        pieces.append(c)
+    out = []
+    for k, c in enumerate(pieces):
+        out.append(c)
+        nxt = pieces[(k + 1) % len(pieces)]
+        if float(np.hypot(*(c.end - nxt.start))) > 1e-3 * size:
+            out.append(TrimCurve.polyline([c.end, nxt.start]))
+    return out
+
+
+def _fit(srf, e, ab, fu, fv, tol):
+    """A non-iso edge: cubic interpolant of its mapped local coordinates (angles on
+    the branch of the chained samples)."""
+    s0 = np.linspace(0.0, 1.0, len(ab))
+
+    def loc(s, k):
+        s = np.clip(s, 0.0, 1.0)
+        v, _ = srf.local(_eval(e.curve, e.ts(s)))
+        x = v[:, k]
+        if srf.periodic[k]:
+            ref = np.interp(s, s0, ab[:, k])
+            x = ref + (x - ref + math.pi) % TWO_PI - math.pi
+        f = fu if k == 0 else fv
+        return x if f is None else f(x)
+
+    diag = TrimCurve.polyline([[0.0, 0.0], [1.0, 1.0]])
+    c, _ = map_pcurve(diag, lambda s: loc(s, 0), lambda s: loc(s, 1), tol)
+    return c
+
+
+def face_surface(rd, srf_de: int, loops, tol_rel: float):
+    """``(surface args, [loops of TrimCurve pieces], domain)`` of one face: the
+    analytic surface ``srf_de`` over the range of its boundary ``loops`` (lists of
+    :class:`_Edge`, outer first)."""
+    P = np.concatenate([_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
+                        for e in lp])
+    size = float(np.ptp(P, axis=0).max()) or 1.0
+    if rd.type_of(srf_de) == 140:  # offset of an analytic surface: exact, the side
+        from ._iges_entities import f_, i_  # that holds the face's edges
+
+        r = rd.rec(srf_de)
+        if rd.transform(srf_de) is not None:
+            raise Unsupported(f"offset surface DE {srf_de} with its own transformation")
+        base = analytic(rd, i_(r[5]))
+        cands = [base.offset(f_(r[4])), base.offset(-f_(r[4]))]
+        srf = min(cands, key=lambda c: float(c.residual(P).max()))
+    else:
+        srf = analytic(rd, srf_de)
+    chains = [_chain(srf, lp, size) for lp in loops]
+    outer = np.concatenate(chains[0])
+    for ch in chains[1:]:  # inner loops: same turn as the outer one
+        for c in (0, 1):
+            if srf.periodic[c]:
+                m = np.concatenate(ch)[:, c].mean()
+                k = round((outer[:, c].mean() - m) / TWO_PI)
+                for ab in ch:
+                    ab[:, c] += k * TWO_PI
+    allab = np.concatenate([np.concatenate(ch) for ch in chains])
+    lo, hi = allab.min(axis=0), allab.max(axis=0)
+    pad = 1e-9 * max(float(np.max(hi - lo)), 1.0)
+    if srf.kind == "sphere":
+        lo[0], hi[0] = max(lo[0], -math.pi / 2), min(hi[0], math.pi / 2)
+    if np.any(hi - lo <= pad):
+        raise Unsupported(f"surface DE {srf_de}: its boundary spans no area")
+    args, fu, fv = srf.build((lo[0], hi[0]), (lo[1], hi[1]))
+    tol = tol_rel * float(np.max(hi - lo))
+    uv_loops = [_pieces(srf, lp, ch, fu, fv, tol, float(np.max(hi - lo)))
+                for lp, ch in zip(loops, chains)]
+    dom = ((float(args[2][0]), float(args[2][-1])), (float(args[3][0]), float(args[3][-1])))
+    return args, uv_loops, dom
