@@ -386,15 +386,35 @@ def read_iges(path, skip_invalid: bool = False,
         counts[t] = counts.get(t, 0) + 1
     surfaces, entities, skipped = [], [], []
     used = set()
-    for de, e in sorted(rd.dir.items()):
-        if int(e.d["entity_type_number"]) != 144:
-            continue
+
+    def take(de, where, what, build):
+        """One face: ``build()`` gives its Surface or raises _Skip (not read: listed)
+        or InvalidInputError (an error unless ``skip_invalid``)."""
+        try:
+            s = build()
+        except _Skip as why:
+            skipped.append(Skipped(where, str(why)))
+            return
+        except InvalidInputError as exc:
+            if not skip_invalid:
+                raise InvalidSurfaceError(f"{p}: {what} at DE {de}: {exc}") from None
+            skipped.append(Skipped(where, f"invalid: {exc}"))
+            return
+        surfaces.append(s)
+        entities.append(de)
+
+    def of_type(t):
+        return [(de, e) for de, e in sorted(rd.dir.items())
+                if int(e.d["entity_type_number"]) == t]
+
+    for de, e in of_type(144):
         r = rd.rec(de)
         pts, n1, n2, pto = _i(r[1]), _i(r[2]), _i(r[3]), _i(r[4])
         pti = [_i(x) for x in r[5: 5 + n2]]
         used.add(pts)
         where = f"144@{de}"
-        try:
+
+        def trimmed_144():
             if rd.transform(de) is not None:
                 raise _Skip("transformation matrix on the trimmed surface itself")
             if rd.type_of(pts) in ANALYTIC:
@@ -402,9 +422,7 @@ def read_iges(path, skip_invalid: bool = False,
                     raise _Skip(f"analytic surface DE {pts} is unbounded (144 without an "
                                 "outer boundary)")
                 edges = [curve_loop_142(rd, k) for k in [pto] + pti]
-                surfaces.append(rd.analytic_face(pts, edges, where))
-                entities.append(de)
-                continue
+                return rd.analytic_face(pts, edges, where)
             args, fu, fv = _surface_entity(rd, pts)
             base = rd.make_surface(pts, args, name=where)
             loops = []
@@ -415,75 +433,45 @@ def read_iges(path, skip_invalid: bool = False,
                 loops.append([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])
             for k in pti:
                 loops.append(rd.loop142(k, where, base.domain, fu, fv, base))
-            s = rd.make_surface(pts, args, trim=loops or None, name=where)
-        except _Skip as why:
-            skipped.append(Skipped(where, str(why)))
-            continue
-        except InvalidInputError as exc:
-            if not skip_invalid:
-                raise InvalidSurfaceError(f"{p}: trimmed surface 144 at DE {de}: {exc}") \
-                    from None
-            skipped.append(Skipped(where, f"invalid: {exc}"))
-            continue
-        surfaces.append(s)
-        entities.append(de)
-    for de, e in sorted(rd.dir.items()):
-        if int(e.d["entity_type_number"]) != 143:
-            continue
+            return rd.make_surface(pts, args, trim=loops or None, name=where)
+
+        take(de, where, "trimmed surface 144", trimmed_144)
+    for de, e in of_type(143):
         r = rd.rec(de)
         srf, nb = _i(r[2]), _i(r[3])
         bd = [_i(x) for x in r[4: 4 + nb]]
         used.add(srf)
         where = f"143@{de}"
-        try:
+
+        def bounded_143():
             if not bd:
                 raise _Skip("bounded surface 143 without boundaries")
             if rd.type_of(srf) in ANALYTIC:
-                s = rd.analytic_face(srf, [curve_loop_141(rd, k) for k in bd], where)
-            else:
-                args, fu, fv = _surface_entity(rd, srf)
-                base = rd.make_surface(srf, args, name=where)
-                loops = [rd.loop141(k, where, base.domain, fu, fv, base) for k in bd]
-                s = rd.make_surface(srf, args, trim=loops, name=where)
-        except _Skip as why:
-            skipped.append(Skipped(where, str(why)))
-            continue
-        except InvalidInputError as exc:
-            if not skip_invalid:
-                raise InvalidSurfaceError(f"{p}: bounded surface 143 at DE {de}: {exc}") \
-                    from None
-            skipped.append(Skipped(where, f"invalid: {exc}"))
-            continue
-        surfaces.append(s)
-        entities.append(de)
-    for de, e in sorted(rd.dir.items()):
-        if int(e.d["entity_type_number"]) != 510:
-            continue
+                return rd.analytic_face(srf, [curve_loop_141(rd, k) for k in bd], where)
+            args, fu, fv = _surface_entity(rd, srf)
+            base = rd.make_surface(srf, args, name=where)
+            loops = [rd.loop141(k, where, base.domain, fu, fv, base) for k in bd]
+            return rd.make_surface(srf, args, trim=loops, name=where)
+
+        take(de, where, "bounded surface 143", bounded_143)
+    for de, e in of_type(510):
         r = rd.rec(de)
         srf, nl = _i(r[1]), _i(r[2])
         used.add(srf)
         where = f"510@{de}"
-        try:
+
+        def face_510():
             if rd.type_of(srf) in ANALYTIC or (rd.type_of(srf) == 140 and rd.type_of(
                     _i(rd.rec(srf)[5])) in ANALYTIC):
                 edges = [edge_loop_508(rd, _i(x)) for x in r[4: 4 + nl]]
-                s = rd.analytic_face(srf, edges, where)
-            else:
-                args, fu, fv = _surface_entity(rd, srf)
-                base = rd.make_surface(srf, args, name=where)
-                loops = [rd.loop508(_i(x), where, base.domain, fu, fv, base)
-                         for x in r[4: 4 + nl]]
-                s = rd.make_surface(srf, args, trim=loops, name=where)
-        except _Skip as why:
-            skipped.append(Skipped(where, str(why)))
-            continue
-        except InvalidInputError as exc:
-            if not skip_invalid:
-                raise InvalidSurfaceError(f"{p}: face 510 at DE {de}: {exc}") from None
-            skipped.append(Skipped(where, f"invalid: {exc}"))
-            continue
-        surfaces.append(s)
-        entities.append(de)
+                return rd.analytic_face(srf, edges, where)
+            args, fu, fv = _surface_entity(rd, srf)
+            base = rd.make_surface(srf, args, name=where)
+            loops = [rd.loop508(_i(x), where, base.domain, fu, fv, base)
+                     for x in r[4: 4 + nl]]
+            return rd.make_surface(srf, args, trim=loops, name=where)
+
+        take(de, where, "face 510", face_510)
     for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
         if t not in (128, 120, 122, 118, 140) or de in used:
@@ -491,17 +479,12 @@ def read_iges(path, skip_invalid: bool = False,
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
             continue
-        where = f"{t}@{de}"
-        try:
+
+        def untrimmed(de=de, t=t):
             args, _, _ = _surface_entity(rd, de)
-            surfaces.append(rd.make_surface(de, args, name=where))
-            entities.append(de)
-        except _Skip as why:
-            skipped.append(Skipped(where, str(why)))
-        except InvalidInputError as exc:
-            if not skip_invalid:
-                raise InvalidSurfaceError(f"{p}: {exc}") from None
-            skipped.append(Skipped(where, f"invalid: {exc}"))
+            return rd.make_surface(de, args, name=f"{t}@{de}")
+
+        take(de, f"{t}@{de}", f"surface {t}", untrimmed)
     for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
         sub = (e.d.get("status_number") or 0) // 10000 % 100
