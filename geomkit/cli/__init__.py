@@ -50,6 +50,17 @@ UNITS_HELP = ("length unit of the model (mm, cm, m, in, ft, um, ...): overrides 
               "the file states; reports say 'model units' when neither does")
 
 
+def _add_cad_options(p) -> None:
+    """The CAD-reading options of every command that loads a model."""
+    p.add_argument("--skip-invalid", action="store_true",
+                   help="IGES/STEP: skip faces that fail validation (counted) "
+                        "instead of stopping")
+    p.add_argument("--skip-unsupported", action="store_true",
+                   help="IGES/STEP: go on without faces whose entities cannot be read "
+                        "(they are listed, and every report says PARTIAL MODEL); "
+                        "default: such a file is an error")
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog="geomkit",
                                  description="Exact NURBS surface geometry with stated "
@@ -74,12 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_demo)
     common = Parser(add_help=False)
-    common.add_argument("--skip-invalid", action="store_true",
-                        help="IGES/STEP: skip faces that fail validation (counted) "
-                             "instead of stopping")
-    common.add_argument("--skip-unsupported", action="store_true",
-                        help="go on without CAD faces whose entities cannot be read "
-                             "(they are listed); default: such a file is an error")
+    _add_cad_options(common)
     common.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     common.add_argument("--json", action="store_true", help="machine-readable output")
     common.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
@@ -165,12 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="largest cell edge, model units")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--skip-invalid", action="store_true",
-                   help="IGES/STEP: skip faces that fail validation (counted) "
-                        "instead of stopping")
-    p.add_argument("--skip-unsupported", action="store_true",
-                   help="IGES/STEP: leave out faces geomkit cannot convert (listed) "
-                        "instead of stopping")
+    _add_cad_options(p)
     p.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
                    help=UNITS_HELP)
     p.set_defaults(func=_cmd_mesh)
