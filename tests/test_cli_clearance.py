@@ -49,6 +49,30 @@ def test_cli_clearance_torus_pass_and_fail(tmp_path):
     assert_one_line_error(r, "exists", "--overwrite")
 
 
+def test_cli_clearance_probing_moves(tmp_path):
+    """Travel over the torus, then a plunge meant to touch (--probing -1): the run passes
+    on the travel moves, the plunge reports its first contact (tip, at 0.4 of the move:
+    tip sphere of radius 1 from z = 10 to z = 0 over the tube top at z = 5 + ... 4 + 1)."""
+    P = write_path(tmp_path / "p.csv", [[-30, 0, 10], [20, 0, 10], [20, 0, 0]])
+    r = cli("clearance", "torus", P, "--stylus", "1,0.5,20", "--margin", "2",
+            "--probing", "-1", "-o", tmp_path / "rep")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 travel move(s): PASS" in r.stdout
+    assert "probing move 1: first contact at parameter 0.4000000" in r.stdout
+    s = json.loads((tmp_path / "rep" / "clearance_summary.json").read_text())
+    assert s["travel_passed"] and not s["passed"] and s["travel_worst_move"] == 0
+    assert s["probing_moves"][0]["move"] == 1
+    assert abs(s["probing_moves"][0]["first_contact"] - 0.4) < 1e-8
+    # without --probing the same path fails (exit 1), as before
+    r = cli("clearance", "torus", P, "--stylus", "1,0.5,20", "--margin", "2",
+            "-o", tmp_path / "rep2", "--no-plots")
+    assert r.returncode == 1 and "FAIL" in r.stdout
+    r = cli("clearance", "torus", P, "--stylus", "1,0.5,20", "--probing", "2",
+            "-o", tmp_path / "rep3")
+    assert_one_line_error(r, "--probing", "out of range")
+    assert not (tmp_path / "rep3").exists()
+
+
 def test_cli_clearance_bad_inputs(tmp_path):
     good = write_path(tmp_path / "p.csv", [[-30, 0, 10], [30, 0, 10]])
     one = write_path(tmp_path / "one.csv", [[-30, 0, 10]])

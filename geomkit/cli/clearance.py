@@ -23,8 +23,12 @@ or JSON {"points": [[x, y, z], ...]} or {"poses": [4x4 stylus->world, ...]} (sty
 frame: tip centre at the origin, axis +z toward the head).  Between consecutive poses the
 stylus translates, or rotates about a fixed line.
 
-Exit code 0: every segment passes; 1: some segment fails (margin or contact); 2: bad
-input.  Writes clearance.csv, clearance.png and clearance_summary.json (last)."""
+--probing K [K ...]: moves meant to touch the part (a probing plunge; move k goes from
+path point k to k+1, negative k counts from the end): they are reported with their first
+contact and drawn blue, and do not fail the run; the others are travel moves.
+
+Exit code 0: every travel move passes; 1: some travel move fails (margin or contact);
+2: bad input.  Writes clearance.csv, clearance.png and clearance_summary.json (last)."""
 
 
 def parse_stylus(text: str):
@@ -53,6 +57,7 @@ def _cmd_clearance(args) -> int:
     case = _load_input(args.part, args.skip_invalid, args.units,
                        skip_unsupported=args.skip_unsupported)
     path = read_path(args.path)
+    probing = _probing_moves(args.probing, len(path) - 1)  # checked before the long run
     out = args.output or f"{Path(args.path).stem}-clearance"
     names = ["clearance.csv", "clearance_summary.json"]
     if not args.no_plots:
@@ -71,17 +76,22 @@ def _cmd_clearance(args) -> int:
     u = case.units
     model, note = _model_info(case)
     rk = {"units": u, "model_note": note}
+    travel = np.ones(len(res), bool)
+    travel[probing] = False
+    ok = bool(np.all(res.passed[travel]))
     targets = outputs.create()
     files = [write_clearance_csv(res, tips, targets["clearance.csv"], args.overwrite,
                                  **rk)]
     if not args.no_plots:
-        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite, **rk))
+        files.append(plot_clearance(res, targets["clearance.png"], args.overwrite,
+                                    probing=probing, **rk))
     files += _reports.write(args, "clearance", targets, res=res, surfaces=case.surfaces,
                             path_points=tips, stylus=stylus, part=args.part,
-                            axis=args.axis if path.ndim == 2 else None, **rk)
+                            axis=args.axis if path.ndim == 2 else None, probing=probing,
+                            **rk)
     summary = {"part_file": args.part, "path_file": args.path, "surfaces": len(case.surfaces),
                "units": _unit(u), "model": model, "stylus": stylus.to_dict(),
-               **res.summary(),
+               **res.summary(), **_travel_summary(res, travel, probing, ok),
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
     write_json(summary, targets["clearance_summary.json"], args.overwrite, **rk)
     if args.json:
@@ -90,19 +100,50 @@ def _cmd_clearance(args) -> int:
         s = summary
         if note:  # a pass on part of the part is not a pass on the part: say so first
             print(note + "; clearance to the faces left out is NOT checked")
-        print(f"{s['segments']} segment(s): {'PASS' if s['passed'] else 'FAIL'} "
-              f"(margin {s['margin']:g} {s['units']}); min clearance {s['min_clearance']:.6g} "
-              f"(certified >= {s['min_clearance_lower_bound']:.6g}) on segment "
-              f"{s['worst_segment']} at parameter {s['worst_parameter']:.4f} "
-              f"({s['worst_component']})")
-        for i in np.flatnonzero(~res.passed):
+        w = s["travel_worst_move"]
+        kind = (f"{int(travel.sum())} travel move(s)" if probing
+                else f"{s['segments']} segment(s)")
+        if w is None:
+            print(f"{kind}: nothing to check besides the probing moves")
+        else:
+            print(f"{kind}: {'PASS' if ok else 'FAIL'} (margin {s['margin']:g} "
+                  f"{s['units']}); min clearance {res.clearance[w]:.6g} (certified >= "
+                  f"{res.lower_bound[w]:.6g}) on segment {w} at parameter "
+                  f"{res.parameter[w]:.4f} ({res.component_names[res.component[w]]})")
+        for k in probing:
+            fc = res.first_contact[k]
+            print(f"  probing move {k}: " + (f"first contact at parameter {fc:.9f} "
+                  f"({res.component_names[res.component[k]]})" if np.isfinite(fc)
+                  else f"no contact (clearance {res.clearance[k]:.6g})"))
+        for i in np.flatnonzero(~res.passed & travel):
             fc = res.first_contact[i]
             what = (f"first contact at parameter {fc:.9f}" if np.isfinite(fc)
                     else f"clearance {res.lower_bound[i]:.6g} < margin")
             print(f"  segment {i}: FAIL, {what} "
                   f"({res.component_names[res.component[i]]})")
         print(f"reports: {Path(out)}/ ({', '.join(Path(f).name for f in s['files'])})")
-    return 0 if res.ok else 1
+    return 0 if ok else 1
+
+
+def _probing_moves(ks, n: int) -> list[int]:
+    """``--probing`` indices as sorted non-negative move numbers (negative count from the
+    end); an index outside the path's ``n`` moves is an error naming it."""
+    bad = [k for k in ks if not -n <= k < n]
+    if bad:
+        raise InvalidInputError(f"move {bad[0]} out of range: the path has {n} move(s) "
+                                f"(0..{n - 1}, or -{n}..-1 from the end)", "--probing")
+    return sorted({k % n for k in ks})
+
+
+def _travel_summary(res, travel, probing, ok) -> dict:
+    """The summary's travel / probing entries: the verdict counts travel moves only."""
+    idx = np.flatnonzero(travel)
+    w = int(idx[np.argmin(res.lower_bound[idx])]) if idx.size else None
+    return {"travel_passed": ok, "travel_worst_move": w,
+            "probing_moves": [{"move": k, "first_contact": (float(res.first_contact[k])
+                               if np.isfinite(res.first_contact[k]) else None),
+                               "component": res.component_names[res.component[k]]}
+                              for k in probing]}
 
 
 def add_parser(sub, common, positive_float, positive_or_zero):
@@ -125,6 +166,9 @@ def add_parser(sub, common, positive_float, positive_or_zero):
                    help="stylus direction tip -> head for point paths (default 0 0 1)")
     p.add_argument("--margin", type=positive_or_zero, default=0.0,
                    help="required clearance (default 0: no contact)")
+    p.add_argument("--probing", type=int, nargs="+", default=[], metavar="K",
+                   help="moves meant to touch (probing plunges; negative counts from the "
+                        "end): reported with their first contact, not failed")
     p.add_argument("--tol", type=positive_float, default=None,
                    help="certified interval width (default 1e-6 of the part's size)")
     p.add_argument("-o", "--output", default=None,
