@@ -332,8 +332,16 @@ def test_cli_section_scan_report(tmp_path):
                  "--scan", str(pts), "-o", str(out)]) == 2
     assert not out.exists()
     assert main(["section", "torus", "--plane", "0", "0", "1", "0", "--formats", "csv",
-                 "--scan", str(pts), "--report", "html", "-o", str(out)]) == 0
+                 "--tolerance", "0.01", "-o", str(out)]) == 2  # a band needs --scan
+    assert main(["section", "torus", "--plane", "0", "0", "1", "0", "--formats", "csv",
+                 "--scan", str(pts), "--report", "html", "--tolerance", "0", "-o",
+                 str(out)]) == 2
+    assert not out.exists()
+    assert main(["section", "torus", "--plane", "0", "0", "1", "0", "--formats", "csv",
+                 "--scan", str(pts), "--report", "html", "--tolerance", "-0.01", "0.02",
+                 "-o", str(out)]) == 0
     text = (out / "section_report.html").read_text(encoding="utf-8")
     assert "whiskers: scan deviation x" in text and "z = 0" in text
+    assert "[-0.01, 0.02]" in text  # the band in the header
     summary = json.loads((out / "section_summary.json").read_text())
     assert str(out / "section_report.html") in summary["files"]

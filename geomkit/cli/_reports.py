@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 
 from ..report_jobs import REPORT_KINDS, parse_kinds, report_files, write_reports
+from ._common import _tolerance
 
 JOBS = ("deviation", "section", "clearance")
 
@@ -37,6 +38,9 @@ def add_options(sub) -> None:
                             "the planes drawn as deviation whiskers")
         p.add_argument("--scan-probe-radius", type=float, default=0.0, metavar="R",
                        help="the --scan points are probe-ball centres of radius R")
+        p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
+                       help="with --scan: tolerance band of the whiskers, T (meaning "
+                            "-T..T) or LOWER UPPER")
 
 
 def names(args, job: str) -> list[str]:
@@ -54,7 +58,13 @@ def names(args, job: str) -> list[str]:
         if not (r >= 0 and r != float("inf")):
             raise InvalidInputError(f"must be a finite number >= 0, got {r}",
                                     "--scan-probe-radius")
+        args._report_tolerance = _tolerance(args.tolerance)
         args._report_scan = read_points(args.scan).points
+    elif getattr(args, "tolerance", None) is not None:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError("the tolerance band is for the --scan whiskers: add --scan "
+                                "POINTS --report html", "--tolerance")
     return report_files(job, kinds)
 
 
@@ -66,6 +76,7 @@ def write(args, job: str, targets: dict, **data) -> list[str]:
     if job == "section":
         data.setdefault("scan", getattr(args, "_report_scan", None))
         data.setdefault("probe_radius", getattr(args, "scan_probe_radius", 0.0))
+        data.setdefault("tolerance", getattr(args, "_report_tolerance", None))
     return [str(p) for p in write_reports(job, kinds, targets,
                                           overwrite=getattr(args, "overwrite", False),
                                           **data)]
