@@ -144,3 +144,7 @@ def test_cli_bench_end_to_end(tmp_path):
     assert_one_line_error(r, "exists", "--overwrite")
     r = cli("bench", "--engines", "nope", "-o", tmp_path / "c")
     assert_one_line_error(r, "--engines", "unknown engine")
+    assert not (tmp_path / "c").exists()
+    (tmp_path / "f").write_text("a file")  # the folder's parent is a file: refused first
+    r = cli("bench", "--engines", "evaluation", "-o", tmp_path / "f" / "b")
+    assert_one_line_error(r, "cannot write here")

@@ -7,9 +7,10 @@ import sys
 
 
 def _cmd_bench(args) -> int:
-    from ..bench.suite import ENGINES, FILES, format_table, run_suite
+    from ..bench.suite import ENGINES, FILES, format_table, run_suite, write_outputs
     from ..errors import InvalidInputError
-    from ..report import _clean, prepare_outputs
+    from ..report import _clean
+    from ._common import Outputs
 
     engines = [e.strip() for e in args.engines.split(",") if e.strip()] if args.engines \
         else list(ENGINES)
@@ -17,12 +18,12 @@ def _cmd_bench(args) -> int:
     if bad or not engines:
         raise InvalidInputError(f"unknown engine(s) {bad}; choose from {', '.join(ENGINES)}",
                                 "--engines")
-    prepare_outputs(args.output, FILES, args.overwrite)  # before minutes of work
+    outputs = Outputs(args.output, FILES, args.overwrite)  # checked before minutes of work
     quiet = args.json or not sys.stderr.isatty()
-    res = run_suite(engines, quick=not args.full, out_dir=args.output,
+    res = run_suite(engines, quick=not args.full,
                     progress=None if quiet else
-                    (lambda m: print(m, file=sys.stderr, flush=True)),
-                    overwrite=args.overwrite)
+                    (lambda m: print(m, file=sys.stderr, flush=True)))
+    res["files"] = write_outputs(res, outputs.create(), args.overwrite)  # folder made now
     if args.json:
         print(json.dumps(_clean({k: res[k] for k in ("mode", "seconds", "machine", "rows",
                                                      "files")}), indent=1, default=str))
