@@ -43,6 +43,9 @@ ALIGN_MAX_ITER = 60
 ALIGN_STEP_TOL = 1e-12
 """Alignment stops when the largest point displacement of a step is below this times
 the model size."""
+ALIGN_RCOND = 1e-8
+"""Motions whose least-squares sensitivity is below this fraction of the largest (rotation
+measured in model-size units) are left free: the surface does not fix them."""
 
 
 @dataclass(eq=False)
@@ -137,6 +140,16 @@ def _side(normals, pr_normal):
     return np.where(d < 0, -1.0, 1.0)
 
 
+def _step(c, x) -> np.ndarray:
+    """4x4 rigid step: rotation ``x[:3]`` (Rodrigues vector) about ``c``, then
+    translation ``x[3:]``."""
+    Rk = _rodrigues(x[:3])
+    step = np.eye(4)
+    step[:3, :3] = Rk
+    step[:3, 3] = c - Rk @ c + x[3:]
+    return step
+
+
 def align_rigid(surfaces, points, normals=None, probe_radius: float = 0.0,
                 max_distance: float | None = None, max_iter: int = ALIGN_MAX_ITER,
                 progress=None):
@@ -166,7 +179,8 @@ def align_rigid(surfaces, points, normals=None, probe_radius: float = 0.0,
     rank = 0
     converged = False
     it = 0
-    rms = float("nan")
+    best = None  # (T, rms, c, x) of the last accepted iterate and its step
+    halvings = 0
     for it in range(1, max_iter + 1):
         P = _apply(T, P0)
         Nt = None if N is None else N @ T[:3, :3].T
@@ -180,14 +194,31 @@ def align_rigid(surfaces, points, normals=None, probe_radius: float = 0.0,
         rms = float(np.sqrt(np.mean(r * r)))
         if rms_before is None:
             rms_before = rms
+        if best is not None and rms > best[1] * (1 + 1e-9) + 1e-15 * size:
+            # the linearised step made the fit worse: halve it (never end worse than
+            # the best iterate; a step halved 40 times is below rounding)
+            halvings += 1
+            if halvings > 40:
+                T = best[0]
+                converged = True
+                break
+            T_best, _, c, x = best
+            x = x * 0.5
+            best = (T_best, best[1], c, x)
+            T = _step(c, x) @ T_best
+            continue
+        halvings = 0
         n = pr.normal[ok]
         c = P[ok].mean(axis=0)
-        J = np.hstack([np.cross(P[ok] - c, n), n])
-        x, _, rank, _ = np.linalg.lstsq(J, -r, rcond=1e-10)
-        Rk = _rodrigues(x[:3])
-        step = np.eye(4)
-        step[:3, :3] = Rk
-        step[:3, 3] = c - Rk @ c + x[3:]
+        # rotation columns in length units (x size), so the rank threshold compares
+        # like with like; a motion the surface leaves free (a sphere's rotations about
+        # its centre, a cylinder's slide along its axis) has a singular value at the
+        # rounding level and is not moved
+        J = np.hstack([np.cross(P[ok] - c, n) / size, n])
+        x, _, rank, _ = np.linalg.lstsq(J, -r, rcond=ALIGN_RCOND)
+        x[:3] /= size
+        best = (T, rms, c, x)
+        step = _step(c, x)
         T = step @ T
         moved = float(np.max(np.linalg.norm(_apply(step, P[ok]) - P[ok], axis=1)))
         if progress is not None:
