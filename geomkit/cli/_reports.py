@@ -60,7 +60,7 @@ def names(args, job: str) -> list[str]:
                                     "--scan-probe-radius")
         args._report_tolerance = _tolerance(args.tolerance)
         args._report_scan = read_points(args.scan).points
-    elif getattr(args, "tolerance", None) is not None:
+    elif job == "section" and getattr(args, "tolerance", None) is not None:
         from ..errors import InvalidInputError
 
         raise InvalidInputError("the tolerance band is for the --scan whiskers: add --scan "
