@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from .occ import HAVE_OCP, _require_ocp, _xyz
+from ._occ_common import HAVE_OCP, _require_ocp, _xyz
 
 __all__ = ["HAVE_OCP", "intss"]
 
