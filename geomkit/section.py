@@ -211,7 +211,9 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     for c in curves:
         c["X"] = _points(ev, c["uv"], c["sid"])
     bridged = [0.0]
-    curves = _join(curves, max(tol, gap), bridged)
+    curves = _join(curves, max(tol, gap), bridged, exact=tol)
+    if gap > 0:
+        curves = _join_across_edges(curves, surfs, gap, bridged)
     # curves within tol of a point are contact points
     keep = []
     for c in curves:
@@ -327,43 +329,105 @@ def _boundary(s, ev, a_in, b_out, zsnap, iters=60):
     return a
 
 
-def _join(curves, tol, bridged=None):
-    """Join open curves whose ends coincide within ``tol`` (seams, shared edges);
-    flag curves whose two ends meet as closed.  ``bridged[0]`` is raised to the
-    largest distance joined."""
+def _join(curves, tol, bridged=None, exact=0.0):
+    """Join open curves whose ends coincide within ``tol`` (seams, shared edges), the
+    nearest pair of ends first (so a sliver face's short piece is joined between its
+    neighbours rather than bridged over); close curves whose two ends meet.  An end
+    point within ``exact`` of the end it is joined to is dropped as a duplicate;
+    farther ones are kept (the curve then bridges the gap).  ``bridged[0]`` is raised
+    to the largest distance joined."""
     bridged = [0.0] if bridged is None else bridged
     curves = list(curves)
-    changed = True
-    while changed:
-        changed = False
+    while True:
         opens = [i for i, c in enumerate(curves) if not c["closed"]]
-        for ii, i in enumerate(opens):
-            for j in opens[ii + 1:]:
-                a, b = curves[i], curves[j]
-                for ra, rb in ((False, False), (False, True), (True, False), (True, True)):
-                    ea = a["X"][0] if ra else a["X"][-1]
-                    sb = b["X"][-1] if rb else b["X"][0]
-                    if (dist := float(np.linalg.norm(ea - sb))) <= tol:
-                        bridged[0] = max(bridged[0], dist)
-                        A = _rev(a) if ra else a
-                        B = _rev(b) if rb else b
-                        curves[i] = {k: (np.concatenate([A[k], B[k][1:]]) if k in ("uv", "sid", "X")
-                                         else A[k]) for k in A}
-                        curves[i]["chord"] = max(a["chord"], b["chord"])
-                        del curves[j]
-                        changed = True
-                        break
-                if changed:
-                    break
-            if changed:
-                break
-    for c in curves:
-        if not c["closed"] and len(c["X"]) > 2 and np.linalg.norm(c["X"][0] - c["X"][-1]) <= tol:
-            bridged[0] = max(bridged[0], float(np.linalg.norm(c["X"][0] - c["X"][-1])))
+        if not opens:
+            return curves
+        E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+        D = np.linalg.norm(E[:, None] - E[None], axis=2)
+        np.fill_diagonal(D, np.inf)
+        # a curve closes on itself only with > 2 points, and only where no other
+        # curve's end is as near (to within ``exact``: duplicates join first)
+        for k, i in enumerate(opens):
+            D[2 * k, 2 * k + 1] = D[2 * k + 1, 2 * k] = (
+                D[2 * k, 2 * k + 1] + exact if len(curves[i]["X"]) > 2 else np.inf)
+        a, b = divmod(int(np.argmin(D)), len(E))
+        dist = float(np.linalg.norm(E[a] - E[b]))
+        if not (np.isfinite(D[a, b]) and dist <= tol):
+            return curves
+        bridged[0] = max(bridged[0], dist)
+        i, j = opens[a // 2], opens[b // 2]
+        dup = dist <= exact
+        if i == j:
+            c = curves[i]
             c["closed"] = True
-            for k in ("uv", "sid", "X"):
-                c[k] = c[k][:-1]
-    return curves
+            if dup:
+                for k in ("uv", "sid", "X"):
+                    c[k] = c[k][:-1]
+            continue
+        A = curves[i] if a % 2 else _rev(curves[i])   # A ends at end a
+        B = _rev(curves[j]) if b % 2 else curves[j]   # B starts at end b
+        merged = {k: (np.concatenate([A[k], B[k][int(dup):]]) if k in ("uv", "sid", "X")
+                      else A[k]) for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+EDGE_REACH = 8.0
+"""Open curve ends on two faces' boundaries are joined across their shared edge when
+they are mutual nearest, each within ``gap`` of the other face's boundary and at most
+``EDGE_REACH * gap`` apart (a plane crossing an edge whose sides are ``gap`` apart at
+an angle a meets them up to ``gap / sin a`` apart: down to a = 7 degrees)."""
+
+
+def _join_across_edges(curves, surfs, gap, bridged):
+    """Join the open ends ``_join`` left where the plane crosses a shared edge obliquely
+    (see EDGE_REACH); ``bridged[0]`` is raised to the largest distance joined."""
+    while True:
+        ends = [(i, e) for i, c in enumerate(curves) if not c["closed"] for e in (0, -1)]
+        if len(ends) < 2:
+            return curves
+        P = np.array([curves[i]["X"][e] for i, e in ends])
+        F = np.array([int(curves[i]["sid"][e]) for i, e in ends])
+        D = np.linalg.norm(P[:, None] - P[None], axis=2)
+        D[(F[:, None] == F[None]) | (D > EDGE_REACH * gap)] = np.inf
+        np.fill_diagonal(D, np.inf)
+        best = None
+        for a, b in zip(*np.nonzero(np.isfinite(D))):
+            if a < b and np.argmin(D[a]) == b and np.argmin(D[b]) == a \
+                    and (best is None or D[a, b] < D[best]):
+                if (_to_boundary(surfs[F[b]], P[a]) <= gap
+                        and _to_boundary(surfs[F[a]], P[b]) <= gap):
+                    best = (a, b)
+        if best is None:
+            return curves
+        (i, ei), (j, ej) = ends[best[0]], ends[best[1]]
+        bridged[0] = max(bridged[0], float(D[best]))
+        if i == j:
+            curves[i]["closed"] = True
+            continue
+        A = _rev(curves[i]) if ei == 0 else curves[i]
+        B = curves[j] if ej == 0 else _rev(curves[j])
+        merged = {k: (np.concatenate([A[k], B[k]]) if k in ("uv", "sid", "X") else A[k])
+                  for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+def _to_boundary(s, p, per_piece=256):
+    """Distance of the point ``p`` to the boundary of face ``s`` (its trim loops' 3-D
+    polylines at ``per_piece`` samples per piece: within their sagitta of it)."""
+    from .cad.gaps import boundary_samples
+
+    key = ("boundary_polyline", per_piece)
+    if key not in s._cache:
+        X, _, pc = boundary_samples([s], per_piece)
+        same = pc[:-1] == pc[1:]
+        s._cache[key] = (X[:-1][same], X[1:][same])
+    A, B = s._cache[key]
+    AB = B - A
+    L2 = np.einsum("ij,ij->i", AB, AB)
+    t = np.clip(np.einsum("ij,ij->i", p - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+    return float(np.linalg.norm(A + t[:, None] * AB - p, axis=1).min())
 
 
 def _rev(c):
