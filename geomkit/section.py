@@ -261,11 +261,12 @@ def _points(ev, uv, sid):
 
 def _clip_trims(s, plane, chains, zsnap):
     """Keep the parts of each chain inside the trimmed face; the ends on the trim
-    curve are found by bisection along the exact curve (classify_uv)."""
+    curve are found by bisection along the exact curve (classify_uv), all the face's
+    crossings at once."""
     if not s.is_trimmed:
         return chains
     ev = _Eval(s, plane)
-    out = []
+    out, pending, req_in, req_out = [], [], [], []
     for c in chains:
         uv = c["uv"]
         if c["closed"]:
@@ -279,22 +280,28 @@ def _clip_trims(s, plane, chains, zsnap):
         if c["closed"] and inside.any():  # start the walk at an outside point
             r = int(np.argmin(inside))
             uv = np.concatenate([uv[r:-1], uv[:r + 1]])
-            inside = s.classify_uv(uv) != OUTSIDE
-        runs, cur = [], None
-        for i in range(len(uv)):
-            if inside[i]:
-                if cur is None:
-                    cur = [_boundary(s, ev, uv[i - 1], uv[i], zsnap)] if i > 0 else []
-                cur.append(uv[i])
-            elif cur is not None:
-                cur.append(_boundary(s, ev, uv[i - 1], uv[i], zsnap))
-                runs.append(cur)
-                cur = None
-        if cur is not None:
-            runs.append(cur)
-        for r in runs:
-            if len(r) >= 2:
-                out.append({"uv": np.array(r), "closed": False, "chord": c["chord"]})
+            inside = inside[np.r_[r:len(inside) - 1, :r + 1]]
+        # runs of inside points [i0, i1); a boundary point before i0 > 0 and after
+        # i1 < len(uv) (requests into req_in / req_out, solved below)
+        d = np.diff(np.r_[0, inside.astype(np.int8), 0])
+        for i0, i1 in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]):
+            head = tail = None
+            if i0 > 0:
+                head = len(req_in)
+                req_in.append(uv[i0])
+                req_out.append(uv[i0 - 1])
+            if i1 < len(uv):
+                tail = len(req_in)
+                req_in.append(uv[i1 - 1])
+                req_out.append(uv[i1])
+            if (head is not None) + (i1 - i0) + (tail is not None) >= 2:
+                pending.append((uv[i0:i1], head, tail, c["chord"]))
+    if pending:
+        q = _boundaries(s, ev, np.array(req_in), np.array(req_out), zsnap)
+        for run, head, tail, chord in pending:
+            parts = ([q[head:head + 1]] if head is not None else []) + [run] + (
+                [q[tail:tail + 1]] if tail is not None else [])
+            out.append({"uv": np.concatenate(parts), "closed": False, "chord": chord})
     return out
 
 
@@ -311,20 +318,20 @@ def _densify(ev, uv, h, zsnap):
     return uv
 
 
-def _boundary(s, ev, a_in, b_out, zsnap, iters=60):
-    """The curve point on the trim boundary between an inside and an outside point."""
-    a, b = np.array(a_in, float), np.array(b_out, float)
+def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
+    """The curve points on the trim boundary between inside points ``a_in`` (n, 2) and
+    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once."""
+    a, b = a_in.copy(), b_out.copy()
     band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
-    if s.classify_uv(a[None])[0] == OUTSIDE:
-        a, b = b, a
+    act = np.arange(len(a))
     for _ in range(iters):
-        m, _f = ev.project(0.5 * (a + b), [np.linalg.norm(b - a)], 0.25 * zsnap)
-        m = m[0]
-        if s.classify_uv(m[None], band)[0] == OUTSIDE:
-            b = m
-        else:
-            a = m
-        if np.linalg.norm(b - a) <= 1e-13:
+        m, _f = ev.project(0.5 * (a[act] + b[act]), np.linalg.norm(b[act] - a[act], axis=1),
+                           0.25 * zsnap)
+        o = s.classify_uv(m, band) == OUTSIDE
+        b[act[o]] = m[o]
+        a[act[~o]] = m[~o]
+        act = act[np.linalg.norm(b[act] - a[act], axis=1) > 1e-13]
+        if not len(act):
             break
     return a
 
