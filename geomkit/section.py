@@ -157,8 +157,11 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     gap : float >= 0
         The model's edge gap (a CAD file's faces meet within it, not exactly; see
         :func:`geomkit.cad.gaps.model_gap`): curve ends closer than ``max(tol, gap)``
-        are joined and loops closed; the largest distance bridged is reported
-        (``max_gap_bridged``).
+        are joined and loops closed, nearest pair first; ends left open where the
+        plane crosses a shared edge obliquely (up to ``gap / sin(angle)`` apart) are
+        joined across it when mutual nearest and each within ``gap`` of the other
+        face's boundary (see ``EDGE_REACH``); the largest distance bridged is
+        reported (``max_gap_bridged``).
 
     Returns
     -------
