@@ -157,8 +157,11 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     gap : float >= 0
         The model's edge gap (a CAD file's faces meet within it, not exactly; see
         :func:`geomkit.cad.gaps.model_gap`): curve ends closer than ``max(tol, gap)``
-        are joined and loops closed; the largest distance bridged is reported
-        (``max_gap_bridged``).
+        are joined and loops closed, nearest pair first; ends left open where the
+        plane crosses a shared edge obliquely (up to ``gap / sin(angle)`` apart) are
+        joined across it when mutual nearest and each within ``gap`` of the other
+        face's boundary (see ``EDGE_REACH``); the largest distance bridged is
+        reported (``max_gap_bridged``).
 
     Returns
     -------
@@ -211,7 +214,9 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     for c in curves:
         c["X"] = _points(ev, c["uv"], c["sid"])
     bridged = [0.0]
-    curves = _join(curves, max(tol, gap), bridged)
+    curves = _join(curves, max(tol, gap), bridged, exact=tol)
+    if gap > 0:
+        curves = _join_across_edges(curves, surfs, gap, bridged)
     # curves within tol of a point are contact points
     keep = []
     for c in curves:
@@ -259,11 +264,12 @@ def _points(ev, uv, sid):
 
 def _clip_trims(s, plane, chains, zsnap):
     """Keep the parts of each chain inside the trimmed face; the ends on the trim
-    curve are found by bisection along the exact curve (classify_uv)."""
+    curve are found by bisection along the exact curve (classify_uv), all the face's
+    crossings at once."""
     if not s.is_trimmed:
         return chains
     ev = _Eval(s, plane)
-    out = []
+    out, pending, req_in, req_out = [], [], [], []
     for c in chains:
         uv = c["uv"]
         if c["closed"]:
@@ -277,22 +283,28 @@ def _clip_trims(s, plane, chains, zsnap):
         if c["closed"] and inside.any():  # start the walk at an outside point
             r = int(np.argmin(inside))
             uv = np.concatenate([uv[r:-1], uv[:r + 1]])
-            inside = s.classify_uv(uv) != OUTSIDE
-        runs, cur = [], None
-        for i in range(len(uv)):
-            if inside[i]:
-                if cur is None:
-                    cur = [_boundary(s, ev, uv[i - 1], uv[i], zsnap)] if i > 0 else []
-                cur.append(uv[i])
-            elif cur is not None:
-                cur.append(_boundary(s, ev, uv[i - 1], uv[i], zsnap))
-                runs.append(cur)
-                cur = None
-        if cur is not None:
-            runs.append(cur)
-        for r in runs:
-            if len(r) >= 2:
-                out.append({"uv": np.array(r), "closed": False, "chord": c["chord"]})
+            inside = inside[np.r_[r:len(inside) - 1, :r + 1]]
+        # runs of inside points [i0, i1); a boundary point before i0 > 0 and after
+        # i1 < len(uv) (requests into req_in / req_out, solved below)
+        d = np.diff(np.r_[0, inside.astype(np.int8), 0])
+        for i0, i1 in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]):
+            head = tail = None
+            if i0 > 0:
+                head = len(req_in)
+                req_in.append(uv[i0])
+                req_out.append(uv[i0 - 1])
+            if i1 < len(uv):
+                tail = len(req_in)
+                req_in.append(uv[i1 - 1])
+                req_out.append(uv[i1])
+            if (head is not None) + (i1 - i0) + (tail is not None) >= 2:
+                pending.append((uv[i0:i1], head, tail, c["chord"]))
+    if pending:
+        q = _boundaries(s, ev, np.array(req_in), np.array(req_out), zsnap)
+        for run, head, tail, chord in pending:
+            parts = ([q[head:head + 1]] if head is not None else []) + [run] + (
+                [q[tail:tail + 1]] if tail is not None else [])
+            out.append({"uv": np.concatenate(parts), "closed": False, "chord": chord})
     return out
 
 
@@ -309,61 +321,123 @@ def _densify(ev, uv, h, zsnap):
     return uv
 
 
-def _boundary(s, ev, a_in, b_out, zsnap, iters=60):
-    """The curve point on the trim boundary between an inside and an outside point."""
-    a, b = np.array(a_in, float), np.array(b_out, float)
+def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
+    """The curve points on the trim boundary between inside points ``a_in`` (n, 2) and
+    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once."""
+    a, b = a_in.copy(), b_out.copy()
     band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
-    if s.classify_uv(a[None])[0] == OUTSIDE:
-        a, b = b, a
+    act = np.arange(len(a))
     for _ in range(iters):
-        m, _f = ev.project(0.5 * (a + b), [np.linalg.norm(b - a)], 0.25 * zsnap)
-        m = m[0]
-        if s.classify_uv(m[None], band)[0] == OUTSIDE:
-            b = m
-        else:
-            a = m
-        if np.linalg.norm(b - a) <= 1e-13:
+        m, _f = ev.project(0.5 * (a[act] + b[act]), np.linalg.norm(b[act] - a[act], axis=1),
+                           0.25 * zsnap)
+        o = s.classify_uv(m, band) == OUTSIDE
+        b[act[o]] = m[o]
+        a[act[~o]] = m[~o]
+        act = act[np.linalg.norm(b[act] - a[act], axis=1) > 1e-13]
+        if not len(act):
             break
     return a
 
 
-def _join(curves, tol, bridged=None):
-    """Join open curves whose ends coincide within ``tol`` (seams, shared edges);
-    flag curves whose two ends meet as closed.  ``bridged[0]`` is raised to the
-    largest distance joined."""
+def _join(curves, tol, bridged=None, exact=0.0):
+    """Join open curves whose ends coincide within ``tol`` (seams, shared edges), the
+    nearest pair of ends first (so a sliver face's short piece is joined between its
+    neighbours rather than bridged over); close curves whose two ends meet.  An end
+    point within ``exact`` of the end it is joined to is dropped as a duplicate;
+    farther ones are kept (the curve then bridges the gap).  ``bridged[0]`` is raised
+    to the largest distance joined."""
     bridged = [0.0] if bridged is None else bridged
     curves = list(curves)
-    changed = True
-    while changed:
-        changed = False
+    while True:
         opens = [i for i, c in enumerate(curves) if not c["closed"]]
-        for ii, i in enumerate(opens):
-            for j in opens[ii + 1:]:
-                a, b = curves[i], curves[j]
-                for ra, rb in ((False, False), (False, True), (True, False), (True, True)):
-                    ea = a["X"][0] if ra else a["X"][-1]
-                    sb = b["X"][-1] if rb else b["X"][0]
-                    if (dist := float(np.linalg.norm(ea - sb))) <= tol:
-                        bridged[0] = max(bridged[0], dist)
-                        A = _rev(a) if ra else a
-                        B = _rev(b) if rb else b
-                        curves[i] = {k: (np.concatenate([A[k], B[k][1:]]) if k in ("uv", "sid", "X")
-                                         else A[k]) for k in A}
-                        curves[i]["chord"] = max(a["chord"], b["chord"])
-                        del curves[j]
-                        changed = True
-                        break
-                if changed:
-                    break
-            if changed:
-                break
-    for c in curves:
-        if not c["closed"] and len(c["X"]) > 2 and np.linalg.norm(c["X"][0] - c["X"][-1]) <= tol:
-            bridged[0] = max(bridged[0], float(np.linalg.norm(c["X"][0] - c["X"][-1])))
+        if not opens:
+            return curves
+        E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+        D = np.linalg.norm(E[:, None] - E[None], axis=2)
+        np.fill_diagonal(D, np.inf)
+        # a curve closes on itself only with > 2 points, and only where no other
+        # curve's end is as near (to within ``exact``: duplicates join first)
+        for k, i in enumerate(opens):
+            D[2 * k, 2 * k + 1] = D[2 * k + 1, 2 * k] = (
+                D[2 * k, 2 * k + 1] + exact if len(curves[i]["X"]) > 2 else np.inf)
+        a, b = divmod(int(np.argmin(D)), len(E))
+        dist = float(np.linalg.norm(E[a] - E[b]))
+        if not (np.isfinite(D[a, b]) and dist <= tol):
+            return curves
+        bridged[0] = max(bridged[0], dist)
+        i, j = opens[a // 2], opens[b // 2]
+        dup = dist <= exact
+        if i == j:
+            c = curves[i]
             c["closed"] = True
-            for k in ("uv", "sid", "X"):
-                c[k] = c[k][:-1]
-    return curves
+            if dup:
+                for k in ("uv", "sid", "X"):
+                    c[k] = c[k][:-1]
+            continue
+        A = curves[i] if a % 2 else _rev(curves[i])   # A ends at end a
+        B = _rev(curves[j]) if b % 2 else curves[j]   # B starts at end b
+        merged = {k: (np.concatenate([A[k], B[k][int(dup):]]) if k in ("uv", "sid", "X")
+                      else A[k]) for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+EDGE_REACH = 8.0
+"""Open curve ends on two faces' boundaries are joined across their shared edge when
+they are mutual nearest, each within ``gap`` of the other face's boundary and at most
+``EDGE_REACH * gap`` apart (a plane crossing an edge whose sides are ``gap`` apart at
+an angle a meets them up to ``gap / sin a`` apart: down to a = 7 degrees)."""
+
+
+def _join_across_edges(curves, surfs, gap, bridged):
+    """Join the open ends ``_join`` left where the plane crosses a shared edge obliquely
+    (see EDGE_REACH); ``bridged[0]`` is raised to the largest distance joined."""
+    while True:
+        ends = [(i, e) for i, c in enumerate(curves) if not c["closed"] for e in (0, -1)]
+        if len(ends) < 2:
+            return curves
+        P = np.array([curves[i]["X"][e] for i, e in ends])
+        F = np.array([int(curves[i]["sid"][e]) for i, e in ends])
+        D = np.linalg.norm(P[:, None] - P[None], axis=2)
+        D[(F[:, None] == F[None]) | (D > EDGE_REACH * gap)] = np.inf
+        np.fill_diagonal(D, np.inf)
+        best = None
+        for a, b in zip(*np.nonzero(np.isfinite(D))):
+            if a < b and np.argmin(D[a]) == b and np.argmin(D[b]) == a \
+                    and (best is None or D[a, b] < D[best]):
+                if (_to_boundary(surfs[F[b]], P[a]) <= gap
+                        and _to_boundary(surfs[F[a]], P[b]) <= gap):
+                    best = (a, b)
+        if best is None:
+            return curves
+        (i, ei), (j, ej) = ends[best[0]], ends[best[1]]
+        bridged[0] = max(bridged[0], float(D[best]))
+        if i == j:
+            curves[i]["closed"] = True
+            continue
+        A = _rev(curves[i]) if ei == 0 else curves[i]
+        B = curves[j] if ej == 0 else _rev(curves[j])
+        merged = {k: (np.concatenate([A[k], B[k]]) if k in ("uv", "sid", "X") else A[k])
+                  for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+def _to_boundary(s, p, per_piece=256):
+    """Distance of the point ``p`` to the boundary of face ``s`` (its trim loops' 3-D
+    polylines at ``per_piece`` samples per piece: within their sagitta of it)."""
+    from .cad.gaps import boundary_samples
+
+    key = ("boundary_polyline", per_piece)
+    if key not in s._cache:
+        X, _, pc = boundary_samples([s], per_piece)
+        same = pc[:-1] == pc[1:]
+        s._cache[key] = (X[:-1][same], X[1:][same])
+    A, B = s._cache[key]
+    AB = B - A
+    L2 = np.einsum("ij,ij->i", AB, AB)
+    t = np.clip(np.einsum("ij,ij->i", p - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+    return float(np.linalg.norm(A + t[:, None] * AB - p, axis=1).min())
 
 
 def _rev(c):

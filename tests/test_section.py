@@ -302,3 +302,46 @@ def test_against_occ_section():
     for P in polys:  # every OCC point is near our exact curve (OCC's own error ~1e-5)
         d = np.array([np.linalg.norm(X - p, axis=1).min() for p in P[:: max(1, len(P) // 50)]])
         assert d.max() <= 0.05
+
+
+# --------------------------------------------------- joining across a model's gaps
+def _sheet(x0, x1, y0=0.0, y1=1.0):
+    """A flat face in z = 0 over [x0, x1] x [y0, y1] (exact rational plane patch)."""
+    from geomkit.cad import analytic
+
+    return geomkit.Surface(*analytic.plane_patch([0, 0, 0], [1, 0, 0], [0, 1, 0],
+                                                 x0, x1, y0, y1))
+
+
+def test_a_sliver_face_is_joined_between_its_neighbours_not_bridged_over():
+    """Faces A | S | B meeting exactly, S 4e-4 wide, gap 2e-3 > that width: the ends
+    are joined nearest pair first, so S's piece (its points coincide with A's last and
+    B's first) joins between A's and B's: one curve, nothing bridged (listed A, B, S,
+    joining the first pair within the gap bridged A -> B over S, 4e-4, and left S's
+    piece alone as a second curve)."""
+    a, b, s = _sheet(0, 1), _sheet(1.0004, 2), _sheet(1, 1.0004)
+    sec = plane_section([a, b, s], [0, 1, 0, -0.5], tol=1e-6, gap=2e-3)
+    assert len(sec.curves) == 1 and sec.max_gap_bridged == 0.0   # nothing bridged
+    X = sec.curves[0]
+    assert np.all(np.abs(X[:, 1:] - [0.5, 0]) < 1e-12)
+    assert sorted(X[:, 0])[0] == 0 and sorted(X[:, 0])[-1] == 2
+
+
+@pytest.mark.parametrize("angle_deg", [30.0, 60.0])
+def test_ends_are_joined_across_an_edge_the_plane_crosses_obliquely(angle_deg):
+    """Two faces 1e-3 apart across the edge x = 1 (y along it); a plane whose trace on
+    them makes the angle a with the edge meets the two sides 1e-3 / sin(a) apart (2e-3
+    at 30 degrees, more than the gap 1.5e-3): still one curve, the jump reported."""
+    a_ = np.radians(angle_deg)
+    n = np.array([np.cos(a_), -np.sin(a_), 0.0])
+    plane = np.append(n, -n @ [1, 0.5, 0])
+    A, B = _sheet(0, 1), _sheet(1.001, 2)
+    jump = 1e-3 / np.sin(a_)
+    sec0 = plane_section([A, B], plane, tol=1e-6, gap=0.0)
+    assert len(sec0.curves) == 2
+    sec = plane_section([A, B], plane, tol=1e-6, gap=1.5e-3)
+    assert len(sec.curves) == 1 and not sec.closed[0]
+    assert abs(sec.max_gap_bridged - jump) < 1e-12
+    # a face farther than the gap from the other's boundary is not joined
+    far = plane_section([A, _sheet(1.004, 2)], plane, tol=1e-6, gap=1.5e-3)
+    assert len(far.curves) == 2 and far.max_gap_bridged == 0.0
