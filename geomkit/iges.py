@@ -1,7 +1,7 @@
 """Reading IGES files: every face as an exact NURBS :class:`~geomkit.Surface`.
 
-pyiges lists the entities (directory section); the parameter records are read here
-from the file's P section, so every value is taken exactly as written.
+The directory (D) and parameter (P) sections are read here
+(:mod:`geomkit.cad._iges_file`), so every value is taken exactly as written.
 
 * Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 120
   (surface of revolution about a 110 axis, generatrix 110 / 100 / 126 / 112), 122
@@ -36,8 +36,6 @@ its entity (directory sequence number), or is skipped with ``skip_invalid=True``
 
 from __future__ import annotations
 
-import contextlib
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -51,11 +49,11 @@ from .cad._iges_entities import restrict, surface as _surface_entity
 from .cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
 from .cad._iges_file import UNIT_FLAGS  # noqa: F401 (re-exported)
+from .cad._iges_file import directory as _directory
 from .cad._iges_file import param_records as _param_records
 from .cad._iges_file import units as _units
 from .cad.uvmap import map_pcurve
-from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
-                     MissingDependencyError)
+from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError
 from .types import Surface, TrimCurve
 
 __all__ = ["read_iges", "IgesResult", "Skipped"]
@@ -102,25 +100,17 @@ class IgesResult:
     pcurve_error: float = 0.0
 
 
-def _import_pyiges():
-    try:
-        import pyiges
-    except ImportError:
-        raise MissingDependencyError("reading IGES needs pyiges: pip install pyiges") from None
-    return pyiges
-
-
 class _Reader:
-    def __init__(self, path: Path, iges):
+    def __init__(self, path: Path, iges=None):
+        """``iges`` is ignored (kept for callers that pass a pyiges model): the
+        directory and parameter sections are read here."""
         self.path = path
         self.recs, self.glob = _param_records(path)
-        self.dir = {}
+        self.dir = _directory(path)
         self.gaps = []
         self.pcurve_error = 0.0
         self.clipped = 0
         self.approx = {}  # DE -> achieved error of an approximated (offset) surface
-        for e in iges.items:
-            self.dir[e.sequence_number] = e
 
     def rec(self, de: int) -> list:
         if de not in self.recs:
@@ -198,6 +188,14 @@ class _Reader:
             for k in range(n):
                 out += self.pcurve_pieces(_i(r[2 + k]), where)
             return out
+        if t in (100, 104):  # arcs and conics in the (u, v) plane: exact rational
+            from .cad._iges_entities import curve3d
+
+            (p, U, Pw), _, _ = curve3d(self, de)
+            w = Pw[:, 3]
+            return [TrimCurve.create(p, U, Pw[:, :2] / w[:, None],
+                                     None if np.all(w == w[0]) else w,
+                                     f"{where}.{t}@{de}")]
         if t == 110:
             p0 = [_f(r[1]), _f(r[2])]
             p1 = [_f(r[4]), _f(r[5])]
@@ -222,8 +220,8 @@ class _Reader:
             w = Pw[:, 2]
             return [TrimCurve.create(M, U, Pw[:, :2] / w[:, None],
                                      None if np.all(w == w[0]) else w, f"{where}.curve@{de}")]
-        raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110 and 102 "
-                    "are read exactly)")
+        raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110, 100, "
+                    "104 and 102 are read exactly)")
 
     def loop142(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         if self.type_of(de) != 142:
@@ -362,8 +360,6 @@ def read_iges(path, skip_invalid: bool = False,
         (listed, each with its reason) without ``skip_unsupported``.
     InvalidSurfaceError
         A surface or trim that fails validation, naming its entity.
-    MissingDependencyError
-        pyiges is not installed.
     """
     p = Path(path)
     if not p.exists():
@@ -372,16 +368,12 @@ def read_iges(path, skip_invalid: bool = False,
         raise FileFormatError(f"{p}: is a directory, expected an IGES file")
     if not p.read_bytes().strip():
         raise InvalidInputError(f"{p}: empty file, expected an IGES file")
-    pyiges = _import_pyiges()
-    try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pyiges prints warnings
-            ig = pyiges.read(str(p))
-    except Exception as exc:  # pyiges fails with assorted errors on malformed input
-        raise FileFormatError(f"{p}: not a readable IGES file ({type(exc).__name__}: "
-                              f"{exc})") from None
-    rd = _Reader(p, ig)
+    rd = _Reader(p)
+    if not rd.dir:
+        raise FileFormatError(f"{p}: not a readable IGES file (no directory section: "
+                              "no line with 'D' in column 73)")
     counts: dict = {}
-    for e in ig.items:
+    for e in rd.dir.values():
         t = int(e.d["entity_type_number"])
         counts[t] = counts.get(t, 0) + 1
     surfaces, entities, skipped = [], [], []

@@ -15,14 +15,15 @@ import math
 import numpy as np
 
 from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, ruled,
-                       transform_curve)
+                       transform_curve, turn_into)
+from .conic import conic_arc
 from .loops import Unsupported
 
 READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
                  122: "tabulated cylinder", 118: "ruled surface",
                  140: "offset surface (approximated)"}
-READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
-               112: "parametric spline curve"}
+READ_CURVES = {110: "line", 100: "circular arc", 104: "conic arc",
+               126: "rational B-spline curve", 112: "parametric spline curve"}
 
 
 def f_(x: str) -> float:
@@ -31,6 +32,23 @@ def f_(x: str) -> float:
 
 def i_(x: str) -> int:
     return int(float(x)) if x else 0
+
+
+def numbers(rd, de: int, first: int, n: int) -> list:
+    """``n`` real parameters of entity ``de`` from index ``first``; a missing or
+    non-numeric one is a :class:`~geomkit.errors.FileFormatError` naming the entity."""
+    from ..errors import FileFormatError
+
+    r = rd.rec(de)
+    t = rd.type_of(de)
+    if len(r) < first + n:
+        raise FileFormatError(f"{rd.path}: entity {t} at DE {de}: {len(r) - first} "
+                              f"parameters, expected {n}")
+    try:
+        return [f_(x) for x in r[first: first + n]]
+    except ValueError:
+        raise FileFormatError(f"{rd.path}: entity {t} at DE {de}: non-numeric parameter "
+                              f"in {r[first: first + n]}") from None
 
 
 def restrict(p, U, Pw, t0, t1):
@@ -75,8 +93,14 @@ def curve3d(rd, de: int):
             a1 += 2 * math.pi
         c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
         # the file's angles may be written in another turn ([-pi/2, 0] for [3pi/2, 2pi])
-        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(_turn(x, a0, a1), a0, a1)), \
+        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(turn_into(x, a0, a1), a0,
+                                                            a1)), \
             (a0, a1)
+    elif t == 104:
+        v = numbers(rd, de, 1, 11)
+        form = int(rd.dir[de].d.get("form_number") or 0)
+        c, fmap, rng = conic_arc(v[:6], v[6], v[7:9], v[9:11], form,
+                                 f"{rd.path}: entity 104 at DE {de}")
     elif t == 126:
         K, M = i_(r[1]), i_(r[2])
         prop3 = i_(r[5])
@@ -100,13 +124,6 @@ def curve3d(rd, de: int):
         raise Unsupported(f"curve DE {de} is entity {t} (read: "
                           + ", ".join(f"{k} {v}" for k, v in READ_CURVES.items()) + ")")
     return transform_curve(c, rd.transform(de)), fmap, rng
-
-
-def _turn(x, a0, a1):
-    """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit."""
-    x = np.asarray(x, float)
-    w = a0 + np.mod(x - a0 + 1e-9, 2 * math.pi) - 1e-9
-    return np.where((x < a0 - 1e-9) | (x > a1 + 1e-9), w, x)
 
 
 def _spline112(r):
@@ -167,16 +184,24 @@ def surface(rd, de: int):
     elif t == 118:
         c1, m1, r1 = curve3d(rd, i_(r[1]))
         c2, m2, r2 = curve3d(rd, i_(r[2]))
-        if m1 is not None or m2 is not None:
-            raise Unsupported(f"ruled surface DE {de} between arcs (normalised arc "
-                              "parameter is not linear in the NURBS parameter)")
-        c1, _ = _normalised(c1, r1, None)
-        c2, _ = _normalised(c2, r2, None)
+        c1, g1 = _normalised(c1, r1, m1)
+        c2, g2 = _normalised(c2, r2, m2)
         if i_(r[3]) == 1:
             p, U, Pw = c2
             c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
+            g2 = None if g2 is None else (lambda s, g=g2: 1.0 - g(1.0 - np.asarray(s)))
+        if g1 is not None or g2 is not None:
+            # rulings join equal entity parameters: exact only where both curves
+            # carry them to equal NURBS parameters (arcs / ellipses of equal sweep)
+            s = np.linspace(0.0, 1.0, 33)
+            h1 = s if g1 is None else g1(s)
+            h2 = s if g2 is None else g2(s)
+            if float(np.abs(h1 - h2).max()) > 1e-12:
+                raise Unsupported(f"ruled surface DE {de}: its curves' parameters map "
+                                  "differently to their NURBS parameters (e.g. an arc and "
+                                  "a line, or arcs of different sweeps); no exact NURBS")
         c1, c2 = _compatible(c1, c2, de)
-        args, fu, fv = ruled(c1, c2), None, None
+        args, fu, fv = ruled(c1, c2), g1, None
     elif t == 140:
         from ..types import Surface
         from .offset import offset_args
