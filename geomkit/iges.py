@@ -466,7 +466,7 @@ def read_iges(path, skip_invalid: bool = False,
         take(de, where, "face 510", face_510)
     for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
-        if t not in (128, 120, 122, 118, 140) or de in used:
+        if t not in (128, 114, 120, 122, 118, 140) or de in used:
             continue
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
@@ -492,15 +492,15 @@ def read_iges(path, skip_invalid: bool = False,
                               "to go on without them")
     if not surfaces:
         kinds = ", ".join(f"{n} x {t}" for t, n in sorted(counts.items()))
-        raise FileFormatError(f"{p}: no readable surface (entities 128, 120, 122, 118, "
-                              f"144); the file holds {kinds or 'no entities'}"
+        raise FileFormatError(f"{p}: no readable surface (entities 128, 114, 120, 122, "
+                              f"118, 144); the file holds {kinds or 'no entities'}"
                               + (f"; first skipped: {skipped[0]}" if skipped else ""))
     units, res = _units(rd.glob)
     return IgesResult(surfaces, entities, skipped, counts, len(rd.gaps),
                       max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
 
 
-UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface",
+UNREAD_SURFACES = {108: "plane",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
                    198: "toroidal surface"}
