@@ -3,9 +3,10 @@
 The directory (D) and parameter (P) sections are read here
 (:mod:`geomkit.cad._iges_file`), so every value is taken exactly as written.
 
-* Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 120
-  (surface of revolution about a 110 axis, generatrix 110 / 100 / 126 / 112), 122
-  (tabulated cylinder), 118 (ruled, between non-arc curves of equal degree), each with
+* Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 114
+  (parametric spline, bicubic patches), 120 (surface of revolution about a 110 axis,
+  generatrix 110 / 100 / 104 / 126 / 112), 122 (tabulated cylinder), 118 (ruled, between
+  curves of equal degree whose parameters map alike to their NURBS), each with
   its 124 transformation chain.  Revolutions are built exactly (The NURBS Book A7.1 /
   A8.1); their angle parameter becomes a rational one, and the face's pcurves are
   carried through that map (:mod:`geomkit.cad.uvmap`: exact for iso-parametric
@@ -19,7 +20,8 @@ The directory (D) and parameter (P) sections are read here
   parameter-space curves on the others.
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
-  line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
+  line, 100 arc, 104 conic (:mod:`geomkit.cad.conic`), or a 102 composite of those)
+  becomes a trim loop, outer first.  ``N1 = 0``
   means the outer boundary is the domain boundary.
 * Gaps between the pieces of a boundary (CAD files carry 1e-5..1e-3 of the domain)
   are bridged by straight UV segments and counted (``gaps_closed``, ``max_gap``).
