@@ -86,7 +86,8 @@ def conic_arc(coef, zt: float, start, end, form: int, what: str):
     kind = 3 if abs(disc) <= _PARABOLA_TOL else (1 if disc < 0 else 2)
     if form in FORMS and form != kind:
         raise FileFormatError(f"{what}: form {form} ({FORMS[form]}) but the coefficients "
-                              f"describe a {FORMS[kind]} (B^2 - 4AC = {B * B - 4 * A * C:.6g})")
+                              f"describe a {FORMS[kind]} "
+                              f"(B^2 - 4AC = {B * B - 4 * A * C:.6g})")
     if form not in FORMS and form != 0:
         raise FileFormatError(f"{what}: form number {form} (expected 1 ellipse, "
                               "2 hyperbola or 3 parabola)")

@@ -65,9 +65,10 @@ def offset_args(base, d: float, tol: float | None = None):
     distance.
 
     The interpolation nodes start at the base's knots with 3 nodes inside each knot
-    span, and are refined where the error is: an interval in ``u`` is split (:func:`_refine`)
-    where the error at its midpoints (any ``v``) exceeds the aim, likewise in ``v``.  Flat regions keep few nodes; the fit never
-    smooths across a base knot without a node on it.
+    span, and are refined where the error is: an interval in ``u`` is split
+    (:func:`_refine`) where the error at its midpoints (any ``v``) exceeds the aim,
+    likewise in ``v``.  Flat regions keep few nodes; the fit never smooths across a
+    base knot without a node on it.
     """
     from scipy.interpolate import RectBivariateSpline
 
