@@ -15,7 +15,9 @@ The directory (D) and parameter (P) sections are read here
   sphere, torus) as exact bilinear patches and revolutions over each face's boundary,
   which is read from the model-space edges (:mod:`geomkit.cad.brep`).
 * B-rep faces: every 510 (under 514 shells / 186 solids) on an analytic surface bounded
-  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 by the loops' pcurves.
+  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 / 114 by the loops' pcurves;
+  a loop without pcurves has its 3-D edges projected onto the surface within the
+  model resolution (:mod:`geomkit.cad.edgeproj`, ``edge_fit_error``).
 * 143 (bounded surface) with 141 boundaries: model-space curves on analytic surfaces,
   parameter-space curves on the others.
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
@@ -89,6 +91,9 @@ class IgesResult:
     resolution : float or None, the file's model resolution / uncertainty in ``units``.
     pcurve_error : float, largest UV error of the pcurves carried through a
         reparametrisation (0 when every one was mapped exactly).
+    edge_fit_error : float, largest model-space distance between a 510 face's edges
+        that carry no pcurves and their projected UV polylines (within the model
+        resolution; 0 when no edge was projected).
     """
 
     surfaces: list
@@ -100,6 +105,7 @@ class IgesResult:
     units: str | None = None
     resolution: float | None = None
     pcurve_error: float = 0.0
+    edge_fit_error: float = 0.0
 
 
 class _Reader:
@@ -113,6 +119,7 @@ class _Reader:
         self.pcurve_error = 0.0
         self.clipped = 0
         self.approx = {}  # DE -> achieved error of an approximated (offset) surface
+        self.edge_fit_error = 0.0  # model-space error of edges projected to UV
 
     def rec(self, de: int) -> list:
         if de not in self.recs:
@@ -248,12 +255,27 @@ class _Reader:
             a += 5 + 2 * k
             if typ == 1:
                 continue
-            if not ptr:
-                raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve "
-                            "on a surface that is not analytic")
+            if not ptr:  # model-space edges only: project them (cad.edgeproj)
+                return self.projected508(de, where, domain, base)
             ps = self.pcurve_pieces(ptr, where)
             pieces += ps if of == 1 else [reverse(c) for c in ps[::-1]]
         return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, fu, fv, base)
+
+    def projected508(self, de: int, where: str, domain, base):
+        """A 508 loop whose edges have no pcurves: its 3-D edges projected onto
+        ``base`` within the model resolution (:func:`geomkit.cad.edgeproj.edge_uv`)."""
+        from .cad._iges_file import units
+        from .cad.edgeproj import EDGE_TOL, edge_uv
+
+        if base is None:
+            raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve")
+        res = units(self.glob)[1]
+        P = base.control_points.reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(P, axis=0)))
+        tol = max(res or 0.0, EDGE_TOL * size)
+        pieces, err = edge_uv(base, edge_loop_508(self, de), tol, f"loop 508 at DE {de}")
+        self.edge_fit_error = max(self.edge_fit_error, err)
+        return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, None, None, base)
 
     def loop141(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         """A 141 boundary from its parameter-space curves (``SENSE = 2``: reversed)."""
@@ -499,7 +521,8 @@ def read_iges(path, skip_invalid: bool = False,
                               + (f"; first skipped: {skipped[0]}" if skipped else ""))
     units, res = _units(rd.glob)
     return IgesResult(surfaces, entities, skipped, counts, len(rd.gaps),
-                      max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
+                      max(rd.gaps, default=0.0), units, res, rd.pcurve_error,
+                      rd.edge_fit_error)
 
 
 UNREAD_SURFACES = {108: "plane",
