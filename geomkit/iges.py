@@ -1,11 +1,12 @@
 """Reading IGES files: every face as an exact NURBS :class:`~geomkit.Surface`.
 
-pyiges lists the entities (directory section); the parameter records are read here
-from the file's P section, so every value is taken exactly as written.
+The directory (D) and parameter (P) sections are read here
+(:mod:`geomkit.cad._iges_file`), so every value is taken exactly as written.
 
-* Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 120
-  (surface of revolution about a 110 axis, generatrix 110 / 100 / 126 / 112), 122
-  (tabulated cylinder), 118 (ruled, between non-arc curves of equal degree), each with
+* Surfaces (see :mod:`geomkit.cad._iges_entities`): 128 (rational B-spline), 114
+  (parametric spline, bicubic patches), 120 (surface of revolution about a 110 axis,
+  generatrix 110 / 100 / 104 / 126 / 112), 122 (tabulated cylinder), 118 (ruled, between
+  curves of equal degree whose parameters map alike to their NURBS), each with
   its 124 transformation chain.  Revolutions are built exactly (The NURBS Book A7.1 /
   A8.1); their angle parameter becomes a rational one, and the face's pcurves are
   carried through that map (:mod:`geomkit.cad.uvmap`: exact for iso-parametric
@@ -14,12 +15,15 @@ from the file's P section, so every value is taken exactly as written.
   sphere, torus) as exact bilinear patches and revolutions over each face's boundary,
   which is read from the model-space edges (:mod:`geomkit.cad.brep`).
 * B-rep faces: every 510 (under 514 shells / 186 solids) on an analytic surface bounded
-  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 by the loops' pcurves.
+  by its 508 loops' 504 edges, or on 128 / 120 / 122 / 118 / 114 by the loops' pcurves;
+  a loop without pcurves has its 3-D edges projected onto the surface within the
+  model resolution (:mod:`geomkit.cad.edgeproj`, ``edge_fit_error``).
 * 143 (bounded surface) with 141 boundaries: model-space curves on analytic surfaces,
   parameter-space curves on the others.
 * 144 (trimmed surface): ``PTS, N1, N2, PTO, PTI(1..N2)``; each boundary is a 142
   (curve on surface) whose parameter-space curve ``BPTR`` (126 B-spline curve, 110
-  line, or a 102 composite of those) becomes a trim loop, outer first.  ``N1 = 0``
+  line, 100 arc, 104 conic (:mod:`geomkit.cad.conic`), or a 102 composite of those)
+  becomes a trim loop, outer first.  ``N1 = 0``
   means the outer boundary is the domain boundary.
 * Gaps between the pieces of a boundary (CAD files carry 1e-5..1e-3 of the domain)
   are bridged by straight UV segments and counted (``gaps_closed``, ``max_gap``).
@@ -36,8 +40,6 @@ its entity (directory sequence number), or is skipped with ``skip_invalid=True``
 
 from __future__ import annotations
 
-import contextlib
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -51,11 +53,11 @@ from .cad._iges_entities import restrict, surface as _surface_entity
 from .cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
 from .cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
 from .cad._iges_file import UNIT_FLAGS  # noqa: F401 (re-exported)
+from .cad._iges_file import directory as _directory
 from .cad._iges_file import param_records as _param_records
 from .cad._iges_file import units as _units
 from .cad.uvmap import map_pcurve
-from .errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
-                     MissingDependencyError)
+from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError
 from .types import Surface, TrimCurve
 
 __all__ = ["read_iges", "IgesResult", "Skipped"]
@@ -89,6 +91,9 @@ class IgesResult:
     resolution : float or None, the file's model resolution / uncertainty in ``units``.
     pcurve_error : float, largest UV error of the pcurves carried through a
         reparametrisation (0 when every one was mapped exactly).
+    edge_fit_error : float, largest model-space distance between a 510 face's edges
+        that carry no pcurves and their projected UV polylines (within the model
+        resolution; 0 when no edge was projected).
     """
 
     surfaces: list
@@ -100,27 +105,21 @@ class IgesResult:
     units: str | None = None
     resolution: float | None = None
     pcurve_error: float = 0.0
-
-
-def _import_pyiges():
-    try:
-        import pyiges
-    except ImportError:
-        raise MissingDependencyError("reading IGES needs pyiges: pip install pyiges") from None
-    return pyiges
+    edge_fit_error: float = 0.0
 
 
 class _Reader:
-    def __init__(self, path: Path, iges):
+    def __init__(self, path: Path, iges=None):
+        """``iges`` is ignored (kept for callers that pass a pyiges model): the
+        directory and parameter sections are read here."""
         self.path = path
         self.recs, self.glob = _param_records(path)
-        self.dir = {}
+        self.dir = _directory(path)
         self.gaps = []
         self.pcurve_error = 0.0
         self.clipped = 0
         self.approx = {}  # DE -> achieved error of an approximated (offset) surface
-        for e in iges.items:
-            self.dir[e.sequence_number] = e
+        self.edge_fit_error = 0.0  # model-space error of edges projected to UV
 
     def rec(self, de: int) -> list:
         if de not in self.recs:
@@ -198,6 +197,14 @@ class _Reader:
             for k in range(n):
                 out += self.pcurve_pieces(_i(r[2 + k]), where)
             return out
+        if t in (100, 104):  # arcs and conics in the (u, v) plane: exact rational
+            from .cad._iges_entities import curve3d
+
+            (p, U, Pw), _, _ = curve3d(self, de)
+            w = Pw[:, 3]
+            return [TrimCurve.create(p, U, Pw[:, :2] / w[:, None],
+                                     None if np.all(w == w[0]) else w,
+                                     f"{where}.{t}@{de}")]
         if t == 110:
             p0 = [_f(r[1]), _f(r[2])]
             p1 = [_f(r[4]), _f(r[5])]
@@ -222,8 +229,8 @@ class _Reader:
             w = Pw[:, 2]
             return [TrimCurve.create(M, U, Pw[:, :2] / w[:, None],
                                      None if np.all(w == w[0]) else w, f"{where}.curve@{de}")]
-        raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110 and 102 "
-                    "are read exactly)")
+        raise _Skip(f"parameter-space curve DE {de} is entity {t} (only 126, 110, 100, "
+                    "104 and 102 are read exactly)")
 
     def loop142(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         if self.type_of(de) != 142:
@@ -248,12 +255,27 @@ class _Reader:
             a += 5 + 2 * k
             if typ == 1:
                 continue
-            if not ptr:
-                raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve "
-                            "on a surface that is not analytic")
+            if not ptr:  # model-space edges only: project them (cad.edgeproj)
+                return self.projected508(de, where, domain, base)
             ps = self.pcurve_pieces(ptr, where)
             pieces += ps if of == 1 else [reverse(c) for c in ps[::-1]]
         return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, fu, fv, base)
+
+    def projected508(self, de: int, where: str, domain, base):
+        """A 508 loop whose edges have no pcurves: its 3-D edges projected onto
+        ``base`` within the model resolution (:func:`geomkit.cad.edgeproj.edge_uv`)."""
+        from .cad._iges_file import units
+        from .cad.edgeproj import EDGE_TOL, edge_uv
+
+        if base is None:
+            raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve")
+        res = units(self.glob)[1]
+        P = base.control_points.reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(P, axis=0)))
+        tol = max(res or 0.0, EDGE_TOL * size)
+        pieces, err = edge_uv(base, edge_loop_508(self, de), tol, f"loop 508 at DE {de}")
+        self.edge_fit_error = max(self.edge_fit_error, err)
+        return self.uv_loop(pieces, f"loop 508 at DE {de}", domain, None, None, base)
 
     def loop141(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         """A 141 boundary from its parameter-space curves (``SENSE = 2``: reversed)."""
@@ -362,8 +384,6 @@ def read_iges(path, skip_invalid: bool = False,
         (listed, each with its reason) without ``skip_unsupported``.
     InvalidSurfaceError
         A surface or trim that fails validation, naming its entity.
-    MissingDependencyError
-        pyiges is not installed.
     """
     p = Path(path)
     if not p.exists():
@@ -372,16 +392,12 @@ def read_iges(path, skip_invalid: bool = False,
         raise FileFormatError(f"{p}: is a directory, expected an IGES file")
     if not p.read_bytes().strip():
         raise InvalidInputError(f"{p}: empty file, expected an IGES file")
-    pyiges = _import_pyiges()
-    try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pyiges prints warnings
-            ig = pyiges.read(str(p))
-    except Exception as exc:  # pyiges fails with assorted errors on malformed input
-        raise FileFormatError(f"{p}: not a readable IGES file ({type(exc).__name__}: "
-                              f"{exc})") from None
-    rd = _Reader(p, ig)
+    rd = _Reader(p)
+    if not rd.dir:
+        raise FileFormatError(f"{p}: not a readable IGES file (no directory section: "
+                              "no line with 'D' in column 73)")
     counts: dict = {}
-    for e in ig.items:
+    for e in rd.dir.values():
         t = int(e.d["entity_type_number"])
         counts[t] = counts.get(t, 0) + 1
     surfaces, entities, skipped = [], [], []
@@ -474,7 +490,7 @@ def read_iges(path, skip_invalid: bool = False,
         take(de, where, "face 510", face_510)
     for de, e in sorted(rd.dir.items()):
         t = int(e.d["entity_type_number"])
-        if t not in (128, 120, 122, 118, 140) or de in used:
+        if t not in (128, 114, 120, 122, 118, 140) or de in used:
             continue
         sub = (e.d.get("status_number") or 0) // 10000 % 100
         if sub == 1:  # physically dependent: part of another entity
@@ -500,15 +516,16 @@ def read_iges(path, skip_invalid: bool = False,
                               "to go on without them")
     if not surfaces:
         kinds = ", ".join(f"{n} x {t}" for t, n in sorted(counts.items()))
-        raise FileFormatError(f"{p}: no readable surface (entities 128, 120, 122, 118, "
-                              f"144); the file holds {kinds or 'no entities'}"
+        raise FileFormatError(f"{p}: no readable surface (entities 128, 114, 120, 122, "
+                              f"118, 144); the file holds {kinds or 'no entities'}"
                               + (f"; first skipped: {skipped[0]}" if skipped else ""))
     units, res = _units(rd.glob)
     return IgesResult(surfaces, entities, skipped, counts, len(rd.gaps),
-                      max(rd.gaps, default=0.0), units, res, rd.pcurve_error)
+                      max(rd.gaps, default=0.0), units, res, rd.pcurve_error,
+                      rd.edge_fit_error)
 
 
-UNREAD_SURFACES = {108: "plane", 114: "parametric spline surface",
+UNREAD_SURFACES = {108: "plane",
                    190: "plane surface", 192: "right circular cylindrical surface",
                    194: "right circular conical surface", 196: "spherical surface",
                    198: "toroidal surface"}

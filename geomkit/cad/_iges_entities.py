@@ -15,14 +15,16 @@ import math
 import numpy as np
 
 from .analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, ruled,
-                       transform_curve)
+                       transform_curve, turn_into)
+from .conic import conic_arc
 from .loops import Unsupported
 
-READ_SURFACES = {128: "rational B-spline surface", 120: "surface of revolution",
+READ_SURFACES = {128: "rational B-spline surface", 114: "parametric spline surface",
+                 120: "surface of revolution",
                  122: "tabulated cylinder", 118: "ruled surface",
                  140: "offset surface (approximated)"}
-READ_CURVES = {110: "line", 100: "circular arc", 126: "rational B-spline curve",
-               112: "parametric spline curve"}
+READ_CURVES = {110: "line", 100: "circular arc", 104: "conic arc",
+               126: "rational B-spline curve", 112: "parametric spline curve"}
 
 
 def f_(x: str) -> float:
@@ -31,6 +33,23 @@ def f_(x: str) -> float:
 
 def i_(x: str) -> int:
     return int(float(x)) if x else 0
+
+
+def numbers(rd, de: int, first: int, n: int) -> list:
+    """``n`` real parameters of entity ``de`` from index ``first``; a missing or
+    non-numeric one is a :class:`~geomkit.errors.FileFormatError` naming the entity."""
+    from ..errors import FileFormatError
+
+    r = rd.rec(de)
+    t = rd.type_of(de)
+    if len(r) < first + n:
+        raise FileFormatError(f"{rd.path}: entity {t} at DE {de}: {len(r) - first} "
+                              f"parameters, expected {n}")
+    try:
+        return [f_(x) for x in r[first: first + n]]
+    except ValueError:
+        raise FileFormatError(f"{rd.path}: entity {t} at DE {de}: non-numeric parameter "
+                              f"in {r[first: first + n]}") from None
 
 
 def restrict(p, U, Pw, t0, t1):
@@ -75,8 +94,14 @@ def curve3d(rd, de: int):
             a1 += 2 * math.pi
         c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
         # the file's angles may be written in another turn ([-pi/2, 0] for [3pi/2, 2pi])
-        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(_turn(x, a0, a1), a0, a1)), \
+        fmap, rng = (lambda x, a0=a0, a1=a1: angle_to_param(turn_into(x, a0, a1), a0,
+                                                            a1)), \
             (a0, a1)
+    elif t == 104:
+        v = numbers(rd, de, 1, 11)
+        form = int(rd.dir[de].d.get("form_number") or 0)
+        c, fmap, rng = conic_arc(v[:6], v[6], v[7:9], v[9:11], form,
+                                 f"{rd.path}: entity 104 at DE {de}")
     elif t == 126:
         K, M = i_(r[1]), i_(r[2])
         prop3 = i_(r[5])
@@ -102,11 +127,12 @@ def curve3d(rd, de: int):
     return transform_curve(c, rd.transform(de)), fmap, rng
 
 
-def _turn(x, a0, a1):
-    """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit."""
-    x = np.asarray(x, float)
-    w = a0 + np.mod(x - a0 + 1e-9, 2 * math.pi) - 1e-9
-    return np.where((x < a0 - 1e-9) | (x > a1 + 1e-9), w, x)
+def _bezier3(c, h):
+    """Bezier control points of the cubic ``c[0] + c[1] s + c[2] s^2 + c[3] s^3`` on
+    ``s`` in ``[0, h]`` (``c`` (4, ...): coefficients along the first axis)."""
+    c = np.asarray(c, float)
+    A, B, C, D = c[0], c[1] * h, c[2] * h * h, c[3] * h ** 3
+    return np.stack([A, A + B / 3, A + 2 * B / 3 + C / 3, A + B + C + D])
 
 
 def _spline112(r):
@@ -119,16 +145,66 @@ def _spline112(r):
     for k in range(N):
         c = np.array([f_(x) for x in r[a: a + 12]]).reshape(3, 4)  # rows x, y, z: A B C D
         a += 12
-        h = T[k + 1] - T[k]
-        A, B, C, D = c[:, 0], c[:, 1] * h, c[:, 2] * h * h, c[:, 3] * h ** 3
-        bez = [A, A + B / 3, A + 2 * B / 3 + C / 3, A + B + C + D]
+        bez = _bezier3(c.T, T[k + 1] - T[k])
         if not pts:
             pts.append(bez[0])
-        pts += bez[1:]
+        pts += list(bez[1:])
         knots += [T[k + 1]] * 3
     knots.append(T[-1])
     P = np.array(pts)
     return 3, np.array(knots), np.column_stack([P, np.ones(len(P))])
+
+
+JOIN_TOL = 1e-7
+"""Neighbouring 114 patches must meet within this x the surface size."""
+
+
+def _spline114(rd, de: int):
+    """Entity 114 (parametric spline surface: bicubic polynomial patches) as an exact
+    bicubic B-spline.  Patch ``(i, j)`` is ``sum X[a + 4 b] s^a t^b`` with ``s = u -
+    TU(i)``, ``t = v - TV(j)`` (IGES 5.3: coefficients ``AX, BX, ..., SX``); its
+    power form becomes its Bezier form (:func:`_bezier3` in ``u`` then ``v``) and the
+    breakpoints become triple knots, so the surface is the file's, to rounding."""
+    from ..errors import FileFormatError
+
+    what = f"{rd.path}: entity 114 at DE {de}"
+    r = rd.rec(de)
+    try:
+        M, N = i_(r[3]), i_(r[4])
+    except (IndexError, ValueError):
+        raise FileFormatError(f"{what}: missing or non-integer segment counts") from None
+    if M < 1 or N < 1:
+        raise FileFormatError(f"{what}: {M} x {N} segments, expected at least 1 x 1")
+    nb = M + 1 + N + 1 + M * (N + 1) * 48  # the trailing arbitrary values are not needed
+    v = numbers(rd, de, 5, min(nb, len(r) - 5))
+    if len(v) < nb - 48:
+        raise FileFormatError(f"{what}: {len(v)} parameters after the segment counts, "
+                              f"{M} x {N} patches need {nb - 48}")
+    TU, TV = np.array(v[: M + 1]), np.array(v[M + 1: M + N + 2])
+    if np.any(np.diff(TU) <= 0) or np.any(np.diff(TV) <= 0):
+        raise FileFormatError(f"{what}: breakpoints not increasing (u {TU.tolist()}, "
+                              f"v {TV.tolist()})")
+    base = M + N + 2
+    P = np.full((3 * M + 1, 3 * N + 1, 3), np.nan)
+    for i in range(M):
+        for j in range(N):
+            a = base + i * (N + 1) * 48 + j * 48
+            c = np.array(v[a: a + 48]).reshape(3, 4, 4)  # [xyz, b (t), a (s)]
+            c = c.transpose(2, 1, 0)  # [a, b, xyz]
+            bz = _bezier3(c, TU[i + 1] - TU[i])  # [k (u), b, xyz]
+            bz = _bezier3(bz.transpose(1, 0, 2), TV[j + 1] - TV[j]).transpose(1, 0, 2)
+            blk = P[3 * i: 3 * i + 4, 3 * j: 3 * j + 4]
+            have = ~np.isnan(blk[..., 0])
+            if have.any():
+                size = float(np.ptp(bz.reshape(-1, 3), axis=0).max()) or 1.0
+                gap = float(np.abs(blk[have] - bz[have]).max())
+                if gap > JOIN_TOL * max(size, float(np.abs(bz).max())):
+                    raise FileFormatError(f"{what}: patch ({i}, {j}) does not meet its "
+                                          f"neighbours (gap {gap:.3g})")
+            blk[~have] = bz[~have]
+    U = np.concatenate([[TU[0]] * 4, np.repeat(TU[1:-1], 3), [TU[-1]] * 4])
+    V = np.concatenate([[TV[0]] * 4, np.repeat(TV[1:-1], 3), [TV[-1]] * 4])
+    return 3, 3, U, V, P, None
 
 
 def _normalised(c, rng, fmap):
@@ -149,7 +225,9 @@ def surface(rd, de: int):
     r = rd.rec(de)
     if t == 128:
         return rd.surface128_args(de), None, None
-    if t == 120:
+    if t == 114:
+        args, fu, fv = _spline114(rd, de), None, None
+    elif t == 120:
         axis, _, _ = curve3d(rd, i_(r[1]))
         if rd.type_of(i_(r[1])) != 110:
             raise Unsupported(f"axis of surface of revolution DE {de} is not a line")
@@ -167,16 +245,24 @@ def surface(rd, de: int):
     elif t == 118:
         c1, m1, r1 = curve3d(rd, i_(r[1]))
         c2, m2, r2 = curve3d(rd, i_(r[2]))
-        if m1 is not None or m2 is not None:
-            raise Unsupported(f"ruled surface DE {de} between arcs (normalised arc "
-                              "parameter is not linear in the NURBS parameter)")
-        c1, _ = _normalised(c1, r1, None)
-        c2, _ = _normalised(c2, r2, None)
+        c1, g1 = _normalised(c1, r1, m1)
+        c2, g2 = _normalised(c2, r2, m2)
         if i_(r[3]) == 1:
             p, U, Pw = c2
             c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
+            g2 = None if g2 is None else (lambda s, g=g2: 1.0 - g(1.0 - np.asarray(s)))
+        if g1 is not None or g2 is not None:
+            # rulings join equal entity parameters: exact only where both curves
+            # carry them to equal NURBS parameters (arcs / ellipses of equal sweep)
+            s = np.linspace(0.0, 1.0, 33)
+            h1 = s if g1 is None else g1(s)
+            h2 = s if g2 is None else g2(s)
+            if float(np.abs(h1 - h2).max()) > 1e-12:
+                raise Unsupported(f"ruled surface DE {de}: its curves' parameters map "
+                                  "differently to their NURBS parameters (e.g. an arc and "
+                                  "a line, or arcs of different sweeps); no exact NURBS")
         c1, c2 = _compatible(c1, c2, de)
-        args, fu, fv = ruled(c1, c2), None, None
+        args, fu, fv = ruled(c1, c2), g1, None
     elif t == 140:
         from ..types import Surface
         from .offset import offset_args

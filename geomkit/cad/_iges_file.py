@@ -39,6 +39,46 @@ def _global_fields(glob: str, psep: str, rsep: str) -> list:
     return out
 
 
+class Entry:
+    """One directory entry: ``d`` holds the fields the reader uses
+    (``entity_type_number``, ``transform``, ``status_number``, ``form_number``)."""
+
+    __slots__ = ("sequence_number", "d")
+
+    def __init__(self, seq: int, d: dict):
+        self.sequence_number, self.d = seq, d
+
+    def __repr__(self) -> str:
+        return f"Entry({self.d['entity_type_number']}@{self.sequence_number})"
+
+
+def directory(path: Path, lines: list | None = None) -> dict:
+    """``{DE sequence number: Entry}`` from the D section (two 80-column lines per
+    entity; fields of 8 columns)."""
+    if lines is None:
+        lines = path.read_text(encoding="latin-1").splitlines()
+    dl = [ln for ln in lines if len(ln) >= 73 and ln[72] == "D"]
+    if len(dl) % 2:
+        raise FileFormatError(f"{path}: directory section has an odd number of lines "
+                              f"({len(dl)}); each entity takes two")
+    out = {}
+    for a, b in zip(dl[::2], dl[1::2]):
+        try:
+            seq = int(a[73:80])
+            typ = int(a[0:8])
+            tr = a[48:56].strip()
+            st = a[64:72].replace(" ", "0")
+            form = b[32:40].strip()
+            d = {"entity_type_number": typ, "transform": int(tr) if tr else None,
+                 "status_number": int(st) if st.strip("0") else 0,
+                 "form_number": int(form) if form else 0}
+        except ValueError:
+            raise FileFormatError(f"{path}: bad directory entry {a.strip()[:40]!r}") \
+                from None
+        out[seq] = Entry(seq, d)
+    return out
+
+
 def param_records(path: Path) -> tuple[dict, list]:
     """``({DE pointer: [fields]}, global fields)`` from the P and G sections."""
     text = path.read_text(encoding="latin-1")

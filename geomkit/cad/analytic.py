@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 __all__ = ["arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
-           "angle_to_param", "param_to_angle", "arc_knots", "transform_curve"]
+           "angle_to_param", "param_to_angle", "turn_into", "arc_knots", "transform_curve"]
 
 
 def arc_knots(theta0: float, theta1: float):
@@ -66,6 +66,14 @@ def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
     mid = theta0 + (k + 0.5) * d
     r = 0.5 * (np.tan(0.5 * (th - mid)) / math.tan(d / 4) + 1.0)
     return np.clip(theta0 + (k + r) * d, theta0, theta1)
+
+
+def turn_into(x, a0: float, a1: float) -> np.ndarray:
+    """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit (files
+    may write ``[-pi/2, 0]`` for ``[3pi/2, 2pi]``)."""
+    x = np.asarray(x, float)
+    w = a0 + np.mod(x - a0 + 1e-9, 2 * math.pi) - 1e-9
+    return np.where((x < a0 - 1e-9) | (x > a1 + 1e-9), w, x)
 
 
 def param_to_angle(s, theta0: float, theta1: float) -> np.ndarray:

@@ -1,0 +1,58 @@
+"""Trim curves of a face whose edges are given only in model space (a 510 over a
+B-spline surface whose 508 loop carries no pcurves): each 3-D edge curve is projected
+onto the face's surface with :func:`geomkit.project_points` and becomes a UV polyline,
+refined until the surface point of every segment's UV midpoint lies within ``tol`` of
+the edge curve's midpoint (``tol``: the larger of the model's resolution and
+:data:`EDGE_TOL` x the surface size; writers state resolutions, 1e-7, finer than their
+edges lie on their faces).  An edge that is not on the surface (farther than ``tol``), or whose projection
+jumps (a seam), is refused with the reason.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..types import TrimCurve
+from .loops import Unsupported
+
+__all__ = ["edge_uv", "EDGE_TOL"]
+
+EDGE_TOL = 1e-6
+"""Default fit tolerance of a projected edge, relative to the surface size."""
+_MAX_POINTS = 4097
+
+
+def edge_uv(base, edges, tol: float, what: str):
+    """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
+    (:class:`geomkit.cad.brep._Edge`) on the untrimmed ``base``, and the largest
+    model-space distance measured between a segment's UV midpoint and the edge."""
+    from ..evaluation import evaluate
+    from ..projection import project_points
+    from .brep import _eval
+
+    pieces, worst = [], 0.0
+    for k, e in enumerate(edges):
+        s = np.linspace(0.0, 1.0, 17)
+        while True:
+            X = _eval(e.curve, e.ts(s))
+            pr = project_points([base], X)
+            off = float(np.nanmax(pr.distance)) if np.all(np.isfinite(pr.distance)) \
+                else np.inf
+            if off > tol:
+                raise Unsupported(f"{what}: edge {k} is not on the surface (a point is "
+                                  f"{off:.3g} from it, tolerance {tol:.3g})")
+            uv = pr.uv
+            sm = 0.5 * (s[1:] + s[:-1])
+            Xm = _eval(e.curve, e.ts(sm))
+            dev = np.linalg.norm(evaluate(base, 0.5 * (uv[1:] + uv[:-1])) - Xm, axis=1)
+            bad = dev > tol
+            if not bad.any():
+                worst = max(worst, float(dev.max()), off)
+                break
+            if len(s) + int(bad.sum()) > _MAX_POINTS:
+                raise Unsupported(f"{what}: edge {k} has no UV polyline within {tol:.3g} "
+                                  f"of {_MAX_POINTS} points (its projection jumps: a "
+                                  "seam?)")
+            s = np.sort(np.concatenate([s, sm[bad]]))
+        pieces.append(TrimCurve.polyline(uv, f"{what}.edge{k}"))
+    return pieces, worst
