@@ -156,8 +156,8 @@ def test_empty_files_are_a_clear_error(tmp_path):
 
 
 def test_unsupported_entities_are_an_error_unless_skipped(tmp_path):
-    """An IGES file with a 114 parametric spline surface (not read yet) next to the
-    impeller's faces."""
+    """An IGES file with a standalone 192 (an unbounded right circular cylindrical
+    surface, no face to read) next to the impeller's faces."""
     from geomkit.iges import Skipped
 
     lines = IMPELLER.read_text(encoding="latin-1").splitlines()
@@ -165,18 +165,18 @@ def test_unsupported_entities_are_an_error_unless_skipped(tmp_path):
     p = [ln for ln in lines if ln[72:73] == "P"]
     s = [ln for ln in lines if ln[72:73] in ("S", "G")]
     nd, np_ = len(d) + 1, len(p) + 1
-    d += [f"{114:8d}{np_:8d}{0:8d}{0:8d}{0:8d}{'':24}{'00000000':>8}D{nd:7d}",
-          f"{114:8d}{0:8d}{0:8d}{1:8d}{0:8d}{'':24}{0:8d}D{nd + 1:7d}"]
-    p += [f"{'114,3,1,1,1,0.,1.,0.,1.;':<64}{nd:8d}P{np_:7d}"]
+    d += [f"{192:8d}{np_:8d}{0:8d}{0:8d}{0:8d}{'':24}{'00000000':>8}D{nd:7d}",
+          f"{192:8d}{0:8d}{0:8d}{1:8d}{0:8d}{'':24}{0:8d}D{nd + 1:7d}"]
+    p += [f"{'192,1,1,2.;':<64}{nd:8d}P{np_:7d}"]
     f = tmp_path / "with_offset.igs"
     f.write_text("\n".join(s + d + p + [f"S{1:7d}G{5:7d}D{len(d):7d}P{len(p):7d}"
                                         f"{'':40}T{1:7d}"]) + "\n", encoding="latin-1")
-    with pytest.raises(FileFormatError, match=r"1 face\(s\) cannot be read: 114@"):
+    with pytest.raises(FileFormatError, match=r"1 face\(s\) cannot be read: 192@"):
         read_iges(f)
     r = read_iges(f, skip_unsupported=True)
     assert len(r.surfaces) == 277 and len(r.skipped) == 1
-    assert isinstance(r.skipped[0], Skipped) and r.skipped[0].id == f"114@{nd}"
-    assert "114" in r.skipped[0].reason or "spline" in r.skipped[0].reason
+    assert isinstance(r.skipped[0], Skipped) and r.skipped[0].id == f"192@{nd}"
+    assert "cylindrical" in r.skipped[0].reason
 
 
 # ------------------------------------------------------------ OCC oracle
