@@ -25,7 +25,7 @@ from .errors import FileFormatError, InvalidInputError, InvalidSurfaceError, \
     MissingDependencyError
 import re
 
-from .cad.loops import GAP_TOL, clip_to_domain, close_gaps
+from .cad.loops import GAP_TOL, chain, clip_to_domain, close_gaps
 from .iges import IgesResult, Skipped
 from .types import Surface, TrimCurve
 
@@ -83,6 +83,30 @@ def _bspline_curve2d(c):
     return TrimCurve.create(c.Degree(), k, P, W if c.IsRational() else None)
 
 
+def _wire_edges(w, face) -> list:
+    """The edges of wire ``w`` in connection order (``BRepTools_WireExplorer``); when
+    that walk stops early (it follows vertices within their tolerance, and a file read
+    in another length unit can leave a seam vertex out of reach: a torus face of a
+    part in inches lost 15 of its 17 edges), every edge of the wire, in file order —
+    the caller chains them by their pcurves."""
+    from OCP.BRepTools import BRepTools_WireExplorer
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+
+    from .oracles.occ import _cast
+
+    walk, every = [], []
+    we = BRepTools_WireExplorer(w, face)
+    while we.More():
+        walk.append(we.Current())
+        we.Next()
+    ex = TopExp_Explorer(w, TopAbs_EDGE)
+    while ex.More():
+        every.append(_cast("Edge", ex.Current()))
+        ex.Next()
+    return walk if len(walk) >= len(every) else every
+
+
 def _file_units(rd):
     from OCP.OCP.collections import Sequence_TCollection_AsciiString as Seq
 
@@ -137,7 +161,7 @@ def read_step(path, skip_invalid: bool = False,
     try:
         from OCP.BRep import BRep_Tool
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-        from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+        from OCP.BRepTools import BRepTools
         from OCP.Geom2d import Geom2d_TrimmedCurve
         from OCP.Geom2dConvert import Geom2dConvert
         from OCP.GeomConvert import GeomConvert
@@ -182,11 +206,10 @@ def read_step(path, skip_invalid: bool = False,
                     wires.append(w)
                 wx.Next()
             loops = []
+            periods = ((u1 - u0) * bs.IsUClosed(), (v1 - v0) * bs.IsVClosed())
             for w in wires:
                 pieces = []
-                we = BRepTools_WireExplorer(w, face)
-                while we.More():
-                    e = we.Current()
+                for e in _wire_edges(w, face):
                     f, l = BRep_Tool.Range_s(e, face)
                     c2 = BRep_Tool.CurveOnSurface_s(e, face, f, l)
                     if c2 is None:
@@ -195,8 +218,11 @@ def read_step(path, skip_invalid: bool = False,
                     if e.Orientation() == TopAbs_REVERSED:
                         bc.Reverse()
                     pieces.append(_bspline_curve2d(bc))
-                    we.Next()
                 if pieces:
+                    size = max(u1 - u0, v1 - v0)
+                    if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size
+                           for a, b in zip(pieces, pieces[1:] + pieces[:1])):
+                        pieces = chain(pieces, size, periods, domain)  # edge order, seam sides
                     pieces, moved = clip_to_domain(pieces, domain, CLIP_TOL, GAP_TOL)
                     gaps += moved
                     pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}")

@@ -30,24 +30,52 @@ def reverse(c: TrimCurve) -> TrimCurve:
                             None if np.all(c.weights == 1) else c.weights[::-1])
 
 
-def chain(pieces, size):
+def shift(c: TrimCurve, d) -> TrimCurve:
+    """The trim curve translated by ``d`` in UV (one period of a closed direction)."""
+    return TrimCurve.create(c.degree, c.knots, np.asarray(c.control_points) + d,
+                            None if np.all(c.weights == 1) else c.weights)
+
+
+def chain(pieces, size, periods=(0.0, 0.0), domain=None):
     """Pieces reordered and reversed so that each starts nearest where the previous
     one ends (files that list a composite's pieces against its direction, e.g. OCC's
-    pcurves on periodic surfaces).  Greedy from the first piece."""
+    pcurves on periodic surfaces).  Greedy from the first piece.  ``periods``: the
+    UV periods of closed directions (0 for open); a piece may then also move by one
+    period (a pcurve given on the other side of a seam), preferably to where it lies
+    in ``domain`` ((u0, u1), (v0, v1))."""
+    du, dv = periods
+    moves = [np.zeros(2)] + [np.array(m, float) for m in
+                             ([du, 0], [-du, 0]) * bool(du) + ([0, dv], [0, -dv]) * bool(dv)]
     rest = list(pieces[1:])
     out = [pieces[0]]
     while rest:
-        end = out[-1].end
+        prev = out[-1]
         best = None
         for k, c in enumerate(rest):
             for rev in (False, True):
-                d = float(np.hypot(*((c.end if rev else c.start) - end)))
-                if best is None or d < best[0] - 1e-12 * size:
-                    best = (d, k, rev)
-        _, k, rev = best
+                a, b = (c.end, c.start) if rev else (c.start, c.end)
+                for m in moves:
+                    d = float(np.hypot(*(a + m - prev.end)))
+                    # prefer a join within the gap tolerance, then one that does not
+                    # run back along the previous piece (a seam edge's other copy),
+                    # then one without a period move, then the nearest
+                    back = float(np.hypot(*(b + m - prev.start))) <= 1e-9 * size
+                    out_of = domain is not None and not (_inside(a + m, domain, size) and
+                                                         _inside(b + m, domain, size))
+                    key = (d > GAP_TOL * size, out_of, back, bool(m.any()), d)
+                    if best is None or key < best[0]:
+                        best = (key, k, rev, m)
+        _, k, rev, m = best
         c = rest.pop(k)
-        out.append(reverse(c) if rev else c)
+        c = reverse(c) if rev else c
+        out.append(shift(c, m) if m.any() else c)
     return out
+
+
+def _inside(p, domain, size) -> bool:
+    (u0, u1), (v0, v1) = domain
+    e = GAP_TOL * size
+    return u0 - e <= p[0] <= u1 + e and v0 - e <= p[1] <= v1 + e
 
 
 def close_gaps(pieces, domain, where: str, same_point=None):
