@@ -44,9 +44,10 @@ from __future__ import annotations
 
 import threading
 
+import numba
 import numpy as np
 
-from ._collision_types import Body, Contact, Contacts, Distance
+from ._collision_types import Body, Contact, Contacts, Distance, _contact
 from ._kernels import bvh as kb
 from ._kernels._numba import prun
 from ._kernels import bvh_query as kq
@@ -211,10 +212,10 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
     if type(a) is Body and type(b) is Body and a.kind != 2 and b.kind != 2:
         # box trees: one kernel call (pose checks, relative motion, traversal, tags);
         # a pose the kernel cannot take as is goes through validate_pose first
-        if not (type(pose_a) is np.ndarray and pose_a.dtype == _F64 and
+        if not (type(pose_a) is np.ndarray and pose_a.dtype is _F64 and
                 pose_a.shape == (4, 4) and pose_a.flags.c_contiguous):
             pose_a = validate_pose(pose_a, "pose_a")
-        if not (type(pose_b) is np.ndarray and pose_b.dtype == _F64 and
+        if not (type(pose_b) is np.ndarray and pose_b.dtype is _F64 and
                 pose_b.shape == (4, 4) and pose_b.flags.c_contiguous):
             pose_b = validate_pose(pose_b, "pose_b")
         c = _collide_boxes(a, pose_a, b, pose_b, all_pairs)
@@ -243,29 +244,26 @@ def _collide_boxes(a, Pa, b, Pb, all_pairs):
     checks, relative motion, traversal and face tags in one kernel call (a single
     call costs about what coal's does).  ``None`` for a pose that is not rigid (the
     general path then raises the usual error)."""
-    scr = _scratch.__dict__
-    pairs = scr.get("pairs")
-    if pairs is None:   # per-thread output buffers, reused (results get copies)
-        pairs = scr["pairs"] = np.empty((_FAST_CAP, 2), dtype=np.int64)
-        scr["tags"] = np.empty((_FAST_CAP, 2), dtype=np.int64)
-    tags = scr["tags"]
+    out = _scratch.__dict__.get("out")
+    if out is None:     # per-thread output buffer (pairs, tags), reused (results copy)
+        out = _scratch.out = np.empty((2, _FAST_CAP, 2), dtype=np.int64)
     while True:
         n, tests, bad = kq.collide_posed(a.I, a.N, a.T, a.order, a.face_tags, b.I, b.N, b.T,
                                          b.order, b.face_tags, Pa, Pb, POSE_TOL,
-                                         not all_pairs, pairs, tags)
+                                         not all_pairs, out[0], out[1])
         if bad:
             return None
-        if n <= pairs.shape[0]:
+        if n <= out.shape[1]:
             break
-        pairs = np.empty((n, 2), dtype=np.int64)     # more pairs than the buffer
-        tags = np.empty((n, 2), dtype=np.int64)
+        out = np.empty((2, n, 2), dtype=np.int64)     # more pairs than the buffer
     if n == 0:
-        return Contact(False, _NO_PAIRS, _NO_PAIRS, tests)
-    pairs, tags = pairs[:n].copy(), tags[:n].copy()
+        return _contact(False, _NO_PAIRS, _NO_PAIRS, tests)
+    res = out[:, :n].copy()             # one copy: pairs res[0], tags res[1]
+    pairs, tags = res[0], res[1]
     if n > 1:
         o = np.lexsort((pairs[:, 1], pairs[:, 0]))
         pairs, tags = pairs[o], tags[o]
-    return Contact(True, pairs, tags, tests)
+    return _contact(True, pairs, tags, tests)
 
 
 _FAST_CAP = 64
@@ -306,7 +304,10 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
     tests = np.empty(n, dtype=np.int64)
     first = not all_pairs
     if a.kind == 2:
-        prun(kq.collide_many_kdops, n, _MANY_CHUNK, a.child, a.rng, a.K, a.T, a.order,
+        # a task refits its bodies at least once: few large tasks (refits cost the same
+        # for every pose, so no balancing is lost)
+        nt = numba.get_num_threads()
+        prun(kq.collide_many_kdops, n, max(_MANY_CHUNK, -(-n // nt)), a.child, a.rng, a.K, a.T, a.order,
              b.child, b.rng, b.K, b.T, b.order, PA, PB, kb.KDOP_ORDER, first, col, cnt, tests)
     else:
         prun(kq.collide_many_boxes, n, _MANY_CHUNK, a.I, a.N, a.T, a.order, b.I, b.N, b.T,
