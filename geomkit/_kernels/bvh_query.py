@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, jit_inline
-from .bvh import pose_status, refit_kdop
+from .bvh import refit_kdop, rigid_code
 from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
@@ -413,7 +413,7 @@ def collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only, ou
     ``seed`` (2,) int64, temporal coherence for ``first_only``: a leaf pair tested
     before the traversal (the pair that held the previous pose's first hit;
     ``seed[0] < 0`` for none); a hit there ends the query, else the traversal runs
-    as without it (the seed pair's test is counted in ``bv_tests``).  On return
+    as without it (the seed pair's tests are counted in ``bv_tests``).  On return
     ``seed`` holds the leaf pair of the first hit found (unchanged if none).
     Returns ``(n_pairs, bv_tests)`` as :func:`collide_trees`.
     """
@@ -424,16 +424,13 @@ def collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only, ou
     hit = scr[3, 1]
     npairs = 0
     tests = 0
-    if first_only and seed[0] >= 0:
-        tests += 1
-        if not _boxes_disjoint(NA, seed[0], NB, seed[1], Rr, tr, Rab, T, M, Ab):
-            npairs = _leaf_pair(IA, TA, orderA, IB, TB, orderB, seed[0], seed[1], Rr, tr,
-                                True, out_pairs, 0, tbs, M, hit)
-            if npairs > 0:
-                return npairs, tests
     st[0, 0] = 0
     st[0, 1] = 0
     top = 1
+    if first_only and seed[0] >= 0:   # the seed on top of the root: popped first
+        st[1, 0] = seed[0]
+        st[1, 1] = seed[1]
+        top = 2
     while top > 0:
         top -= 1
         i = st[top, 0]
@@ -485,9 +482,9 @@ def collide_posed(IA, NA, TA, orderA, tagsA, IB, NB, TB, orderB, tagsB, Pa, Pb, 
     poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for the first
     one that is not rigid, nothing traversed), forms the relative motion and writes
     the face tags of the pairs found.  Returns ``(n_pairs, bv_tests, bad)``."""
-    if pose_status(Pa.reshape((1, 4, 4)), pose_tol)[0] >= 0:
+    if rigid_code(Pa, pose_tol)[0] != 0:
         return 0, 0, 1
-    if pose_status(Pb.reshape((1, 4, 4)), pose_tol)[0] >= 0:
+    if rigid_code(Pb, pose_tol)[0] != 0:
         return 0, 0, 2
     Rr = np.empty((3, 3))
     tr = np.empty(3)
