@@ -5,7 +5,7 @@ or AABB nodes; see :mod:`geomkit._kernels.bvh` for the tree layout).  Queries ta
 4x4 rigid poses (body -> world):
 
 * :func:`collide` — every intersecting triangle pair (or the first);
-* :func:`collide_many` — the same for many pose pairs in one call (parallel);
+* :func:`collide_many` — the same for many pose pairs in one call (threads);
 * :func:`min_distance` — exact minimum distance with closest points and faces, or
   with ``margin`` a quick "closer than margin?".
 
@@ -281,7 +281,9 @@ _NO_PAIRS.flags.writeable = False
 
 
 def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
-    """:func:`collide` for n pose pairs in one call (parallel over poses).
+    """:func:`collide` for n pose pairs in one call (serial kernel workers over pose
+    ranges, on threads for batches longer than :data:`_MANY_CHUNK`; box trees reuse
+    the previous pose's first hit, see :func:`geomkit._kernels.bvh_query.collide_boxes`).
 
     Parameters
     ----------
