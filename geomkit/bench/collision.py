@@ -372,7 +372,8 @@ def main(argv=None):
         for bv, (t1, tm, tm1, cm1, tmean, tmed, dt) in r["geomkit"].items():
             print(f"| {na}–{nb} | {r['hits']} | {bv} | {t1 * 1e6:.1f} | {cr * 1e6:.1f} | "
                   f"{co * 1e6:.1f} | {t1 / cr:.2f} | {tm * 1e6:.1f} | {tm1 * 1e6:.1f} | "
-                  f"{cl * 1e6:.1f} | {tm / cl:.2f} | {tm1 / cl:.2f} | {cm1 / ccl:.2f} | {tmean:.0f} | "
+                  f"{cl * 1e6:.1f} | {tm / cl:.2f} | {tm1 / cl:.2f} | {cm1 / ccl:.2f} | "
+                  f"{tmean:.0f} | "
                   f"{tmed:.0f} |")
             dist_rows.append((na, nb, bv, dt, r.get("coal_dist", np.nan)))
         if coal is not None:
