@@ -308,3 +308,63 @@ def test_bad_inputs():
         min_distance(body("box", "obb"), np.eye(4), body("box", "obb"), np.eye(4), margin=-1)
     with pytest.raises(InvalidInputError, match="Body"):
         collide((V, F), np.eye(4), body("box", "obb"), np.eye(4))
+
+
+# ---------------------------------------------------------------- batch kernels (issue 15)
+def _coherent_poses(n, seed):
+    """A body sliding through another in small steps (consecutive poses close:
+    the first-hit seed of collide_many is reused from pose to pose)."""
+    rng = np.random.default_rng(seed)
+    P = np.tile(np.eye(4), (n, 1, 1))
+    P[:, :3, :3] = Rotation.from_rotvec(np.outer(np.linspace(0, 1.5, n),
+                                                 rng.normal(size=3))).as_matrix()
+    P[:, :3, 3] = np.outer(np.linspace(-25, 25, n), rng.normal(size=3) / 3 + [1, 0, 0])
+    return P
+
+
+@pytest.mark.parametrize("bv", BVS)
+def test_collide_many_equals_single_calls_on_coherent_poses(bv):
+    import numba
+    a, b = body("torus", bv), body("capsule", bv)
+    Ps = _coherent_poses(600, 4)    # > one task of collide_many: several threads
+    Pa = random_poses(1, 9, spread=2.0)[0]
+    many = collide_many(a, b, Pa, Ps)
+    ref = [collide(a, Pa, b, P, all_pairs=False) for P in Ps]
+    assert np.array_equal(many.colliding, [c.colliding for c in ref])
+    assert 100 < many.colliding.sum() < 500
+    assert np.array_equal(many.n_pairs, many.colliding.astype(np.int64))
+    nt = numba.get_num_threads()
+    numba.set_num_threads(1)   # one thread: the same rows (the cut does not matter)
+    try:
+        one = collide_many(a, b, Pa, Ps)
+    finally:
+        numba.set_num_threads(nt)
+    assert np.array_equal(one.colliding, many.colliding)
+    full = collide_many(a, b, np.repeat(Pa[None], len(Ps), 0), Ps, all_pairs=True)
+    assert np.array_equal(full.n_pairs, [len(collide(a, Pa, b, P).pairs) for P in Ps])
+
+
+def test_collide_pose_layouts_agree():
+    """The one-kernel path (float64 C-contiguous poses) and the validated path
+    (lists, ints, Fortran order, views) give the same contacts."""
+    a, b = body("freeform", "obb"), body("icosphere", "obb")
+    for Pa, Pb in random_poses(30, 21, spread=6.0).reshape(15, 2, 4, 4):
+        c = collide(a, Pa, b, Pb)
+        for other in (Pb.tolist(), np.asfortranarray(Pb), np.tile(Pb, (1, 2))[:, :4]):
+            d = collide(a, Pa, b, other)
+            assert np.array_equal(c.pairs, d.pairs) and np.array_equal(c.tags, d.tags)
+    c = collide(a, np.eye(4, dtype=int), b, np.eye(4))
+    assert c.colliding and c.pairs.flags.c_contiguous and c.tags.flags.c_contiguous
+    with pytest.raises(InvalidInputError, match="pose_b"):
+        collide(a, np.eye(4), b, np.diag([1.0, 1.0, -1.0, 1.0]))
+
+
+def test_batch_kernels_are_serial():
+    """Project policy: no numba parallel=True kernels in the collision group (batch
+    work runs on threads by _numba.prun)."""
+    from geomkit._kernels import bvh, bvh_query, triangles
+    for mod in (bvh, bvh_query, triangles):
+        for name in dir(mod):
+            f = getattr(mod, name)
+            if hasattr(f, "targetoptions"):
+                assert not f.targetoptions.get("parallel"), (mod.__name__, name)

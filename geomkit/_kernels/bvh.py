@@ -357,28 +357,38 @@ def refit_kdop(T, child, rng, Rw, tw, K):
 
 
 @jit
+def rigid_code(P, tol):
+    """Check one rigid pose ``P`` (4, 4): ``(code, value)`` as :func:`pose_status`
+    (code 0: rigid)."""
+    for r in range(4):
+        for c in range(4):
+            if not np.isfinite(P[r, c]):
+                return 1, P[r, c]
+    if P[3, 0] != 0.0 or P[3, 1] != 0.0 or P[3, 2] != 0.0 or P[3, 3] != 1.0:
+        return 2, 0.0
+    err = 0.0
+    for i in range(3):
+        for j in range(3):
+            s = P[0, i] * P[0, j] + P[1, i] * P[1, j] + P[2, i] * P[2, j]
+            err = max(err, abs(s - (1.0 if i == j else 0.0)))
+    if err > tol:
+        return 3, err
+    det = (P[0, 0] * (P[1, 1] * P[2, 2] - P[1, 2] * P[2, 1])
+           - P[0, 1] * (P[1, 0] * P[2, 2] - P[1, 2] * P[2, 0])
+           + P[0, 2] * (P[1, 0] * P[2, 1] - P[1, 1] * P[2, 0]))
+    if det < 0.0:
+        return 4, det
+    return 0, 0.0
+
+
+@jit
 def pose_status(P, tol):
     """Check rigid poses ``P`` (n, 4, 4).  Returns ``(k, code, value)`` for the first
     bad pose k (code 1 non-finite, 2 last row not (0, 0, 0, 1), 3 rotation not
     orthonormal within ``tol`` (value: max |R^T R - I|), 4 determinant < 0), or
     ``(-1, 0, 0.0)`` when all are rigid."""
     for k in range(P.shape[0]):
-        for r in range(4):
-            for c in range(4):
-                if not np.isfinite(P[k, r, c]):
-                    return k, 1, P[k, r, c]
-        if P[k, 3, 0] != 0.0 or P[k, 3, 1] != 0.0 or P[k, 3, 2] != 0.0 or P[k, 3, 3] != 1.0:
-            return k, 2, 0.0
-        err = 0.0
-        for i in range(3):
-            for j in range(3):
-                s = P[k, 0, i] * P[k, 0, j] + P[k, 1, i] * P[k, 1, j] + P[k, 2, i] * P[k, 2, j]
-                err = max(err, abs(s - (1.0 if i == j else 0.0)))
-        if err > tol:
-            return k, 3, err
-        det = (P[k, 0, 0] * (P[k, 1, 1] * P[k, 2, 2] - P[k, 1, 2] * P[k, 2, 1])
-               - P[k, 0, 1] * (P[k, 1, 0] * P[k, 2, 2] - P[k, 1, 2] * P[k, 2, 0])
-               + P[k, 0, 2] * (P[k, 1, 0] * P[k, 2, 1] - P[k, 1, 1] * P[k, 2, 0]))
-        if det < 0.0:
-            return k, 4, det
+        code, val = rigid_code(P[k], tol)
+        if code != 0:
+            return k, code, val
     return -1, 0, 0.0

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, jit_inline, pjit, prange
-from .bvh import pose_status, refit_kdop
+from ._numba import jit, jit_inline
+from .bvh import refit_kdop, rigid_code
 from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
@@ -298,76 +298,288 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     return best, fa, fb, tests
 
 
-@pjit
-def collide_many_boxes(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
-                       childB, rngB, CB, RB, EB, KB, TB, orderB,
-                       Rrs, trs, order, first_only, colliding, npairs, tests):
-    """Box trees (OBB / AABB) under many relative motions ``Rrs`` (n, 3, 3),
-    ``trs`` (n, 3), in parallel: flags, pair counts and node tests per motion."""
-    n = Rrs.shape[0]
-    eye = np.eye(3)
-    zero = np.zeros(3)
-    for k in prange(n):
-        buf = np.empty((0, 2), dtype=np.int64)
-        c, t = collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
-                             childB, rngB, CB, RB, EB, KB, TB, orderB,
-                             Rrs[k], trs[k], eye, zero, Rrs[k], trs[k], order,
-                             first_only, buf)
-        colliding[k] = c > 0
-        npairs[k] = c
-        tests[k] = t
+# ------------------------------------------------------------ packed box trees
+# Box trees (OBB / AABB) are also stored as one record per node, so that a node test
+# reads two cache lines per node instead of one line from each of five arrays (the
+# node tests of a query jump across the tree: memory latency, not arithmetic, is
+# most of their cost).  ``N`` (n, 16) float64: centre (0:3), axes row-major (3:12,
+# ``R[r, c] = N[3 + 3 r + c]``, axes as columns), half extents (12:15), largest
+# half extent (15); ``I`` (n, 4) int64: children (0:2, -1 for a leaf) and the
+# triangle range (2:4).  Built by :func:`pack_boxes`.
 
 
-@pjit
-def collide_many_kdops(childA, rngA, KA, TA, orderA, childB, rngB, KB, TB, orderB,
-                       RAs, tAs, RBs, tBs, order, first_only, colliding, npairs, tests):
-    """14-DOP trees under many world poses, in parallel: each pose refits both
-    trees in the world frame (Paper 5's rebuild, O(triangles)) and traverses."""
-    n = RAs.shape[0]
-    empty3 = np.empty((0, 3))
-    empty33 = np.empty((0, 3, 3))
-    eye = np.eye(3)
-    zero = np.zeros(3)
-    for k in prange(n):
-        KAw = np.empty_like(KA)
-        KBw = np.empty_like(KB)
-        refit_kdop(TA, childA, rngA, RAs[k], tAs[k], KAw)
-        refit_kdop(TB, childB, rngB, RBs[k], tBs[k], KBw)
-        buf = np.empty((0, 2), dtype=np.int64)
-        c, t = collide_trees(2, childA, rngA, empty3, empty33, empty3, KAw, TA, orderA,
-                             childB, rngB, empty3, empty33, empty3, KBw, TB, orderB,
-                             eye, zero, RAs[k], tAs[k], RBs[k], tBs[k], order,
-                             first_only, buf)
+@jit
+def pack_boxes(child, rng, C, R, E):
+    """The packed records ``(I, N)`` of a box tree (see above)."""
+    n = child.shape[0]
+    I = np.empty((n, 4), dtype=np.int64)
+    N = np.empty((n, 16))
+    for i in range(n):
+        I[i, 0] = child[i, 0]
+        I[i, 1] = child[i, 1]
+        I[i, 2] = rng[i, 0]
+        I[i, 3] = rng[i, 1]
+        for k in range(3):
+            N[i, k] = C[i, k]
+            N[i, 12 + k] = E[i, k]
+            for c in range(3):
+                N[i, 3 + 3 * k + c] = R[i, k, c]
+        N[i, 15] = max(E[i, 0], E[i, 1], E[i, 2])
+    return I, N
+
+
+@jit_inline
+def _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
+    """:func:`box_separation` ``> 0`` with ``early`` for packed nodes (same
+    arithmetic as :func:`_rel_box` + :func:`box_separation`): B-node ``j`` carried
+    into A-node ``i``'s axes by the relative motion ``(Rr, tr)``."""
+    for r in range(3):
+        for c in range(3):
+            M[r, c] = Rr[r, 0] * NB[j, 3 + c] + Rr[r, 1] * NB[j, 6 + c] + \
+                Rr[r, 2] * NB[j, 9 + c]
+    d0 = Rr[0, 0] * NB[j, 0] + Rr[0, 1] * NB[j, 1] + Rr[0, 2] * NB[j, 2] + tr[0] - NA[i, 0]
+    d1 = Rr[1, 0] * NB[j, 0] + Rr[1, 1] * NB[j, 1] + Rr[1, 2] * NB[j, 2] + tr[1] - NA[i, 1]
+    d2 = Rr[2, 0] * NB[j, 0] + Rr[2, 1] * NB[j, 1] + Rr[2, 2] * NB[j, 2] + tr[2] - NA[i, 2]
+    for r in range(3):
+        T[r] = NA[i, 3 + r] * d0 + NA[i, 6 + r] * d1 + NA[i, 9 + r] * d2
+        for c in range(3):
+            Rab[r, c] = NA[i, 3 + r] * M[0, c] + NA[i, 6 + r] * M[1, c] + \
+                NA[i, 9 + r] * M[2, c]
+            Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
+    a0 = NA[i, 12]
+    a1 = NA[i, 13]
+    a2 = NA[i, 14]
+    b0 = NB[j, 12]
+    b1 = NB[j, 13]
+    b2 = NB[j, 14]
+    for k in range(3):   # A's face normals
+        ak = a0 if k == 0 else (a1 if k == 1 else a2)
+        if abs(T[k]) - ak - (b0 * Ab[k, 0] + b1 * Ab[k, 1] + b2 * Ab[k, 2]) > 0.0:
+            return True
+    for k in range(3):   # B's face normals
+        bk = b0 if k == 0 else (b1 if k == 1 else b2)
+        if abs(T[0] * Rab[0, k] + T[1] * Rab[1, k] + T[2] * Rab[2, k]) - bk - \
+                (a0 * Ab[0, k] + a1 * Ab[1, k] + a2 * Ab[2, k]) > 0.0:
+            return True
+    for p in range(3):   # A_p x B_q
+        p1 = (p + 1) % 3
+        p2 = (p + 2) % 3
+        for q in range(3):
+            q1 = (q + 1) % 3
+            q2 = (q + 2) % 3
+            ra = NA[i, 12 + p1] * Ab[p2, q] + NA[i, 12 + p2] * Ab[p1, q]
+            rb = NB[j, 12 + q1] * Ab[p, q2] + NB[j, 12 + q2] * Ab[p, q1]
+            if abs(T[p2] * Rab[p1, q] - T[p1] * Rab[p2, q]) - ra - rb > 0.0:
+                return True
+    return False
+
+
+@jit_inline
+def _leaf_pair(IA, TA, orderA, IB, TB, orderB, i, j, Rr, tr, first_only, out_pairs,
+               npairs, tbs, M, hit):
+    """Triangle tests of the leaf pair ``(i, j)`` (B's triangles moved by ``(Rr,
+    tr)``); returns the new pair count (one more than ``npairs`` at most with
+    ``first_only``)."""
+    cap = out_pairs.shape[0]
+    rb0 = IB[j, 2]
+    nbl = IB[j, 3] - rb0
+    if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
+        for rb in range(nbl):
+            _move(TB, rb0 + rb, Rr, tr, tbs[rb])
+    for ra in range(IA[i, 2], IA[i, 3]):
+        for rb in range(rb0, IB[j, 3]):
+            if nbl <= LEAF_BUF:
+                trb = tbs[rb - rb0]
+            else:
+                _move(TB, rb, Rr, tr, M)
+                trb = M
+            if _intersect_point(TA[ra], trb, hit):
+                if npairs < cap:
+                    out_pairs[npairs, 0] = orderA[ra]
+                    out_pairs[npairs, 1] = orderB[rb]
+                npairs += 1
+                if first_only:
+                    return npairs
+    return npairs
+
+
+@jit
+def collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only, out_pairs,
+                  st, scr, tbs, seed):
+    """:func:`collide_trees` for packed box trees (OBB / AABB) in A's frame, B moved
+    by ``(Rr, tr)``; scratch passed in (``st`` (STACK, 2) int64, ``scr`` (4, 3, 3),
+    ``tbs`` (LEAF_BUF, 3, 3)) so that a batch allocates it once.
+
+    ``seed`` (2,) int64, temporal coherence for ``first_only``: a leaf pair tested
+    before the traversal (the pair that held the previous pose's first hit;
+    ``seed[0] < 0`` for none); a hit there ends the query, else the traversal runs
+    as without it (the seed pair's tests are counted in ``bv_tests``).  On return
+    ``seed`` holds the leaf pair of the first hit found (unchanged if none).
+    Returns ``(n_pairs, bv_tests)`` as :func:`collide_trees`.
+    """
+    Rab = scr[0]
+    M = scr[1]
+    Ab = scr[2]
+    T = scr[3, 0]
+    hit = scr[3, 1]
+    npairs = 0
+    tests = 0
+    st[0, 0] = 0
+    st[0, 1] = 0
+    top = 1
+    if first_only and seed[0] >= 0:   # the seed on top of the root: popped first
+        st[1, 0] = seed[0]
+        st[1, 1] = seed[1]
+        top = 2
+    while top > 0:
+        top -= 1
+        i = st[top, 0]
+        j = st[top, 1]
+        tests += 1
+        if _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
+            continue
+        la = IA[i, 0] < 0
+        lb = IB[j, 0] < 0
+        if la and lb:
+            n0 = npairs
+            npairs = _leaf_pair(IA, TA, orderA, IB, TB, orderB, i, j, Rr, tr, first_only,
+                                out_pairs, npairs, tbs, M, hit)
+            if npairs > n0:
+                if n0 == 0:
+                    seed[0] = i
+                    seed[1] = j
+                if first_only:
+                    return npairs, tests
+            continue
+        if lb or (not la and NA[i, 15] >= NB[j, 15]):
+            st[top, 0] = IA[i, 1]
+            st[top, 1] = j
+            st[top + 1, 0] = IA[i, 0]
+            st[top + 1, 1] = j
+        else:
+            st[top, 0] = i
+            st[top, 1] = IB[j, 1]
+            st[top + 1, 0] = i
+            st[top + 1, 1] = IB[j, 0]
+        top += 2
+    return npairs, tests
+
+
+@jit_inline
+def _relative(Pa, Pb, Rr, tr):
+    """Relative motion ``Ra^T [Rb | tb - ta]`` of two (4, 4) poses (B into A's frame)."""
+    for r in range(3):
+        tr[r] = Pa[0, r] * (Pb[0, 3] - Pa[0, 3]) + Pa[1, r] * (Pb[1, 3] - Pa[1, 3]) + \
+            Pa[2, r] * (Pb[2, 3] - Pa[2, 3])
+        for c in range(3):
+            Rr[r, c] = Pa[0, r] * Pb[0, c] + Pa[1, r] * Pb[1, c] + Pa[2, r] * Pb[2, c]
+
+
+@jit
+def collide_posed(IA, NA, TA, orderA, tagsA, IB, NB, TB, orderB, tagsB, Pa, Pb, pose_tol,
+                  first_only, out_pairs, out_tags):
+    """One :func:`collide_boxes` call (packed box trees) straight from the two (4, 4)
+    poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for the first
+    one that is not rigid, nothing traversed), forms the relative motion and writes
+    the face tags of the pairs found.  Returns ``(n_pairs, bv_tests, bad)``."""
+    if rigid_code(Pa, pose_tol)[0] != 0:
+        return 0, 0, 1
+    if rigid_code(Pb, pose_tol)[0] != 0:
+        return 0, 0, 2
+    Rr = np.empty((3, 3))
+    tr = np.empty(3)
+    _relative(Pa, Pb, Rr, tr)
+    seed = np.full(2, -1, dtype=np.int64)
+    n, tests = collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only,
+                             out_pairs, np.empty((STACK, 2), dtype=np.int64),
+                             np.empty((4, 3, 3)), np.empty((LEAF_BUF, 3, 3)), seed)
+    for k in range(min(n, out_pairs.shape[0])):
+        out_tags[k, 0] = tagsA[out_pairs[k, 0]]
+        out_tags[k, 1] = tagsB[out_pairs[k, 1]]
+    return n, tests, 0
+
+
+@jit
+def collide_many_boxes(i0, i1, IA, NA, TA, orderA, IB, NB, TB, orderB, PA, PB, first_only,
+                       colliding, npairs, tests):
+    """Serial worker (run by :func:`geomkit._kernels._numba.prun`): packed box trees
+    under the pose pairs ``k`` in ``[i0, i1)`` of ``PA``, ``PB`` ((n, 4, 4) or (1, 4,
+    4), broadcast; checked rigid by the caller): flags, pair counts, node tests.
+    The relative motion carries B into A's frame (no tree is touched per pose);
+    with ``first_only`` the previous pose's hit is tried first (temporal
+    coherence, :func:`collide_boxes`)."""
+    st = np.empty((STACK, 2), dtype=np.int64)
+    scr = np.empty((4, 3, 3))
+    tbs = np.empty((LEAF_BUF, 3, 3))
+    Rr = np.empty((3, 3))
+    tr = np.empty(3)
+    seed = np.full(2, -1, dtype=np.int64)
+    buf = np.empty((0, 2), dtype=np.int64)
+    ma = PA.shape[0] > 1
+    mb = PB.shape[0] > 1
+    for k in range(i0, i1):
+        _relative(PA[k if ma else 0], PB[k if mb else 0], Rr, tr)
+        c, t = collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only,
+                             buf, st, scr, tbs, seed)
         colliding[k] = c > 0
         npairs[k] = c
         tests[k] = t
 
 
 @jit
-def collide_posed(kind, childA, rngA, CA, RA, EA, KA, TA, orderA, tagsA,
-                  childB, rngB, CB, RB, EB, KB, TB, orderB, tagsB,
-                  Pa, Pb, pose_tol, order, first_only, out_pairs, out_tags):
-    """One :func:`collide_trees` call for box trees (OBB / AABB) straight from the
-    two (4, 4) poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for
-    the first one that is not rigid, nothing traversed), forms the relative motion
-    ``Ra^T [Rb | tb - ta]`` and writes the face tags of the pairs found.
-    Returns ``(n_pairs, bv_tests, bad)``."""
-    if pose_status(Pa.reshape((1, 4, 4)), pose_tol)[0] >= 0:
-        return 0, 0, 1
-    if pose_status(Pb.reshape((1, 4, 4)), pose_tol)[0] >= 0:
-        return 0, 0, 2
-    Rr = np.empty((3, 3))
-    tr = np.empty(3)
+def collide_many_kdops(i0, i1, childA, rngA, KA, TA, orderA, childB, rngB, KB, TB, orderB,
+                       PA, PB, order, first_only, colliding, npairs, tests):
+    """Serial worker (run by :func:`geomkit._kernels._numba.prun`): 14-DOP trees
+    under the pose pairs ``k`` in ``[i0, i1)`` (``PA``, ``PB`` as in
+    :func:`collide_many_boxes`).  Each body is refitted in the world frame
+    (Paper 5's rebuild, O(triangles)) only when its pose differs from the one of
+    its last refit in this worker: a static body is refitted once."""
+    empty3 = np.empty((0, 3))
+    empty33 = np.empty((0, 3, 3))
+    eye = np.eye(3)
+    zero = np.zeros(3)
+    KAw = np.empty_like(KA)
+    KBw = np.empty_like(KB)
+    Ra = np.empty((3, 3))
+    ta = np.empty(3)
+    Rb = np.empty((3, 3))
+    tb = np.empty(3)
+    buf = np.empty((0, 2), dtype=np.int64)
+    ma = PA.shape[0] > 1
+    mb = PB.shape[0] > 1
+    la = -1
+    lb = -1
+    for k in range(i0, i1):
+        ka = k if ma else 0
+        kb = k if mb else 0
+        if la < 0 or not _same_pose(PA[la], PA[ka]):
+            _split_pose(PA[ka], Ra, ta)
+            refit_kdop(TA, childA, rngA, Ra, ta, KAw)
+            la = ka
+        if lb < 0 or not _same_pose(PB[lb], PB[kb]):
+            _split_pose(PB[kb], Rb, tb)
+            refit_kdop(TB, childB, rngB, Rb, tb, KBw)
+            lb = kb
+        c, t = collide_trees(2, childA, rngA, empty3, empty33, empty3, KAw, TA, orderA,
+                             childB, rngB, empty3, empty33, empty3, KBw, TB, orderB,
+                             eye, zero, Ra, ta, Rb, tb, order, first_only, buf)
+        colliding[k] = c > 0
+        npairs[k] = c
+        tests[k] = t
+
+
+@jit_inline
+def _split_pose(P, R, t):
     for r in range(3):
-        tr[r] = Pa[0, r] * (Pb[0, 3] - Pa[0, 3]) + Pa[1, r] * (Pb[1, 3] - Pa[1, 3]) + \
-            Pa[2, r] * (Pb[2, 3] - Pa[2, 3])
+        t[r] = P[r, 3]
         for c in range(3):
-            Rr[r, c] = Pa[0, r] * Pb[0, c] + Pa[1, r] * Pb[1, c] + Pa[2, r] * Pb[2, c]
-    n, tests = collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
-                             childB, rngB, CB, RB, EB, KB, TB, orderB,
-                             Rr, tr, np.eye(3), np.zeros(3), Rr, tr, order,
-                             first_only, out_pairs)
-    for k in range(min(n, out_pairs.shape[0])):
-        out_tags[k, 0] = tagsA[out_pairs[k, 0]]
-        out_tags[k, 1] = tagsB[out_pairs[k, 1]]
-    return n, tests, 0
+            R[r, c] = P[r, c]
+
+
+@jit_inline
+def _same_pose(P, Q):
+    for r in range(3):
+        for c in range(4):
+            if P[r, c] != Q[r, c]:
+                return False
+    return True

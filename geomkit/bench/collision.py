@@ -4,17 +4,20 @@ Meshes: tessellated shared cases (torus, sphere, freeform_1 at tolerances giving
 ~25–50k triangles) and trimesh primitives.  For each mesh pair and N random poses
 (after JIT warm-up): median time per query of
 
-* geomkit ``collide(..., all_pairs=False)`` one call per pose, and
-  ``collide_many`` (all poses in one call; time / N), for OBB, 14-DOP, AABB trees;
-* coal ``collide`` (default request: first contact) with ``BVHModelOBBRSS`` and
-  ``BVHModelOBB``;
+* geomkit ``collide(..., all_pairs=False)`` one call per pose, interleaved pose by
+  pose with coal ``collide`` (default request: first contact) with
+  ``BVHModelOBBRSS`` and ``BVHModelOBB``, for OBB, 14-DOP, AABB trees;
+* ``collide_many`` (all poses in one call, wall time / N; with the default threads
+  and with one) against coal's Python loop over the same poses (total time / N:
+  the same work, a mean per query, not a median of single calls);
 * ``min_distance`` vs coal ``distance`` (OBBRSS);
 
 with ratios geomkit / coal and bounding-volume tests per query.  Also the OBB fit
 volume (root box and sum over all nodes) of the covariance centre vs Paper 3's
 region-weighted centre on the shared cases' meshes.
 
-Usage: ``python -m geomkit.bench.collision [--poses 200] [--quick]``
+Usage: ``python -m geomkit.bench.collision [--poses 200] [--repeats 5] [--bv obb,aabb]
+[--quick]``
 """
 
 from __future__ import annotations
@@ -79,55 +82,108 @@ def _median_time(fn, n):
     return float(np.median(ts))
 
 
-def bench_pair(coal, meshes, na, nb, n_poses, seed):
+def _coal_pose(coal, P):
+    return coal.Transform3s(np.ascontiguousarray(P[:3, :3]), np.ascontiguousarray(P[:3, 3]))
+
+
+def bench_pair(coal, meshes, na, nb, n_poses, seed, bvs=("obb", "kdop14", "aabb"),
+               repeats=5):
+    """One mesh pair: per tree kind, single ``collide`` calls (first hit) timed pose by
+    pose, interleaved with coal's call on the same pose (medians over poses and
+    ``repeats``), ``collide_many`` over all poses (wall time / poses, median of
+    ``repeats``; also with one thread) against coal's Python loop over the same
+    poses (total / poses, median of ``repeats``), and ``min_distance``."""
+    import numba
+
     (VA, FA), (VB, FB) = meshes[na], meshes[nb]
     spread = 0.45 * max(np.ptp(VA, 0).max(), np.ptp(VB, 0).max())
     PA = _poses(n_poses, 0.0, seed)
     PA[:, :3, :3] = np.eye(3)     # a static, b moves (the usual simulation case)
     PB = _poses(n_poses, spread, seed + 1)
-    rows = {}
-    flags = {}
-    for bv in ("obb", "kdop14", "aabb"):
+    out = {"geomkit": {}}
+    cmod = {}
+    if coal is not None:
+        for name, cls in (("OBBRSS", coal.BVHModelOBBRSS), ("OBB", coal.BVHModelOBB)):
+            cmod[name] = (_coal(coal, VA, FA, cls), _coal(coal, VB, FB, cls))
+        tfa = [_coal_pose(coal, P) for P in PA]
+        tfb = [_coal_pose(coal, P) for P in PB]
+        req = coal.CollisionRequest()
+        cres = {name: np.empty(n_poses, bool) for name in cmod}
+
+    def coal_one(name, k):
+        ca, cb = cmod[name]
+        r = coal.CollisionResult()
+        t0 = time.perf_counter()
+        coal.collide(ca, tfa[k], cb, tfb[k], req, r)
+        t = time.perf_counter() - t0
+        cres[name][k] = r.isCollision()
+        return t
+
+    def coal_loop(name):
+        ca, cb = cmod[name]
+        c0, t0 = time.process_time(), time.perf_counter()
+        for k in range(n_poses):
+            coal.collide(ca, tfa[k], cb, tfb[k], req, coal.CollisionResult())
+        return ((time.perf_counter() - t0) / n_poses, (time.process_time() - c0) / n_poses)
+
+    flags = None
+    for bv in bvs:
         a, b = Body((VA, FA), bv=bv), Body((VB, FB), bv=bv)
         collide(a, PA[0], b, PB[0], all_pairs=False)          # warm-up
         collide_many(a, b, PA[:2], PB[:2])
         tests = np.empty(n_poses, np.int64)
         res = np.empty(n_poses, bool)
-
-        def one(k):
-            c = collide(a, PA[k], b, PB[k], all_pairs=False)
-            tests[k] = c.bv_tests
-            res[k] = c.colliding
-        t1 = _median_time(one, n_poses)
-        t0 = time.perf_counter()
-        many = collide_many(a, b, PA, PB)
-        tm = (time.perf_counter() - t0) / n_poses
-        assert np.array_equal(many.colliding, res)
+        t_gk, t_co = [], {name: [] for name in cmod}
+        for _ in range(repeats if bv == "obb" else 1):
+            for k in range(n_poses):
+                t0 = time.perf_counter()
+                c = collide(a, PA[k], b, PB[k], all_pairs=False)
+                t_gk.append(time.perf_counter() - t0)
+                tests[k] = c.bv_tests
+                res[k] = c.colliding
+                if bv == "obb":
+                    for name in cmod:
+                        t_co[name].append(coal_one(name, k))
+        if bv == "obb":
+            flags = res.copy()
+            for name in cmod:
+                out["coal_" + name] = float(np.median(t_co[name]))
+                out["agree_" + name] = int((cres[name] == res).sum())
+        t1 = float(np.median(t_gk))
+        tm, tm1, tcl, cm1, ccl = [], [], [], [], []
+        nt = numba.get_num_threads()
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            many = collide_many(a, b, PA, PB)
+            tm.append((time.perf_counter() - t0) / n_poses)
+            assert np.array_equal(many.colliding, res)
+            numba.set_num_threads(1)
+            try:
+                c0, t0 = time.process_time(), time.perf_counter()
+                collide_many(a, b, PA, PB)
+                tm1.append((time.perf_counter() - t0) / n_poses)
+                cm1.append((time.process_time() - c0) / n_poses)
+            finally:
+                numba.set_num_threads(nt)
+            if bv == "obb" and coal is not None:
+                w, c = coal_loop("OBBRSS")
+                tcl.append(w)
+                ccl.append(c)
+        if tcl:
+            out["coal_loop"] = float(np.median(tcl))
+            out["coal_loop_cpu"] = float(np.median(ccl))
         min_distance(a, PA[0], b, PB[0])
         dt = _median_time(lambda k: min_distance(a, PA[k], b, PB[k]), min(n_poses, 50))
-        rows[bv] = (t1, tm, float(np.mean(tests)), float(np.median(tests)), dt)
-        flags[bv] = res
-    out = {"geomkit": rows, "hits": int(flags["obb"].sum())}
+        out["geomkit"][bv] = (t1, float(np.median(tm)), float(np.median(tm1)),
+                              float(np.median(cm1)), float(np.mean(tests)),
+                              float(np.median(tests)), dt)
+    out["hits"] = int(flags.sum()) if flags is not None else -1
     if coal is not None:
-        for name, cls in (("OBBRSS", coal.BVHModelOBBRSS), ("OBB", coal.BVHModelOBB)):
-            ca, cb = _coal(coal, VA, FA, cls), _coal(coal, VB, FB, cls)
-            tfa = [coal.Transform3s(P[:3, :3].copy(), P[:3, 3].copy()) for P in PA]
-            tfb = [coal.Transform3s(P[:3, :3].copy(), P[:3, 3].copy()) for P in PB]
-            req = coal.CollisionRequest()
-            cres = np.empty(n_poses, bool)
-
-            def cone(k):
-                r = coal.CollisionResult()
-                coal.collide(ca, tfa[k], cb, tfb[k], req, r)
-                cres[k] = r.isCollision()
-            cone(0)
-            out["coal_" + name] = _median_time(cone, n_poses)
-            out["agree_" + name] = int((cres == flags["obb"]).sum())
-            if name == "OBBRSS":
-                dreq = coal.DistanceRequest()
-                out["coal_dist"] = _median_time(
-                    lambda k: coal.distance(ca, tfa[k], cb, tfb[k], dreq, coal.DistanceResult()),
-                    min(n_poses, 50))
+        ca, cb = cmod["OBBRSS"]
+        dreq = coal.DistanceRequest()
+        out["coal_dist"] = _median_time(
+            lambda k: coal.distance(ca, tfa[k], cb, tfb[k], dreq, coal.DistanceResult()),
+            min(n_poses, 50))
     return out
 
 
@@ -275,6 +331,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--poses", type=int, default=200)
     ap.add_argument("--quick", action="store_true", help="coarser meshes (smoke run)")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--bv", default="obb,kdop14,aabb", help="tree kinds (comma separated)")
     args = ap.parse_args(argv)
     try:
         import coal
@@ -290,23 +348,37 @@ def main(argv=None):
     for name, m, v in obb_volumes(meshes):
         c, r = v["covariance"], v["regions"]
         print(f"| {name} | {m} | {c[0]:.6g} | {r[0]:.6g} | {c[1]:.6g} | {r[1]:.6g} |")
-    print(f"\n## collide (first hit), {args.poses} random poses per pair, medians\n")
-    print("| pair | hits | bv | geomkit 1 call µs | collide_many µs/query | coal OBBRSS µs | "
-          "coal OBB µs | ratio 1 call / OBBRSS | ratio many / OBBRSS | BV tests mean | "
-          "BV tests median |\n|---|---|---|---|---|---|---|---|---|---|---|")
+    print(f"\n## collide (first hit), {args.poses} random poses per pair\n")
+    print("Single calls: geomkit and coal timed pose by pose in one loop, medians over "
+          f"poses x {args.repeats} (OBB; other trees 1 pass).  collide_many: all poses in "
+          "one call, wall time / poses (2 threads, and 1 thread), against coal's Python "
+          "loop over the same poses (total / poses, OBBRSS); medians of "
+          f"{args.repeats} repeats.  CPU: process time of the one-thread batch and of "
+          "coal's loop (insensitive to other processes taking the cores).\n")
+    print("| pair | hits | bv | geomkit 1 call µs | coal OBBRSS 1 call µs | coal OBB 1 call µs "
+          "| ratio 1 call / OBBRSS | collide_many µs/query | many, 1 thread | coal loop "
+          "µs/query | ratio many / coal loop | ratio many 1 thread / coal loop | "
+          "CPU ratio many 1 thread / coal loop | "
+          "BV tests mean | BV tests median |\n|---|---|---|---|---|---|---|---|---|---|---|"
+          "---|---|---|---|")
     dist_rows = []
+    bvs = tuple(args.bv.split(","))
     for k, (na, nb) in enumerate(PAIRS):
-        r = bench_pair(coal, meshes, na, nb, args.poses, 10 * k)
-        for bv, (t1, tm, tmean, tmed, dt) in r["geomkit"].items():
-            cr = r.get("coal_OBBRSS", np.nan)
-            co = r.get("coal_OBB", np.nan)
-            print(f"| {na}–{nb} | {r['hits']} | {bv} | {t1 * 1e6:.1f} | {tm * 1e6:.1f} | "
-                  f"{cr * 1e6:.1f} | {co * 1e6:.1f} | {t1 / cr:.2f} | {tm / cr:.2f} | "
-                  f"{tmean:.0f} | {tmed:.0f} |")
+        r = bench_pair(coal, meshes, na, nb, args.poses, 10 * k, bvs, args.repeats)
+        cr = r.get("coal_OBBRSS", np.nan)
+        co = r.get("coal_OBB", np.nan)
+        cl = r.get("coal_loop", np.nan)
+        ccl = r.get("coal_loop_cpu", np.nan)
+        for bv, (t1, tm, tm1, cm1, tmean, tmed, dt) in r["geomkit"].items():
+            print(f"| {na}–{nb} | {r['hits']} | {bv} | {t1 * 1e6:.1f} | {cr * 1e6:.1f} | "
+                  f"{co * 1e6:.1f} | {t1 / cr:.2f} | {tm * 1e6:.1f} | {tm1 * 1e6:.1f} | "
+                  f"{cl * 1e6:.1f} | {tm / cl:.2f} | {tm1 / cl:.2f} | {cm1 / ccl:.2f} | "
+                  f"{tmean:.0f} | "
+                  f"{tmed:.0f} |")
             dist_rows.append((na, nb, bv, dt, r.get("coal_dist", np.nan)))
         if coal is not None:
             print(f"|  | coal agrees on {r['agree_OBBRSS']}/{args.poses} (OBBRSS), "
-                  f"{r['agree_OBB']}/{args.poses} (OBB) |||||||||| ")
+                  f"{r['agree_OBB']}/{args.poses} (OBB) |||||||||||||| ")
     print("\n## min_distance (exact), 50 poses per pair, medians\n")
     print("| pair | bv | geomkit µs | coal OBBRSS distance µs | ratio |\n|---|---|---|---|---|")
     for na, nb, bv, dt, cd in dist_rows:
