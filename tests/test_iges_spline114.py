@@ -149,3 +149,22 @@ def test_malformed_114_names_entity_and_de(tmp_path, case):
     with pytest.raises(FileFormatError, match=msg) as ei:
         read_iges(path)
     assert "entity 114 at DE 3" in str(ei.value)
+
+
+def test_114_patches_meeting_within_the_resolution(tmp_path):
+    """Real files round the coefficients, so neighbouring patches meet only within the
+    file's resolution (pythonocc-demos' surf114.igs: 7.9e-7 at resolution 1e-4): read,
+    the first patch's boundary kept and the gap stated as the face's approx_error;
+    beyond the resolution it stays an error."""
+    F, taylor = _poly()
+    params = _params(taylor, [0.0, 0.5, 1.0], [0.0, 1.0])
+    params[4 + 3 + 2 + 48 + 48] += 3e-6  # AX of patch (1, 0): its corners move 3e-6 in x
+    path = tmp_path / "near.igs"
+    write_iges(path, [(114, params)], resolution=1e-5)
+    (s,) = read_iges(path).surfaces
+    assert s.approx_error == pytest.approx(3e-6, rel=1e-6)
+    uv = np.random.default_rng(4).random((100, 2)) * [1.0, 1.0]
+    assert np.abs(evaluate(s, uv) - F(uv[:, 0], uv[:, 1])).max() <= 3e-6 * (1 + 1e-9)
+    write_iges(path, [(114, params)], resolution=1e-6)
+    with pytest.raises(FileFormatError, match="does not meet"):
+        read_iges(path)
