@@ -79,18 +79,20 @@ def check_knots(knots, degree, count, field, error) -> np.ndarray:
     if not hi > lo:
         raise error(f"empty parameter domain [{lo!r}, {hi!r}] (knot[p] must be < knot[n])",
                     field)
-    for end, val in (("first", U[0]), ("last", U[-1])):
-        mult = int(np.count_nonzero(U == val))
-        if mult > degree + 1:
-            raise error(f"the {end} knot {float(val)!r} has multiplicity {mult}; at most "
-                        f"degree + 1 = {degree + 1} (a basis function would vanish)", field)
-    values, counts = np.unique(U[degree + 1: count], return_counts=True)
-    for val, mult in zip(values, counts):
-        if val > lo and val < hi:
-            total = int(np.count_nonzero(U == val))
-            if total > degree:
-                raise error(f"interior knot {float(val)!r} has multiplicity {total} > degree "
-                            f"{degree} (the surface would be discontinuous)", field)
+    # U is non-decreasing: each distinct knot is one run, its length the multiplicity
+    starts = np.concatenate(([0], np.flatnonzero(np.diff(U) != 0) + 1))
+    mult = np.diff(np.append(starts, U.shape[0]))
+    for end, r in (("first", 0), ("last", -1)):
+        if mult[r] > degree + 1:
+            raise error(f"the {end} knot {float(U[starts[r]])!r} has multiplicity "
+                        f"{int(mult[r])}; at most degree + 1 = {degree + 1} (a basis "
+                        "function would vanish)", field)
+    vals = U[starts]
+    bad = np.flatnonzero((vals > lo) & (vals < hi) & (mult > degree))
+    if bad.size:
+        k = int(bad[0])
+        raise error(f"interior knot {float(vals[k])!r} has multiplicity {int(mult[k])} > "
+                    f"degree {degree} (the surface would be discontinuous)", field)
     return U
 
 

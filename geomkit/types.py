@@ -193,6 +193,10 @@ def _first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
     """
     from ._kernels.bezier import de_casteljau_split, decompose
 
+    xy = curve.control_points  # the curve lies in their convex hull (weights > 0)
+    if ((xy[:, 0] >= box[0]) & (xy[:, 0] <= box[1]) & (xy[:, 1] >= box[2])
+            & (xy[:, 1] <= box[3])).all():
+        return None
     Q, _ = decompose(curve.homogeneous, curve.degree, curve.knots)
     stack = list(Q)
     while stack:
