@@ -341,10 +341,13 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     stands for (both ways), so with d_t the point–triangle distance the surface piece
     lies in ``[d_t - fdev[t], d_t + fdev[t]]``.  Collects every triangle with
     ``d_t - fdev[t] <= UB`` (UB = min over triangles of ``d_t + fdev[t]``), nearest
-    first, up to ``cand_t.size`` (the nearest ones when there are more).  Returns
-    ``(count, UB, LB, overflow, pops, tested, hk, hv)`` (``pops`` cells opened,
-    ``tested`` point–triangle distances) with
-    LB a guaranteed lower bound of the point's distance to the surfaces.  With
+    first, up to ``cand_t.size`` (when there are more, those of smallest lower bound
+    ``d_t - fdev[t]`` are kept).  Returns ``(count, UB, LB, drop_lb, pops, tested, hk,
+    hv)`` (``pops`` cells opened, ``tested`` point–triangle distances) with LB a
+    guaranteed lower bound of the point's distance to the surfaces (dropped candidates
+    included) and ``drop_lb`` the smallest lower bound of a candidate dropped for lack
+    of room that could still win (inf when none: an answer no farther than
+    ``drop_lb`` is proven despite the overflow).  With
     ``max_dist`` finite, the search stops once every remaining triangle is farther
     than ``max_dist`` (then count may be 0 and LB > max_dist).
     """
@@ -357,7 +360,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     nz0 = lvl_dims[0, 2]
     UB = np.inf
     count = 0
-    overflow = False
+    drop_lb = np.inf
     cap = cand_t.shape[0]
     LB = np.inf
     pops = 0
@@ -386,17 +389,21 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
             d, s, w = point_triangle_closest(px, py, pz, V, F[t, 0], F[t, 1], F[t, 2])
             if d + fdev[t] < UB:
                 UB = d + fdev[t]
-            if d - fdev[t] <= UB and d - fdev[t] <= max_dist:
+            lbt = d - fdev[t]
+            if lbt <= UB and lbt <= max_dist:
                 slot = count
                 if count == cap:
-                    # full: replace the farthest candidate if this one is nearer
-                    overflow = True
+                    # full: the candidate of largest lower bound makes room, if this
+                    # one's is smaller; the dropped one's bound is remembered
                     slot = 0
                     for r in range(1, cap):
-                        if cand_d[r] > cand_d[slot]:
+                        if cand_d[r] - fdev[cand_t[r]] > cand_d[slot] - fdev[cand_t[slot]]:
                             slot = r
-                    if cand_d[slot] <= d:
+                    lbs = cand_d[slot] - fdev[cand_t[slot]]
+                    if lbs <= lbt:
+                        drop_lb = min(drop_lb, lbt)
                         continue
+                    drop_lb = min(drop_lb, lbs)
                 else:
                     count += 1
                 cand_t[slot] = t
@@ -427,7 +434,12 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
         cand_w[j + 1] = ww
     for i in range(k):
         LB = min(LB, cand_d[i] - fdev[cand_t[i]])
-    return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv
+    if drop_lb <= UB:
+        # a dropped candidate could still hold the nearest point: it bounds LB
+        LB = min(LB, drop_lb)
+    else:
+        drop_lb = np.inf
+    return k, UB, max(0.0, LB), drop_lb, pops, tested, hk, hv
 
 
 @jit
