@@ -94,6 +94,9 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
     f = _f(SKL, x)
     it = 0
     escapes = 0
+    # the previous iteration's full Newton step on a positive definite Hessian, free
+    # and taken whole (0: none): quadratic convergence predicts the next step
+    prev_step = 0.0
     status = FOOT_NOT_CONVERGED
     while it < MAX_ITER:
         it += 1
@@ -115,6 +118,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         lam = 1e-14 * (ga + gc) + 1e-300
         du = 0.0
         dv = 0.0
+        newton_pd = False
         if fixu and fixv:
             status = FOOT_OK
             break
@@ -129,6 +133,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             if a > 0.0 and det > 1e-14 * a * c:
                 du = -(c * gu - b * gv) / det
                 dv = -(a * gv - b * gu) / det
+                newton_pd = True
             else:
                 ga2 = ga + lam
                 gc2 = gc + lam
@@ -197,8 +202,16 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                         u = bu
                         v = bvv
                         f = bf
+                        prev_step = 0.0
                         continue
-        if full_step <= step_tol:
+        # converged: the step is below tol, or (Newton on a positive definite Hessian,
+        # unclamped, after such a step taken whole) quadratic convergence puts the
+        # step after this one below tol: s_next ~ s^2 * s / s_prev^2 (saves the
+        # iteration that would only confirm it)
+        quad = newton_pd and prev_step > 0.0 and full_step <= 0.1 * prev_step \
+            and full_step * full_step * full_step <= step_tol * prev_step * prev_step \
+            and ddu == du and ddv == dv
+        if full_step <= step_tol or quad:
             un = _wrap(u + du, umin, umax, closed_u)
             vn = _wrap(v + dv, vmin, vmax, closed_v)
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
@@ -265,6 +278,8 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         # a stall only in the smooth regime (the full Newton step was taken): at a
         # kink the distance error is first order in the step, so keep going there
         stalled = f - fn <= 1e-13 * f and full_step <= 1e4 * step_tol and full_newton
+        prev_step = full_step if (full_newton and newton_pd and ddu == du and ddv == dv) \
+            else 0.0
         u = un
         v = vn
         f = fn
