@@ -59,9 +59,13 @@ MAX_STARTS_TRIMMED = 16
 """The same with trimmed faces (their feet prune no candidate: a foot may lie
 outside its face)."""
 RERUN_STARTS = 64
-"""Newton runs per point at most in the second pass, for the points whose first pass
-hit the start cap with a candidate left that could hold a nearer point (64 is the
-candidate buffer: every candidate is tried)."""
+"""Newton runs per point at least in the second pass, for the points whose first pass
+hit the start cap with a candidate left that could hold a nearer point: the pass
+allows as many starts as the most candidates of its points, at least this many and at
+most :data:`RERUN_STARTS_MAX` (the candidate buffer grows, no candidate is dropped)."""
+RERUN_STARTS_MAX = 256
+"""The second pass's start cap: candidates beyond it with a lower bound below the
+answer are counted in ``stats["not_proven"]``."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
 TRIM_STARTS = 3
@@ -262,7 +266,7 @@ class Projector:
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 2), dtype=np.int64)
+        work = np.zeros((n, 3), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
@@ -399,8 +403,8 @@ class Projector:
                                  "time_finish": time.perf_counter() - t2})
         if reruns:
             rows = np.flatnonzero(open_)
-            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol,
-                              RERUN_STARTS)
+            K2 = int(min(RERUN_STARTS_MAX, max(RERUN_STARTS, work[rows, 2].max())))
+            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol, K2)
             for f in ("point", "uv", "surface", "distance", "signed_distance", "normal",
                       "status", "lower_bound", "residual", "feet_tried"):
                 getattr(out, f)[rows] = getattr(sub, f)

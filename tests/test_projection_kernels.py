@@ -56,21 +56,26 @@ def test_surface_derivs2_equals_the_general_kernel(s):
             assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
 
 
-def test_candidate_overflow_is_not_proven():
-    """The sphere's centre sees every triangle as a candidate (> 64): the dropped
-    ones could hold a nearer point as far as the bounds know, so the point is counted
-    in not_proven (an overflow never passes silently); the answer and the lower bound
-    still hold."""
+def test_candidate_overflow_never_drops_a_candidate():
+    """The sphere's centre sees every triangle as a candidate (far more than the 64 of
+    the initial buffer): the buffer grows instead of dropping candidates (issue 15: an
+    overflow never passes silently), the second pass tries up to RERUN_STARTS_MAX of
+    them and the point is counted in not_proven (the rest could hold a nearer point
+    as far as the bounds know); the answer and the lower bound still hold."""
+    from geomkit.projection import RERUN_STARTS_MAX
+
     sphere = samples.load("sphere")[0]
     P = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 12.0], [3.0, 1.0, 2.0]])
-    pr = geomkit.Projector(sphere).project(P)
-    assert pr.stats["candidate_overflow"] >= 1
-    assert pr.stats["not_proven"] >= 1
-    assert pr.stats["not_proven"] <= pr.stats["candidate_overflow"] + 1  # the centre
-    assert abs(pr.distance[0] - 10.0) < 1e-9
-    assert abs(pr.distance[1] - 2.0) < 1e-9
-    assert abs(pr.distance[2] - (10.0 - np.sqrt(14.0))) < 1e-9
-    assert np.all(pr.lower_bound <= pr.distance + 1e-12)
+    pr = geomkit.Projector(sphere)
+    assert pr.mesh.faces.shape[0] > RERUN_STARTS_MAX
+    res = pr.project(P)
+    assert res.stats["candidate_overflow"] >= 1
+    assert res.stats["not_proven"] == 1  # the centre only
+    assert res.feet_tried[0] == min(127, RERUN_STARTS_MAX)
+    assert abs(res.distance[0] - 10.0) < 1e-9
+    assert abs(res.distance[1] - 2.0) < 1e-9
+    assert abs(res.distance[2] - (10.0 - np.sqrt(14.0))) < 1e-9
+    assert np.all(res.lower_bound <= res.distance + 1e-12)
 
 
 def test_scan_points_are_proven():

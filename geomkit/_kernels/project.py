@@ -94,9 +94,6 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
     f = _f(SKL, x)
     it = 0
     escapes = 0
-    # the previous iteration's full Newton step on a positive definite Hessian, free
-    # and taken whole (0: none): quadratic convergence predicts the next step
-    prev_step = 0.0
     status = FOOT_NOT_CONVERGED
     while it < MAX_ITER:
         it += 1
@@ -118,7 +115,6 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         lam = 1e-14 * (ga + gc) + 1e-300
         du = 0.0
         dv = 0.0
-        newton_pd = False
         if fixu and fixv:
             status = FOOT_OK
             break
@@ -133,7 +129,6 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             if a > 0.0 and det > 1e-14 * a * c:
                 du = -(c * gu - b * gv) / det
                 dv = -(a * gv - b * gu) / det
-                newton_pd = True
             else:
                 ga2 = ga + lam
                 gc2 = gc + lam
@@ -202,16 +197,8 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                         u = bu
                         v = bvv
                         f = bf
-                        prev_step = 0.0
                         continue
-        # converged: the step is below tol, or (Newton on a positive definite Hessian,
-        # unclamped, after such a step taken whole) quadratic convergence puts the
-        # step after this one below tol: s_next ~ s^2 * s / s_prev^2 (saves the
-        # iteration that would only confirm it)
-        quad = newton_pd and prev_step > 0.0 and full_step <= 0.1 * prev_step \
-            and full_step * full_step * full_step <= step_tol * prev_step * prev_step \
-            and ddu == du and ddv == dv
-        if full_step <= step_tol or quad:
+        if full_step <= step_tol:
             un = _wrap(u + du, umin, umax, closed_u)
             vn = _wrap(v + dv, vmin, vmax, closed_v)
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
@@ -278,8 +265,6 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         # a stall only in the smooth regime (the full Newton step was taken): at a
         # kink the distance error is first order in the step, so keep going there
         stalled = f - fn <= 1e-13 * f and full_step <= 1e4 * step_tol and full_newton
-        prev_step = full_step if (full_newton and newton_pd and ddu == du and ddv == dv) \
-            else 0.0
         u = un
         v = vn
         f = fn
@@ -402,13 +387,14 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         x[0] = P[i, 0]
         x[1] = P[i, 1]
         x[2] = P[i, 2]
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
             start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
         out_lb[i] = LB
         out_work[i, 0] = pops
         out_work[i, 1] = tested
-        flags = 1 if ovf < np.inf else 0
+        out_work[i, 2] = k
+        flags = 1 if ovf else 0
         nf = 0
         # the mesh upper bound holds for trimmed faces too (their triangles lie on
         # the face); a Newton foot on a trimmed surface may lie outside the face,
@@ -416,8 +402,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         best = UB
         if k == 0:
             flags |= 2
-        # a candidate dropped from the full buffer is like one left untried
-        rest = ovf
+        rest = np.inf
         for c in range(k):
             t = ct[c]
             lbc = cd[c] - fdev[t]
@@ -482,13 +467,12 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
     nearest first: every candidate whose lower bound is below the best bound so far
     is tried, up to ``max_starts``; ``out_rest[i]`` is the smallest lower bound of the
-    candidates left untried by that cap or dropped from the full candidate buffer (inf
-    when none).  ``out_lb[i]`` is the mesh
+    candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
-    more candidate triangles than the candidate buffer, one that could still win
-    dropped; bit 1: beyond ``max_dist``.
+    more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
+    ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates).
     Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
@@ -510,7 +494,7 @@ def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     cs = np.empty(cap)
     cw = np.empty(cap)
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
             occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
         out_k[i] = k

@@ -331,6 +331,22 @@ def _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv):
 
 # ---------------------------------------------------------------- point queries
 @jit
+def _grow(ct, cd, cs, cw, n):
+    """The candidate arrays at twice the size, the first ``n`` entries copied."""
+    m = 2 * ct.shape[0]
+    nt = np.empty(m, dtype=ct.dtype)
+    nd = np.empty(m)
+    ns = np.empty(m)
+    nw = np.empty(m)
+    for r in range(n):
+        nt[r] = ct[r]
+        nd[r] = cd[r]
+        ns[r] = cs[r]
+        nw[r] = cw[r]
+    return nt, nd, ns, nw
+
+
+@jit
 def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
                      start, tris, stamp, qid, hk, hv, cand_t, cand_d, cand_s, cand_w,
                      max_dist):
@@ -341,14 +357,11 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     stands for (both ways), so with d_t the point–triangle distance the surface piece
     lies in ``[d_t - fdev[t], d_t + fdev[t]]``.  Collects every triangle with
     ``d_t - fdev[t] <= UB`` (UB = min over triangles of ``d_t + fdev[t]``), nearest
-    first, up to ``cand_t.size`` (when there are more, those of smallest lower bound
-    ``d_t - fdev[t]`` are kept).  Returns ``(count, UB, LB, drop_lb, pops, tested, hk,
-    hv)`` (``pops`` cells opened, ``tested`` point–triangle distances) with LB a
-    guaranteed lower bound of the point's distance to the surfaces (dropped candidates
-    included) and ``drop_lb`` the smallest lower bound of a candidate dropped for lack
-    of room that could still win (inf when none: an answer no farther than
-    ``drop_lb`` is proven despite the overflow).  With
-    ``max_dist`` finite, the search stops once every remaining triangle is farther
+    first; the candidate arrays grow when full (then ``overflow`` is True).  Returns
+    ``(count, UB, LB, overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w)``
+    (``pops`` cells opened, ``tested`` point–triangle distances, the arrays possibly
+    new ones) with LB a guaranteed lower bound of the point's distance to the
+    surfaces.  With ``max_dist`` finite, the search stops once every remaining triangle is farther
     than ``max_dist`` (then count may be 0 and LB > max_dist).
     """
     q = np.empty(3)
@@ -360,7 +373,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     nz0 = lvl_dims[0, 2]
     UB = np.inf
     count = 0
-    drop_lb = np.inf
+    overflow = False
     cap = cand_t.shape[0]
     LB = np.inf
     pops = 0
@@ -391,21 +404,14 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
                 UB = d + fdev[t]
             lbt = d - fdev[t]
             if lbt <= UB and lbt <= max_dist:
-                slot = count
                 if count == cap:
-                    # full: the candidate of largest lower bound makes room, if this
-                    # one's is smaller; the dropped one's bound is remembered
-                    slot = 0
-                    for r in range(1, cap):
-                        if cand_d[r] - fdev[cand_t[r]] > cand_d[slot] - fdev[cand_t[slot]]:
-                            slot = r
-                    lbs = cand_d[slot] - fdev[cand_t[slot]]
-                    if lbs <= lbt:
-                        drop_lb = min(drop_lb, lbt)
-                        continue
-                    drop_lb = min(drop_lb, lbs)
-                else:
-                    count += 1
+                    # full: the buffer grows (no candidate is ever dropped)
+                    overflow = True
+                    cand_t, cand_d, cand_s, cand_w = _grow(cand_t, cand_d, cand_s, cand_w,
+                                                           count)
+                    cap = cand_t.shape[0]
+                slot = count
+                count += 1
                 cand_t[slot] = t
                 cand_d[slot] = d
                 cand_s[slot] = s
@@ -434,12 +440,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
         cand_w[j + 1] = ww
     for i in range(k):
         LB = min(LB, cand_d[i] - fdev[cand_t[i]])
-    if drop_lb <= UB:
-        # a dropped candidate could still hold the nearest point: it bounds LB
-        LB = min(LB, drop_lb)
-    else:
-        drop_lb = np.inf
-    return k, UB, max(0.0, LB), drop_lb, pops, tested, hk, hv
+    return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w
 
 
 @jit
@@ -455,7 +456,7 @@ def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, st
     cs = np.empty(1)
     cw = np.empty(1)
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
             occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, np.inf)
         work[i, 0] = pops
