@@ -30,6 +30,7 @@ import math
 import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from . import results as R
 from ._kernels import project as _pk
@@ -58,11 +59,17 @@ MAX_STARTS_TRIMMED = 16
 """The same with trimmed faces (their feet prune no candidate: a foot may lie
 outside its face)."""
 RERUN_STARTS = 64
-"""Newton runs per point at most in the second pass, for the points whose first pass
-hit the start cap with a candidate left that could hold a nearer point (64 is the
-candidate buffer: every candidate is tried)."""
+"""Newton runs per point at least in the second pass, for the points whose first pass
+hit the start cap with a candidate left that could hold a nearer point: the pass
+allows as many starts as the most candidates of its points, at least this many and at
+most :data:`RERUN_STARTS_MAX` (the candidate buffer grows, no candidate is dropped)."""
+RERUN_STARTS_MAX = 256
+"""The second pass's start cap: candidates beyond it with a lower bound below the
+answer are counted in ``stats["not_proven"]``."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
+TRIM_STARTS = 3
+"""Trim-boundary Newton starts per point: from its nearest boundary samples."""
 CHUNK_SIZE = 1 << 16
 TIE_TOL = 1e-12
 """Feet whose distances differ by less than this times max(model size, distance) are
@@ -164,6 +171,16 @@ class _TrimData:
         uv[:, 0] = np.clip(uv[:, 0], u0, u1)
         uv[:, 1] = np.clip(uv[:, 1], v0, v1)
         self.samp_xyz = np.ascontiguousarray(evaluate(s, uv))
+        self.tree = cKDTree(self.samp_xyz)
+
+    def nearest_samples(self, P):
+        """Indices (n, 3) of the :data:`TRIM_STARTS` boundary samples nearest to each
+        point (-1 where there are fewer samples)."""
+        k = min(TRIM_STARTS, self.samp_xyz.shape[0])
+        _, idx = self.tree.query(P, k=k)
+        near = np.full((P.shape[0], TRIM_STARTS), -1, dtype=np.int64)
+        near[:, :k] = np.asarray(idx, dtype=np.int64).reshape(P.shape[0], k)
+        return near
 
 
 class Projector:
@@ -249,7 +266,7 @@ class Projector:
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 2), dtype=np.int64)
+        work = np.zeros((n, 3), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
@@ -288,10 +305,10 @@ class Projector:
             td_ = np.empty(rows.size)
             tseg = np.empty(rows.size, dtype=np.int64)
             tt = np.empty(rows.size)
-            _tf.trim_feet(np.ascontiguousarray(P[rows]), s.homogeneous, s.degree_u,
-                          s.degree_v, s.knots_u, s.knots_v, dom[si], td.seg, td.deg,
-                          td.samp_xyz, td.samp_seg, td.samp_t, step_tol,
-                          tuv, td_, tseg, tt)
+            Pr = np.ascontiguousarray(P[rows])
+            _tf.trim_feet(Pr, s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                          dom[si], td.seg, td.deg, td.nearest_samples(Pr), td.samp_seg,
+                          td.samp_t, step_tol, tuv, td_, tseg, tt)
             better = td_ < extra_d[rows]
             r = rows[better]
             extra_d[r] = td_[better]
@@ -386,8 +403,8 @@ class Projector:
                                  "time_finish": time.perf_counter() - t2})
         if reruns:
             rows = np.flatnonzero(open_)
-            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol,
-                              RERUN_STARTS)
+            K2 = int(min(RERUN_STARTS_MAX, max(RERUN_STARTS, work[rows, 2].max())))
+            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol, K2)
             for f in ("point", "uv", "surface", "distance", "signed_distance", "normal",
                       "status", "lower_bound", "residual", "feet_tried"):
                 getattr(out, f)[rows] = getattr(sub, f)

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ._numba import jit, jit_inline, prun
-from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .voxel import point_candidates
 
 MAX_ITER = 100
@@ -74,7 +74,7 @@ def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
         u = umax - left_u
     if left_v > 0.0 and v >= vmax:
         v = vmax - left_v
-    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
+    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
 
 
 @jit
@@ -279,7 +279,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
 @jit
 def _slope(Pw, p, q, U, V, u, v, x, along_u, bin_, scr, SKL):
     """d/du (along_u = 1) or d/dv of |S - x|^2 / 2 at (u, v)."""
-    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
+    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
     k = 1 if along_u else 0
     g = 0.0
     for c in range(3):
@@ -355,8 +355,6 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
             moved = True
         if not moved:
             break
-    # leave the derivatives of the returned point in SKL
-    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
     return u, v, d, it_all, st
 
 
@@ -389,12 +387,13 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         x[0] = P[i, 0]
         x[1] = P[i, 1]
         x[2] = P[i, 2]
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
             start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
         out_lb[i] = LB
         out_work[i, 0] = pops
         out_work[i, 1] = tested
+        out_work[i, 2] = k
         flags = 1 if ovf else 0
         nf = 0
         # the mesh upper bound holds for trimmed faces too (their triangles lie on
@@ -472,7 +471,8 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
-    more candidate triangles than the candidate buffer; bit 1: beyond ``max_dist``.
+    more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
+    ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates).
     Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
@@ -494,7 +494,7 @@ def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     cs = np.empty(cap)
     cw = np.empty(cap)
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
             occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
         out_k[i] = k

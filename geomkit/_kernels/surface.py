@@ -268,3 +268,183 @@ def surface_normals(Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel, out, 
     """Batch unit normals ``out`` (n, 3) with per-point ``status`` (n,) int8."""
     prun(_surface_normals_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, umin, umax, vmin,
          vmax, degen_rel, out, status)
+
+
+# ------------------------------------------------ order-2 derivatives, fixed size
+@jit
+def _basis_d2(i, u, p, U, D, W, left, right, A):
+    """Basis functions and their first and second derivatives at ``u`` in span ``i``:
+    ``D[0..2, 0..p]`` (rows: N, N', N'').
+
+    The degree p-2 and p-1 functions are by-products of the triangular recurrence
+    (A2.2: kept in rows 2 and 1 of ``W``); the derivatives follow from them by the
+    derivative formula (The NURBS Book eq. 2.7) applied once and twice, with one
+    division per knot difference.  ``W`` (>= 3 x (p+1) for p >= 2, else (p+1) x
+    (p+1)), ``left``/``right`` (p+1) and ``A`` (>= 1 x (p+1)) are scratch: the arrays
+    of :func:`derivs_scratch`.  Every knot difference used is the support of a basis
+    function that is non-zero on the (non-empty) span, so none is zero.
+    """
+    D[0, 0] = 1.0
+    if p == 1:
+        W[1, 0] = 1.0
+    elif p == 2:
+        W[2, 0] = 1.0
+    for j in range(1, p + 1):
+        left[j] = u - U[i + 1 - j]
+        right[j] = U[i + j] - u
+        saved = 0.0
+        for r in range(j):
+            temp = D[0, r] / (right[r + 1] + left[j - r])
+            D[0, r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        D[0, j] = saved
+        if j == p - 1:
+            for r in range(j + 1):
+                W[1, r] = D[0, r]
+        elif j == p - 2:
+            for r in range(j + 1):
+                W[2, r] = D[0, r]
+    if p == 0:
+        D[1, 0] = 0.0
+        D[2, 0] = 0.0
+        return
+    # right[r] = 1 / (U[i + r] - U[i + r - p]), r = 1..p (supports of degree p-1)
+    for r in range(1, p + 1):
+        right[r] = 1.0 / (U[i + r] - U[i + r - p])
+    for r in range(p + 1):
+        t = 0.0
+        if r >= 1:
+            t += W[1, r - 1] * right[r]
+        if r <= p - 1:
+            t -= W[1, r] * right[r + 1]
+        D[1, r] = p * t
+    if p == 1:
+        D[2, 0] = 0.0
+        D[2, 1] = 0.0
+        return
+    # left[r] = 1 / (U[i + r] - U[i + r + 1 - p]), r = 1..p-1 (supports of degree p-2);
+    # A[0, r] = N'_{i-p+1+r, p-1}, r = 0..p-1
+    for r in range(1, p):
+        left[r] = 1.0 / (U[i + r] - U[i + r + 1 - p])
+    for r in range(p):
+        t = 0.0
+        if r >= 1:
+            t += W[2, r - 1] * left[r]
+        if r <= p - 2:
+            t -= W[2, r] * left[r + 1]
+        A[0, r] = (p - 1) * t
+    for r in range(p + 1):
+        t = 0.0
+        if r >= 1:
+            t += A[0, r - 1] * right[r]
+        if r <= p - 1:
+            t -= A[0, r] * right[r + 1]
+        D[2, r] = p * t
+
+
+@jit
+def surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL):
+    """The derivatives of order k + l <= 2: ``SKL[k, l, :]`` for (0,0), (1,0), (0,1),
+    (2,0), (1,1), (0,2) — what a Newton step on |S - x|^2 needs (the other entries of
+    ``SKL`` are left as they are).
+
+    Same values as :func:`surface_derivs` with ``d = 2`` (to rounding), at about a
+    third of its cost: basis derivatives from the recurrence's by-products
+    (:func:`_basis_d2`), one pass over the (p+1)(q+1) control points accumulating the
+    six homogeneous derivatives in registers, and the rational quotient rule (A4.4)
+    written out for these six.  ``scr`` is :func:`derivs_scratch` of at least the
+    surface's degrees (any order >= 2 ... the arrays are only used as scratch).
+    """
+    dNu, dNv, Aw, sa, sb = scr
+    su = find_span(Pw.shape[0] - 1, p, u, U)
+    _basis_d2(su, u, p, U, dNu, sa[0], sa[1], sa[2], sa[3])
+    sv = find_span(Pw.shape[1] - 1, q, v, V)
+    _basis_d2(sv, v, q, V, dNv, sb[0], sb[1], sb[2], sb[3])
+    a00x = a00y = a00z = a00w = 0.0
+    a10x = a10y = a10z = a10w = 0.0
+    a01x = a01y = a01z = a01w = 0.0
+    a20x = a20y = a20z = a20w = 0.0
+    a11x = a11y = a11z = a11w = 0.0
+    a02x = a02y = a02z = a02w = 0.0
+    for r in range(p + 1):
+        row = su - p + r
+        t0x = t0y = t0z = t0w = 0.0
+        t1x = t1y = t1z = t1w = 0.0
+        t2x = t2y = t2z = t2w = 0.0
+        for s in range(q + 1):
+            col = sv - q + s
+            px = Pw[row, col, 0]
+            py = Pw[row, col, 1]
+            pz = Pw[row, col, 2]
+            pw = Pw[row, col, 3]
+            b = dNv[0, s]
+            t0x += b * px
+            t0y += b * py
+            t0z += b * pz
+            t0w += b * pw
+            b = dNv[1, s]
+            t1x += b * px
+            t1y += b * py
+            t1z += b * pz
+            t1w += b * pw
+            b = dNv[2, s]
+            t2x += b * px
+            t2y += b * py
+            t2z += b * pz
+            t2w += b * pw
+        a = dNu[0, r]
+        a00x += a * t0x
+        a00y += a * t0y
+        a00z += a * t0z
+        a00w += a * t0w
+        a01x += a * t1x
+        a01y += a * t1y
+        a01z += a * t1z
+        a01w += a * t1w
+        a02x += a * t2x
+        a02y += a * t2y
+        a02z += a * t2z
+        a02w += a * t2w
+        a = dNu[1, r]
+        a10x += a * t0x
+        a10y += a * t0y
+        a10z += a * t0z
+        a10w += a * t0w
+        a11x += a * t1x
+        a11y += a * t1y
+        a11z += a * t1z
+        a11w += a * t1w
+        a = dNu[2, r]
+        a20x += a * t0x
+        a20y += a * t0y
+        a20z += a * t0z
+        a20w += a * t0w
+    # quotient rule (A4.4) for k + l <= 2
+    iw = 1.0 / a00w
+    s00x = a00x * iw
+    s00y = a00y * iw
+    s00z = a00z * iw
+    s10x = (a10x - a10w * s00x) * iw
+    s10y = (a10y - a10w * s00y) * iw
+    s10z = (a10z - a10w * s00z) * iw
+    s01x = (a01x - a01w * s00x) * iw
+    s01y = (a01y - a01w * s00y) * iw
+    s01z = (a01z - a01w * s00z) * iw
+    SKL[0, 0, 0] = s00x
+    SKL[0, 0, 1] = s00y
+    SKL[0, 0, 2] = s00z
+    SKL[1, 0, 0] = s10x
+    SKL[1, 0, 1] = s10y
+    SKL[1, 0, 2] = s10z
+    SKL[0, 1, 0] = s01x
+    SKL[0, 1, 1] = s01y
+    SKL[0, 1, 2] = s01z
+    SKL[2, 0, 0] = (a20x - 2.0 * a10w * s10x - a20w * s00x) * iw
+    SKL[2, 0, 1] = (a20y - 2.0 * a10w * s10y - a20w * s00y) * iw
+    SKL[2, 0, 2] = (a20z - 2.0 * a10w * s10z - a20w * s00z) * iw
+    SKL[1, 1, 0] = (a11x - a10w * s01x - a01w * s10x - a11w * s00x) * iw
+    SKL[1, 1, 1] = (a11y - a10w * s01y - a01w * s10y - a11w * s00y) * iw
+    SKL[1, 1, 2] = (a11z - a10w * s01z - a01w * s10z - a11w * s00z) * iw
+    SKL[0, 2, 0] = (a02x - 2.0 * a01w * s01x - a02w * s00x) * iw
+    SKL[0, 2, 1] = (a02y - 2.0 * a01w * s01y - a02w * s00y) * iw
+    SKL[0, 2, 2] = (a02z - 2.0 * a01w * s01z - a02w * s00z) * iw

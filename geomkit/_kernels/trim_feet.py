@@ -11,7 +11,7 @@ from ._numba import jit, prun
 from .project import MAX_ITER
 
 TRIM_FEET_CHUNK = 16
-from .surface import D2, _binomial_table, derivs_scratch, surface_derivs
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 
 
 @jit
@@ -83,7 +83,7 @@ def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
     trim_curve_d2(Q, n, t, B, B1, B2, Cd)
     u = min(dom[1], max(dom[0], Cd[0, 0]))
     v = min(dom[3], max(dom[2], Cd[0, 1]))
-    surface_derivs(Pw, p, q, U, V, u, v, D2, bin_, scr, SKL)
+    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
     cu = Cd[1, 0]
     cv = Cd[1, 1]
     f = 0.0
@@ -137,35 +137,21 @@ def segment_newton(Pw, p, q, U, V, dom, Q, nd, t, x, step_tol, bin_, scr, SKL, B
 
 
 @jit
-def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t,
+def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t,
                      step_tol, out_uv, out_d, out_seg, out_t):
-    M = samp_xyz.shape[0]
     bin_ = _binomial_table(D2)
     pmax = seg.shape[1] - 1
+    scr = derivs_scratch(p, q, D2)
+    SKL = np.empty((3, 3, 3))
+    B = np.empty(pmax + 1)
+    B1 = np.empty(pmax + 1)
+    B2 = np.empty(pmax + 1)
+    Cd = np.empty((3, 2))
     for i in range(i0, i1):
-        scr = derivs_scratch(p, q, D2)
-        SKL = np.empty((3, 3, 3))
-        B = np.empty(pmax + 1)
-        B1 = np.empty(pmax + 1)
-        B2 = np.empty(pmax + 1)
-        Cd = np.empty((3, 2))
         x = P[i]
-        best_i = np.array([-1, -1, -1])
-        best_d = np.array([np.inf, np.inf, np.inf])
-        for k in range(M):
-            d = ((samp_xyz[k, 0] - x[0]) ** 2 + (samp_xyz[k, 1] - x[1]) ** 2
-                 + (samp_xyz[k, 2] - x[2]) ** 2)
-            if d < best_d[2]:
-                j = 2
-                while j > 0 and best_d[j - 1] > d:
-                    best_d[j] = best_d[j - 1]
-                    best_i[j] = best_i[j - 1]
-                    j -= 1
-                best_d[j] = d
-                best_i[j] = k
         out_d[i] = np.inf
-        for r in range(3):
-            k = best_i[r]
+        for r in range(near.shape[1]):
+            k = near[i, r]
             if k < 0:
                 continue
             sg = samp_seg[k]
@@ -184,15 +170,16 @@ def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_se
                 out_t[i] = t
 
 
-def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, samp_xyz, samp_seg, samp_t, step_tol,
+def trim_feet(P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t, step_tol,
               out_uv, out_d, out_seg, out_t):
     """Nearest point of each point on the trim boundary of one surface.
 
-    Starts from the three nearest boundary samples (``samp_*``: points S(C(t)) on the
-    segments), then a safeguarded 1-D Newton in each segment's parameter t in [0, 1].
+    Starts from the boundary samples ``near[i]`` (indices into ``samp_*``: points
+    S(C(t)) on the segments, -1 for none; the caller finds the three nearest with a
+    k-d tree), then a safeguarded 1-D Newton in each segment's parameter t in [0, 1].
     """
     prun(_trim_feet_range, P.shape[0], TRIM_FEET_CHUNK, P, Pw, p, q, U, V, dom, seg, deg,
-         samp_xyz, samp_seg, samp_t, step_tol, out_uv, out_d, out_seg, out_t)
+         near, samp_seg, samp_t, step_tol, out_uv, out_d, out_seg, out_t)
 
 
 @jit

@@ -331,6 +331,22 @@ def _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv):
 
 # ---------------------------------------------------------------- point queries
 @jit
+def _grow(ct, cd, cs, cw, n):
+    """The candidate arrays at twice the size, the first ``n`` entries copied."""
+    m = 2 * ct.shape[0]
+    nt = np.empty(m, dtype=ct.dtype)
+    nd = np.empty(m)
+    ns = np.empty(m)
+    nw = np.empty(m)
+    for r in range(n):
+        nt[r] = ct[r]
+        nd[r] = cd[r]
+        ns[r] = cs[r]
+        nw[r] = cw[r]
+    return nt, nd, ns, nw
+
+
+@jit
 def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
                      start, tris, stamp, qid, hk, hv, cand_t, cand_d, cand_s, cand_w,
                      max_dist):
@@ -341,11 +357,11 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     stands for (both ways), so with d_t the point–triangle distance the surface piece
     lies in ``[d_t - fdev[t], d_t + fdev[t]]``.  Collects every triangle with
     ``d_t - fdev[t] <= UB`` (UB = min over triangles of ``d_t + fdev[t]``), nearest
-    first, up to ``cand_t.size`` (the nearest ones when there are more).  Returns
-    ``(count, UB, LB, overflow, pops, tested, hk, hv)`` (``pops`` cells opened,
-    ``tested`` point–triangle distances) with
-    LB a guaranteed lower bound of the point's distance to the surfaces.  With
-    ``max_dist`` finite, the search stops once every remaining triangle is farther
+    first; the candidate arrays grow when full (then ``overflow`` is True).  Returns
+    ``(count, UB, LB, overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w)``
+    (``pops`` cells opened, ``tested`` point–triangle distances, the arrays possibly
+    new ones) with LB a guaranteed lower bound of the point's distance to the
+    surfaces.  With ``max_dist`` finite, the search stops once every remaining triangle is farther
     than ``max_dist`` (then count may be 0 and LB > max_dist).
     """
     q = np.empty(3)
@@ -386,19 +402,16 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
             d, s, w = point_triangle_closest(px, py, pz, V, F[t, 0], F[t, 1], F[t, 2])
             if d + fdev[t] < UB:
                 UB = d + fdev[t]
-            if d - fdev[t] <= UB and d - fdev[t] <= max_dist:
-                slot = count
+            lbt = d - fdev[t]
+            if lbt <= UB and lbt <= max_dist:
                 if count == cap:
-                    # full: replace the farthest candidate if this one is nearer
+                    # full: the buffer grows (no candidate is ever dropped)
                     overflow = True
-                    slot = 0
-                    for r in range(1, cap):
-                        if cand_d[r] > cand_d[slot]:
-                            slot = r
-                    if cand_d[slot] <= d:
-                        continue
-                else:
-                    count += 1
+                    cand_t, cand_d, cand_s, cand_w = _grow(cand_t, cand_d, cand_s, cand_w,
+                                                           count)
+                    cap = cand_t.shape[0]
+                slot = count
+                count += 1
                 cand_t[slot] = t
                 cand_d[slot] = d
                 cand_s[slot] = s
@@ -427,7 +440,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
         cand_w[j + 1] = ww
     for i in range(k):
         LB = min(LB, cand_d[i] - fdev[cand_t[i]])
-    return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv
+    return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w
 
 
 @jit
@@ -443,7 +456,7 @@ def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, st
     cs = np.empty(1)
     cw = np.empty(1)
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv = point_candidates(
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
             occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, np.inf)
         work[i, 0] = pops

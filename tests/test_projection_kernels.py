@@ -1,0 +1,90 @@
+"""The fixed-order-2 derivative kernel and the candidate-buffer overflow accounting
+of the projection (issue 15)."""
+
+import numpy as np
+import pytest
+
+import geomkit
+from geomkit import samples
+from geomkit._kernels.surface import D2, _binomial_table, derivs_scratch, surface_derivs, \
+    surface_derivs2
+
+ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
+
+
+def _random_surface(rng, p, q, nu, nv, rational):
+    def knots(n, d):
+        inner = np.sort(rng.uniform(0, 1, n - d - 1))
+        return np.r_[np.zeros(d + 1), inner, np.ones(d + 1)]
+    P = rng.normal(size=(nu, nv, 3)) * 10
+    W = rng.uniform(0.3, 3.0, (nu, nv)) if rational else None
+    return geomkit.Surface(p, q, knots(nu, p), knots(nv, q), P, W)
+
+
+def _surfaces():
+    rng = np.random.default_rng(5)
+    out = [samples.load(n)[0] for n in ("freeform_1", "sphere", "torus", "heavy_weights",
+                                        "crease", "plate_with_hole", "cylinder_quarter")]
+    out += [_random_surface(rng, p, q, p + 3, q + 4, r)
+            for p, q, r in ((1, 4, True), (4, 2, False), (5, 3, True), (2, 1, False))]
+    return out
+
+
+@pytest.mark.parametrize("s", _surfaces(), ids=lambda s: f"{s.degree_u}x{s.degree_v}")
+def test_surface_derivs2_equals_the_general_kernel(s):
+    """surface_derivs2 (k + l <= 2) against surface_derivs (A3.6 + A4.4, itself
+    checked against geomdl): equal to rounding, at random parameters, knots, ends."""
+    (a, b), (c, d) = s.domain
+    rng = np.random.default_rng(0)
+    uv = np.column_stack([rng.uniform(a, b, 300), rng.uniform(c, d, 300)])
+    ku = np.unique(s.knots_u)
+    kv = np.unique(s.knots_v)
+    uv = np.vstack([uv, np.column_stack([ku, np.full(ku.size, 0.5 * (c + d))]),
+                    np.column_stack([np.full(kv.size, 0.5 * (a + b)), kv])])
+    p, q = s.degree_u, s.degree_v
+    bin_ = _binomial_table(D2)
+    # scratch of larger degree than the surface's, as the projection batch uses it
+    scr1 = derivs_scratch(p, q, D2)
+    scr2 = derivs_scratch(p + 2, q + 1, D2)
+    S1 = np.empty((3, 3, 3))
+    S2 = np.full((3, 3, 3), np.nan)
+    for u, v in uv:
+        surface_derivs(s.homogeneous, p, q, s.knots_u, s.knots_v, u, v, D2, bin_, scr1, S1)
+        surface_derivs2(s.homogeneous, p, q, s.knots_u, s.knots_v, u, v, scr2, S2)
+        scale = max(np.abs(S1[k, l]).max() for k, l in ORDERS)
+        for k, l in ORDERS:
+            assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
+
+
+def test_candidate_overflow_never_drops_a_candidate():
+    """The sphere's centre sees every triangle as a candidate (far more than the 64 of
+    the initial buffer): the buffer grows instead of dropping candidates (issue 15: an
+    overflow never passes silently), the second pass tries up to RERUN_STARTS_MAX of
+    them and the point is counted in not_proven (the rest could hold a nearer point
+    as far as the bounds know); the answer and the lower bound still hold."""
+    from geomkit.projection import RERUN_STARTS_MAX
+
+    sphere = samples.load("sphere")[0]
+    P = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 12.0], [3.0, 1.0, 2.0]])
+    pr = geomkit.Projector(sphere)
+    assert pr.mesh.faces.shape[0] > RERUN_STARTS_MAX
+    res = pr.project(P)
+    assert res.stats["candidate_overflow"] >= 1
+    assert res.stats["not_proven"] == 1  # the centre only
+    assert res.feet_tried[0] == min(127, RERUN_STARTS_MAX)
+    assert abs(res.distance[0] - 10.0) < 1e-9
+    assert abs(res.distance[1] - 2.0) < 1e-9
+    assert abs(res.distance[2] - (10.0 - np.sqrt(14.0))) < 1e-9
+    assert np.all(res.lower_bound <= res.distance + 1e-12)
+
+
+def test_scan_points_are_proven():
+    """Points near a surface have few candidates: none overflows, all proven."""
+    s = samples.load("freeform_1")[0]
+    rng = np.random.default_rng(1)
+    (a, b), (c, d) = s.domain
+    uv = np.column_stack([rng.uniform(a, b, 500), rng.uniform(c, d, 500)])
+    P = s.evaluate(uv) + 0.3 * rng.normal(size=(500, 3))
+    pr = geomkit.project_points(s, P)
+    assert pr.stats["candidate_overflow"] == 0
+    assert pr.stats["not_proven"] == 0
