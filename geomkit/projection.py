@@ -38,7 +38,7 @@ from ._kernels import trim_feet as _tf
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
-from .tessellate import _closed_directions, tessellate
+from .tessellate import TRIM_TARGET, _closed_directions, tessellate
 from .trimming import INSIDE, OUTSIDE, _segments, classify_uv
 from .types import Surface
 from .voxel import VoxelGrid
@@ -110,6 +110,29 @@ def _as_surfaces(surfaces) -> list[Surface]:
         return list(surfaces)
     raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
                             f"{type(surfaces).__name__}", "surfaces")
+
+
+def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
+    """(m,) bool: triangles of trimmed faces with an edge on the mesh boundary.
+
+    Their deviation bound must also carry the trim polyline's 3-D chord error
+    (:data:`geomkit.tessellate.TRIM_TARGET` times the mesh tolerance): along a trim
+    curve the face runs past the mesh (outer loops) or the mesh past the face (over a
+    hole), so ``d(x, t) + e_t`` measured on the parametric gap alone is no upper bound
+    of the distance to the trimmed face there — it pruned the nearest face of a real
+    part (a disk above a plate's hole)."""
+    F = mesh.faces
+    on = trimmed[mesh.face_surface] != 0
+    out = np.zeros(F.shape[0], bool)
+    if not on.any():
+        return out
+    idx = np.flatnonzero(on)
+    E = np.sort(np.stack([F[idx][:, [0, 1]], F[idx][:, [1, 2]], F[idx][:, [2, 0]]],
+                         axis=1), axis=2).reshape(-1, 2)  # (3k, 2), vertex ids
+    _, inv, cnt = np.unique(E, axis=0, return_inverse=True, return_counts=True)
+    single = (cnt[inv.ravel()] == 1).reshape(-1, 3)
+    out[idx] = single.any(axis=1)
+    return out
 
 
 def _pack(surfaces):
@@ -215,7 +238,10 @@ class Projector:
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
         self.mesh = tessellate(self.surfaces, mesh_tol)
         self.grid = VoxelGrid(self.mesh, voxel_size)
-        self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * self.mesh.face_deviation)
+        self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
+        self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
+            self.mesh.face_deviation
+            + TRIM_TARGET * self.mesh.tol * _trim_boundary_triangles(self.mesh, self.trimmed)))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
@@ -240,7 +266,6 @@ class Projector:
         self.face_approx_error = np.array([float(getattr(s, "approx_error", 0.0) or 0.0)
                                            for s in self.surfaces])
         self.approx_error = float(self.face_approx_error.max())
-        self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
         self.morton = False  # Morton-ordered points: same answers, speed gain not
         # shown on the loaded machine (-20% .. +16% per case), so off by default
