@@ -64,8 +64,12 @@ hit the start cap with a candidate left that could hold a nearer point: the pass
 allows as many starts as the most candidates of its points, at least this many and at
 most :data:`RERUN_STARTS_MAX` (the candidate buffer grows, no candidate is dropped)."""
 RERUN_STARTS_MAX = 256
-"""The second pass's start cap: candidates beyond it with a lower bound below the
-answer are counted in ``stats["not_proven"]``."""
+"""The second pass's start cap.  The few points with more candidates than that whose
+untried candidates could still hold a nearer point get a last pass with every
+candidate (in batches of :data:`RERUN_BUDGET` point-starts); a point left open after
+trying every candidate is counted in ``stats["not_proven"]``."""
+RERUN_BUDGET = 1 << 20
+"""Points x starts per batch of the last pass (bounds its working memory)."""
 TRIM_SAMPLES = 32
 """Samples per trim segment that seed the trim-boundary Newton."""
 TRIM_STARTS = 3
@@ -409,8 +413,11 @@ class Projector:
         # answer: those points again with every candidate tried (the cap only
         # bounds the first pass's work), else they are counted as not proven
         open_ = rest < np.where(ok, dist, np.inf) - TIE_TOL * self.size
-        reruns = int(np.count_nonzero(open_)) if first else 0
-        n_open = 0 if first else int(np.count_nonzero(open_))
+        # a later pass reruns only points whose cap left candidates untried (more
+        # candidates than K): with every candidate tried, an open point is not proven
+        again = open_ if first else open_ & (work[:, 2] > K)
+        reruns = int(np.count_nonzero(again))
+        n_open = 0 if first else int(np.count_nonzero(open_ & ~again))
         out = Projection(point=foot, uv=uv, surface=surf, distance=dist,
                          signed_distance=signed, normal=nrm, status=status,
                          lower_bound=lower, residual=resid,
@@ -427,14 +434,22 @@ class Projector:
                                  "time_kernel": t1 - t0, "time_trim": t2 - t1,
                                  "time_finish": time.perf_counter() - t2})
         if reruns:
-            rows = np.flatnonzero(open_)
-            K2 = int(min(RERUN_STARTS_MAX, max(RERUN_STARTS, work[rows, 2].max())))
-            sub = self._chunk(np.ascontiguousarray(P[rows]), max_distance, step_tol, K2)
-            for f in ("point", "uv", "surface", "distance", "signed_distance", "normal",
-                      "status", "lower_bound", "residual", "feet_tried"):
-                getattr(out, f)[rows] = getattr(sub, f)
-            for k_ in ("newton_runs", "not_proven"):
-                out.stats[k_] += sub.stats[k_]
+            rows = np.flatnonzero(again)
+            most = int(work[rows, 2].max())
+            if first:  # the second pass: as many starts as its points' candidates
+                K2 = int(min(RERUN_STARTS_MAX, max(RERUN_STARTS, most)))
+                batches = [rows]
+            else:  # the last resort for the few points beyond that: every candidate,
+                K2 = most  # in batches of bounded memory (points x starts)
+                step = max(1, RERUN_BUDGET // K2)
+                batches = [rows[i:i + step] for i in range(0, rows.size, step)]
+            for b in batches:
+                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2)
+                for f in ("point", "uv", "surface", "distance", "signed_distance",
+                          "normal", "status", "lower_bound", "residual", "feet_tried"):
+                    getattr(out, f)[b] = getattr(sub, f)
+                for k_ in ("newton_runs", "not_proven", "start_cap_reruns"):
+                    out.stats[k_] += sub.stats[k_]
         return out
 
     # ------------------------------------------------------------------ public
