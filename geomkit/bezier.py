@@ -15,6 +15,17 @@ from .types import BezierPatches, Surface
 __all__ = ["bezier_patches"]
 
 
+def _readonly(a):
+    """``a`` C-contiguous and read-only (a view when it is writable): every call of
+    ``decompose`` gets the same array types, so it is compiled once (numba compiles a
+    read-only and a writable array argument separately)."""
+    a = np.ascontiguousarray(a)
+    if a.flags.writeable:
+        a = a.view()
+        a.setflags(write=False)
+    return a
+
+
 def bezier_patches(surface: Surface) -> BezierPatches:
     """Split ``surface`` into rational Bézier patches, one per non-empty knot cell.
 
@@ -29,13 +40,12 @@ def bezier_patches(surface: Surface) -> BezierPatches:
     Pw = surface.homogeneous
     nu, nv = Pw.shape[:2]
     # u direction: each row index i is a control point of a curve in R^(nv*4)
-    Qu, ub = decompose(np.ascontiguousarray(Pw.reshape(nu, nv * 4)), p, surface.knots_u)
+    Qu, ub = decompose(_readonly(Pw.reshape(nu, nv * 4)), p, _readonly(surface.knots_u))
     nsu = Qu.shape[0]
     rows = Qu.reshape(nsu * (p + 1), nv, 4)
     # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
     cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
-    cols.setflags(write=False)  # read-only like the first call's: one compiled decompose
-    Qv, vb = decompose(cols, q, surface.knots_v)
+    Qv, vb = decompose(_readonly(cols), q, _readonly(surface.knots_v))
     nsv = Qv.shape[0]
     H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)
     H = np.ascontiguousarray(H)

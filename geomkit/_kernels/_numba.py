@@ -23,6 +23,8 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
+from numba.core import errors, types
+from numba.core.registry import CPUDispatcher
 
 # The OpenMP layer parks idle threads deeply: every parallel call then pays ~7 ms of
 # wake-up, which dominates the many small kernel calls of adaptive refinement
@@ -34,11 +36,46 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 
 FASTMATH = {"contract", "nsz"}
 
-jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+
+class _Dispatcher(CPUDispatcher):
+    """numba's CPU dispatcher, except that a call from another kernel compiles the
+    callee for the plain types of its arguments, not their literal types.
+
+    numba types a constant argument (``0``, ``True``, a module-level int such as
+    ``D2``, or a variable still holding its initial constant in numba's SSA form) as
+    ``Literal[int](0)`` and compiles the callee once more for it (a whole call tree
+    again: ``sphere_fit_separator`` was compiled twice, ``sep_bounds`` and
+    ``_add_sep`` three times on a fresh install).  The literal specialisation is only
+    tried when the plain one does not type (a callee that needs a constant)."""
+
+    def get_call_template(self, args, kws):
+        plain = tuple(types.unliteral(a) for a in args)
+        if plain != tuple(args):
+            try:
+                return super().get_call_template(plain, kws)
+            except errors.TypingError:
+                pass
+        return super().get_call_template(args, kws)
+
+
+def _decorator(**options):
+    targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
+                         **options)
+
+    def wrap(func):
+        if numba.config.DISABLE_JIT:
+            return func
+        disp = _Dispatcher(py_func=func, locals={}, targetoptions=targetoptions)
+        disp.enable_caching()  # cache=True
+        return disp
+    return wrap
+
+
+jit = _decorator()
 """Decorator for serial kernels."""
 
-jit_inline = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
-                        inline="always")
+jit_inline = _decorator(inline="always")
 """Decorator for tiny helpers called in hot loops with array arguments: inlined at the
 numba IR level, which removes the per-call reference counting of array arguments
 (measured: a heap push/pop with array arguments cost ~50 ns as a call)."""
@@ -46,11 +83,45 @@ numba IR level, which removes the per-call reference counting of array arguments
 
 def pjit(func):
     """Decorator for batch kernels parallel over their outer ``prange`` loop."""
-    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, parallel=True,
-                      error_model="numpy")(func)
+    return _decorator(parallel=True)(func)
 
 
 prange = numba.prange
+
+
+def _install_compile_log(path):
+    """Append one line per numba compilation in this process to ``path``:
+    ``pid, function, start, end, exclusive CPU seconds`` (tab separated; times are
+    ``time.time()``).  Enabled by ``GEOMKIT_COMPILE_LOG=<file>`` so that the demo and
+    its background compile helper (a separate process) log to one file;
+    :mod:`geomkit.bench.compile_groups` reads it (which process compiled what, and
+    whether a kernel was compiled twice)."""
+    import time
+
+    from numba.core import event
+
+    stack = []
+    pid = os.getpid()
+
+    class _Log(event.Listener):
+        def on_start(self, ev):
+            f = ev.data["dispatcher"].py_func
+            stack.append((f"{f.__module__}.{f.__qualname__}", time.time(),
+                          time.process_time(), [0.0]))
+
+        def on_end(self, ev):
+            name, w0, c0, kids = stack.pop()
+            dt = time.process_time() - c0
+            if stack:
+                stack[-1][3][0] += dt
+            with open(path, "a") as fh:
+                fh.write(f"{pid}\t{name}\t{w0:.3f}\t{time.time():.3f}\t{dt - kids[0]:.3f}\n")
+
+    event.register("numba:compile", _Log())
+
+
+if os.environ.get("GEOMKIT_COMPILE_LOG"):
+    _install_compile_log(os.environ["GEOMKIT_COMPILE_LOG"])
 
 _pool = None
 _pool_lock = threading.Lock()
