@@ -67,7 +67,8 @@ class CompileProfile:
 
         class _Passes(event.Listener):
             def on_start(self, ev):
-                prof._pstack.append((ev.data["name"], time.process_time(), [0.0]))
+                name = ev.data["name"].split(" [")[0]  # "native_lowering [func]"
+                prof._pstack.append((name, time.process_time(), [0.0]))
 
             def on_end(self, ev):
                 name, t0, kids = prof._pstack.pop()
