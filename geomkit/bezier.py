@@ -15,10 +15,16 @@ from .types import BezierPatches, Surface
 __all__ = ["bezier_patches"]
 
 
-def _readonly(a):
-    """``a`` C-contiguous and read-only (a view when it is writable): every call of
-    ``decompose`` gets the same array types, so it is compiled once (numba compiles a
-    read-only and a writable array argument separately)."""
+def _net(a):
+    """Control rows for ``decompose``: C-contiguous and writable (a copy of a read-only
+    surface net), as :func:`geomkit.trimming._segments` passes its curves'; knots go
+    read-only (:func:`_knots`).  numba compiles a read-only and a writable array
+    argument separately: one argument kind per parameter, one compiled ``decompose``."""
+    a = np.ascontiguousarray(a)
+    return a if a.flags.writeable else a.copy()
+
+
+def _knots(a):
     a = np.ascontiguousarray(a)
     if a.flags.writeable:
         a = a.view()
@@ -40,12 +46,12 @@ def bezier_patches(surface: Surface) -> BezierPatches:
     Pw = surface.homogeneous
     nu, nv = Pw.shape[:2]
     # u direction: each row index i is a control point of a curve in R^(nv*4)
-    Qu, ub = decompose(_readonly(Pw.reshape(nu, nv * 4)), p, _readonly(surface.knots_u))
+    Qu, ub = decompose(_net(Pw.reshape(nu, nv * 4)), p, _knots(surface.knots_u))
     nsu = Qu.shape[0]
     rows = Qu.reshape(nsu * (p + 1), nv, 4)
     # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
     cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
-    Qv, vb = decompose(_readonly(cols), q, _readonly(surface.knots_v))
+    Qv, vb = decompose(_net(cols), q, _knots(surface.knots_v))
     nsv = Qv.shape[0]
     H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)
     H = np.ascontiguousarray(H)
