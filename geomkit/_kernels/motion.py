@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit_plain as jit
 from .bvh import KDOP_DIRS
 from .bvh_query import LB_SHRINK, SAT_EPS, STACK, _move, _rel_box, _size, box_separation
 from .triangles import triangle_triangle_distance

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit_plain as jit
 from .bvh_query import STACK, _move, _node_sep, _size
 from .triangles import _intersect_point
 
