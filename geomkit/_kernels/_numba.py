@@ -37,7 +37,6 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 FASTMATH = {"contract", "nsz"}
 
 
-
 class _Dispatcher(CPUDispatcher):
     """numba's CPU dispatcher, except that a call from another kernel compiles the
     callee for the plain types of its arguments, not their literal types.
@@ -59,7 +58,7 @@ class _Dispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
 
-def _decorator(**options):
+def _decorator(cache=True, **options):
     targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
                          **options)
 
@@ -67,7 +66,8 @@ def _decorator(**options):
         if numba.config.DISABLE_JIT:
             return func
         disp = _Dispatcher(py_func=func, locals={}, targetoptions=targetoptions)
-        disp.enable_caching()  # cache=True
+        if cache:
+            disp.enable_caching()
         return disp
     return wrap
 
