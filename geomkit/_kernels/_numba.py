@@ -80,8 +80,8 @@ jit_plain = _decorator()
 (see :class:`_Dispatcher`): for kernels whose callers pass constants and where a
 constant argument gains nothing at run time (the distance and motion kernels).  Not
 the default: a literal derivative order or size lets LLVM unroll the small loops of
-the evaluation kernels (tessellating freeform_1 at 1e-3 measured ~15 % slower with
-every kernel compiled for plain types, on a loaded machine)."""
+the evaluation kernels (tessellating freeform_1 at 1e-3 looked ~15 % slower with
+every kernel compiled for plain types, noisy runs on a loaded machine)."""
 
 jit_inline = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
                         inline="always")
