@@ -15,6 +15,23 @@ from .types import BezierPatches, Surface
 __all__ = ["bezier_patches"]
 
 
+def _net(a):
+    """Control rows for ``decompose``: C-contiguous and writable (a copy of a read-only
+    surface net), as :func:`geomkit.trimming._segments` passes its curves'; knots go
+    read-only (:func:`_knots`).  numba compiles a read-only and a writable array
+    argument separately: one argument kind per parameter, one compiled ``decompose``."""
+    a = np.ascontiguousarray(a)
+    return a if a.flags.writeable else a.copy()
+
+
+def _knots(a):
+    a = np.ascontiguousarray(a)
+    if a.flags.writeable:
+        a = a.view()
+        a.setflags(write=False)
+    return a
+
+
 def bezier_patches(surface: Surface) -> BezierPatches:
     """Split ``surface`` into rational Bézier patches, one per non-empty knot cell.
 
@@ -29,13 +46,12 @@ def bezier_patches(surface: Surface) -> BezierPatches:
     Pw = surface.homogeneous
     nu, nv = Pw.shape[:2]
     # u direction: each row index i is a control point of a curve in R^(nv*4)
-    Qu, ub = decompose(np.ascontiguousarray(Pw.reshape(nu, nv * 4)), p, surface.knots_u)
+    Qu, ub = decompose(_net(Pw.reshape(nu, nv * 4)), p, _knots(surface.knots_u))
     nsu = Qu.shape[0]
     rows = Qu.reshape(nsu * (p + 1), nv, 4)
     # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
     cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
-    cols.setflags(write=False)  # read-only like the first call's: one compiled decompose
-    Qv, vb = decompose(cols, q, surface.knots_v)
+    Qv, vb = decompose(_net(cols), q, _knots(surface.knots_v))
     nsv = Qv.shape[0]
     H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)
     H = np.ascontiguousarray(H)

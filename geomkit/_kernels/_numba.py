@@ -23,6 +23,8 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
+from numba.core import errors, types
+from numba.core.registry import CPUDispatcher
 
 # The OpenMP layer parks idle threads deeply: every parallel call then pays ~7 ms of
 # wake-up, which dominates the many small kernel calls of adaptive refinement
@@ -34,8 +36,52 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 
 FASTMATH = {"contract", "nsz"}
 
+
+class _Dispatcher(CPUDispatcher):
+    """numba's CPU dispatcher, except that a call from another kernel compiles the
+    callee for the plain types of its arguments, not their literal types.
+
+    numba types a constant argument (``0``, ``True``, a module-level int such as
+    ``D2``, or a variable still holding its initial constant in numba's SSA form) as
+    ``Literal[int](0)`` and compiles the callee once more for it (a whole call tree
+    again: ``sphere_fit_separator`` was compiled twice, ``sep_bounds`` and
+    ``_add_sep`` three times on a fresh install).  The literal specialisation is only
+    tried when the plain one does not type (a callee that needs a constant)."""
+
+    def get_call_template(self, args, kws):
+        plain = tuple(types.unliteral(a) for a in args)
+        if plain != tuple(args):
+            try:
+                return super().get_call_template(plain, kws)
+            except errors.TypingError:
+                pass
+        return super().get_call_template(args, kws)
+
+
+def _decorator(cache=True, **options):
+    targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
+                         **options)
+
+    def wrap(func):
+        if numba.config.DISABLE_JIT:
+            return func
+        disp = _Dispatcher(py_func=func, locals={}, targetoptions=targetoptions)
+        if cache:
+            disp.enable_caching()
+        return disp
+    return wrap
+
+
 jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 """Decorator for serial kernels."""
+
+jit_plain = _decorator()
+"""Like :data:`jit`, but calls from other kernels compile it for plain argument types
+(see :class:`_Dispatcher`): for kernels whose callers pass constants and where a
+constant argument gains nothing at run time (the distance and motion kernels).  Not
+the default: a literal derivative order or size lets LLVM unroll the small loops of
+the evaluation kernels (tessellating freeform_1 at 1e-3 looked ~15 % slower with
+every kernel compiled for plain types, noisy runs on a loaded machine)."""
 
 jit_inline = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
                         inline="always")
@@ -51,6 +97,41 @@ def pjit(func):
 
 
 prange = numba.prange
+
+
+def _install_compile_log(path):
+    """Append one line per numba compilation in this process to ``path``:
+    ``pid, function, start, end, exclusive CPU seconds`` (tab separated; times are
+    ``time.time()``).  Enabled by ``GEOMKIT_COMPILE_LOG=<file>`` so that the demo and
+    its background compile helper (a separate process) log to one file;
+    :mod:`geomkit.bench.compile_groups` reads it (which process compiled what, and
+    whether a kernel was compiled twice)."""
+    import time
+
+    from numba.core import event
+
+    stack = []
+    pid = os.getpid()
+
+    class _Log(event.Listener):
+        def on_start(self, ev):
+            f = ev.data["dispatcher"].py_func
+            stack.append((f"{f.__module__}.{f.__qualname__}", time.time(),
+                          time.process_time(), [0.0]))
+
+        def on_end(self, ev):
+            name, w0, c0, kids = stack.pop()
+            dt = time.process_time() - c0
+            if stack:
+                stack[-1][3][0] += dt
+            with open(path, "a") as fh:
+                fh.write(f"{pid}\t{name}\t{w0:.3f}\t{time.time():.3f}\t{dt - kids[0]:.3f}\n")
+
+    event.register("numba:compile", _Log())
+
+
+if os.environ.get("GEOMKIT_COMPILE_LOG"):
+    _install_compile_log(os.environ["GEOMKIT_COMPILE_LOG"])
 
 _pool = None
 _pool_lock = threading.Lock()

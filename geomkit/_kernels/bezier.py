@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, prun
+from ._numba import jit_plain as jit, prun
+
+from .basis import ders_basis_funs, ders_scratch, find_span
 
 CURVE_CHUNK = 256
-from .basis import ders_basis_funs, ders_scratch, find_span
 
 
 @jit
@@ -112,24 +113,31 @@ def insert_knot(Pw, p, U, u, r):
         UQ[k + i] = u
     for i in range(k + 1, U.shape[0]):
         UQ[i + r] = U[i]
+    # element loops, not row-slice assignments: no shape-check raise path to compile
     Qw = np.empty((n + r, dim))
     for i in range(k - p + 1):
-        Qw[i, :] = Pw[i, :]
+        for c in range(dim):
+            Qw[i, c] = Pw[i, c]
     for i in range(k - s, n):
-        Qw[i + r, :] = Pw[i, :]
+        for c in range(dim):
+            Qw[i + r, c] = Pw[i, c]
     Rw = np.empty((p + 1, dim))
     for i in range(p - s + 1):
-        Rw[i, :] = Pw[k - p + i, :]
+        for c in range(dim):
+            Rw[i, c] = Pw[k - p + i, c]
     L = k - p + 1
     for j in range(1, r + 1):
         L = k - p + j
         for i in range(p - j - s + 1):
             alpha = (u - U[L + i]) / (U[i + k + 1] - U[L + i])
-            Rw[i, :] = alpha * Rw[i + 1, :] + (1.0 - alpha) * Rw[i, :]
-        Qw[L, :] = Rw[0, :]
-        Qw[k + r - j - s, :] = Rw[p - j - s, :]
+            for c in range(dim):
+                Rw[i, c] = alpha * Rw[i + 1, c] + (1.0 - alpha) * Rw[i, c]
+        for c in range(dim):
+            Qw[L, c] = Rw[0, c]
+            Qw[k + r - j - s, c] = Rw[p - j - s, c]
     for i in range(L + 1, k - s):
-        Qw[i, :] = Rw[i - L, :]
+        for c in range(dim):
+            Qw[i, c] = Rw[i - L, c]
     return Qw, UQ
 
 
@@ -167,9 +175,10 @@ def curve_derivs(Pw, p, U, t, d, dN, out):
     ndu, left, right, a = ders_scratch(p)
     ders_basis_funs(span, t, p, du, U, dN, ndu, left, right, a)
     Aw = np.zeros((d + 1, k + 1))
-    for j in range(du + 1):
+    for j in range(du + 1):  # element loops: no shape-check raise path to compile
         for r in range(p + 1):
-            Aw[j, :] += dN[j, r] * Pw[span - p + r, :]
+            for c in range(k + 1):
+                Aw[j, c] += dN[j, r] * Pw[span - p + r, c]
     for j in range(d + 1):
         for c in range(k):
             val = Aw[j, c]

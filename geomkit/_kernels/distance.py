@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit_plain as jit
 from .surface import D2, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH
 from .voxel import _heap_pop, _heap_push

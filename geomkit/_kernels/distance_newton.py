@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit_plain as jit
 from .distance_nodes import _uv_inside
 from .project import _surface, foot_newton
 from .trim_feet import _trim_point, segment_newton

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, jit_inline
+from ._numba import jit_plain as jit, jit_inline
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
 NI = 10
