@@ -182,5 +182,9 @@ def prun(worker, n, chunk, *args):
     try:
         run()  # the calling thread takes tasks too
     finally:
+        # every task is taken once run() returns here: a helper that has not started
+        # yet would find none, so it is cancelled rather than waited for (on a busy
+        # machine a pool thread can wait long for a core)
         for f in futures:
-            f.result()
+            if not f.cancel():
+                f.result()
