@@ -299,3 +299,74 @@ class EdgeIndex:
         if len(cells):
             fill_rings(self.h, self.v, KEY, np.ascontiguousarray(cells), starts, out)
         return starts, out
+
+
+def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
+                 target: float, exact_above: float, max_cells: int):
+    """One tensor grid of cells for a surface whose first estimate asks for few cells.
+
+    Each root span gets ``nu x nv`` equal children from :func:`split_counts` of its
+    estimate for ``target`` (the largest count of its row / column, so the grid has
+    no hanging nodes); every cell's two-triangle split is measured (``cell_deviation``,
+    as in :func:`measure`) and its better diagonal kept; if a cell fails ``tol``, one
+    more grid is tried with ``target`` scaled down by the excess.  Returns ``(tri_uv (M, 3, 2), dev (M,), cells)``, triangles
+    counter-clockwise in UV, or None when the grid would exceed ``max_cells`` or a
+    cell fails ``tol`` (the adaptive path then takes over).  The measurement is the
+    one adaptive refinement accepts cells with, so the stated bound is the same.
+    """
+    nsu, nsv = len(ub) - 1, len(vb) - 1
+    if nsu * nsv > max_cells:
+        return None
+    ru = np.repeat(np.arange(nsu), nsv)
+    rv = np.tile(np.arange(nsv), nsu)
+    roots = np.stack([ub[ru], ub[ru + 1], vb[rv], vb[rv + 1]], axis=1)
+    E = np.empty((len(roots), 5))
+    cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v, surface.knots_u,
+                surface.knots_v, roots, m, E)
+    (u0, u1), (v0, v1) = surface.domain
+    for _ in range(2):  # a second try with the target scaled by the first's excess
+        nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
+                              max_parts=max_cells)
+        cu = nu.reshape(nsu, nsv).max(axis=1)
+        cv = nv.reshape(nsu, nsv).max(axis=0)
+        if int(cu.sum()) * int(cv.sum()) > max_cells:
+            return None
+        u = _lines(ub, cu)
+        v = _lines(vb, cv)
+        iu, iv = len(u) - 1, len(v) - 1
+        gi = np.repeat(np.arange(iu), iv)
+        gj = np.tile(np.arange(iv), iu)
+        cells = np.stack([u[gi], u[gi + 1], v[gj], v[gj + 1]], axis=1)
+        Ec = np.empty((len(cells), 5))
+        cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v,
+                    surface.knots_u, surface.knots_v, cells, m, Ec)
+        first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
+        M = np.empty((len(cells), 2))
+        cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,
+                       surface.knots_u, surface.knots_v, cells, first, k, u0, u1, v0, v1,
+                       exact_above, tol, M)
+        diag = np.argmin(M, axis=1)
+        dev = M[np.arange(len(cells)), diag]
+        worst = float(dev.max())
+        if worst <= tol:
+            break
+        # errors fall with the square of the cell size: aim the retry below target
+        target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+    else:
+        return None
+    # corners A=(u0,v0) B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 is AC, 1 is BD
+    A = cells[:, [0, 2]]
+    B = cells[:, [1, 2]]
+    C = cells[:, [1, 3]]
+    D = cells[:, [0, 3]]
+    d1 = (diag == 1)[:, None]
+    t0 = np.stack([A, B, np.where(d1, D, C)], axis=1)
+    t1 = np.stack([np.where(d1, B, A), C, D], axis=1)
+    tri_uv = np.stack([t0, t1], axis=1).reshape(-1, 3, 2)
+    return tri_uv, np.repeat(dev, 2), cells
+
+
+def _lines(b: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Breakpoints ``b`` with ``counts[i]`` equal parts in span i (span ends exact)."""
+    parts = [b[i] + (b[i + 1] - b[i]) * (np.arange(c) / c) for i, c in enumerate(counts.tolist())]
+    return np.concatenate(parts + [b[-1:]])

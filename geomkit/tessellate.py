@@ -37,11 +37,11 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
+from ._kernels.surface import surface_points
 from ._kernels.tess import chord_deviation, triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
 from ._validate import as_int
 from .errors import InvalidInputError
-from .evaluation import evaluate
 from .trimming import evaluate_trim_curve
 from .types import Mesh, Surface
 
@@ -59,6 +59,10 @@ EXACT_ABOVE = 1.0
 distances measured instead (see :func:`geomkit._kernels.tess.triangle_deviation`)."""
 MAX_HANGING = 2
 """Grading: a cell edge carries at most this many hanging nodes (finer neighbours)."""
+GRID_CELLS = 4096
+"""Untrimmed surfaces whose first estimate asks for at most this many cells are tried
+as one uniform grid first (:func:`geomkit._quadtree.uniform_grid`): small meshes then
+cost a few kernel calls instead of the adaptive rounds' per-call overhead."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -117,7 +121,7 @@ class _TrimPolylines:
                 # the mesh boundary follows them clipped to it (S is not defined outside)
                 C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
                 Cm = np.clip(evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, 3, 2)
-                P = evaluate(s, C)
+                P = _points(s, C)
                 dev = np.empty(len(t) - 1)
                 chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
                                 C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Cm), dev)
@@ -161,9 +165,23 @@ def _closed_directions(s: Surface) -> tuple[bool, bool]:
     t = np.linspace(0.0, 1.0, 17)
     v = v0 + (v1 - v0) * t
     u = u0 + (u1 - u0) * t
-    cu = np.max(np.abs(evaluate(s, np.c_[np.full(17, u0), v]) - evaluate(s, np.c_[np.full(17, u1), v])))
-    cv = np.max(np.abs(evaluate(s, np.c_[u, np.full(17, v0)]) - evaluate(s, np.c_[u, np.full(17, v1)])))
+    uv = np.empty((4, 17, 2))  # the u0, u1, v0, v1 edges, in one evaluation
+    uv[0, :, 0], uv[1, :, 0], uv[:2, :, 1] = u0, u1, v
+    uv[2, :, 1], uv[3, :, 1], uv[2:, :, 0] = v0, v1, u
+    P = _points(s, uv.reshape(-1, 2)).reshape(4, 17, 3)
+    cu = np.max(np.abs(P[0] - P[1]))
+    cv = np.max(np.abs(P[2] - P[3]))
     return bool(cu <= eps), bool(cv <= eps)
+
+
+def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
+    """S(uv) for (n, 2) parameters already in the domain (no validation: the callers
+    make them; :func:`geomkit.evaluation.evaluate` checks user input)."""
+    uv = np.ascontiguousarray(uv, dtype=np.float64)
+    out = np.empty((uv.shape[0], 3))
+    if uv.shape[0]:
+        surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
+    return out
 
 
 def _triangulate(s, lat, cells, M, state, trim, closed, centre):
@@ -231,9 +249,11 @@ def _triangulate_cut(lat, cells, cut, index, trim):
 
 
 # ------------------------------------------------------------------ assembly
-def _weld(s: Surface, tri_uv: np.ndarray):
-    """Vertices, faces and per-vertex UV; merges equal UVs, then coincident boundary
-    vertices in 3-D (poles, seams); drops the triangles that collapse."""
+def _weld(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
+    """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
+    UVs within rounding of each other: trim crossings computed in two cells), then
+    coincident boundary vertices in 3-D (poles, seams); drops the triangles that
+    collapse."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
@@ -246,15 +266,19 @@ def _weld(s: Surface, tri_uv: np.ndarray):
     uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
     uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
     inv = inv.ravel()
-    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")]
-    P = evaluate(s, uniq)
+    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")] if near_uv else []
+    P = _points(s, uniq)
     eps = 1e-12 * dom
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
                      | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
     if len(bnd):
         pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * s.size, output_type="ndarray")])
-    pairs = np.concatenate(pairs).reshape(-1, 2)
+    pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
     n = len(uniq)
+    if not len(pairs):  # nothing to merge
+        F = inv.reshape(-1, 3)
+        good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+        return P, F, uniq, good
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     # representative of each component: its first member
@@ -274,6 +298,18 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    if not s.trim and max_angle is None and max_edge is None:
+        grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
+                               GRID_CELLS)
+        if grid is not None:
+            tri_uv, dev, cells = grid
+            V, F, UV, good = _weld(s, tri_uv, near_uv=False)
+            closed = _closed_directions(s)
+            stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
+                     "collapsed_dropped": int(np.count_nonzero(~good)),
+                     "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
+                     "seconds": time.perf_counter() - t0}
+            return V, F[good], UV, dev[good], tri_uv[good], stats
     trim = _TrimPolylines(s, tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = _closed_directions(s)
@@ -307,7 +343,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                 todo = todo[~hit]
         if len(todo):
             sub = np.ascontiguousarray(tri_uv[todo])
-            tri_xyz = evaluate(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+            tri_xyz = _points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
             out = np.empty(len(todo))
             (u0, u1), (v0, v1) = s.domain
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
@@ -326,7 +362,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                 fanned.add(key)
             else:
                 force[ci] = True
-    V, F, UV, good = _weld(s, tri_uv)
+    V, F, UV, good = _weld(s, tri_uv, near_uv=bool(np.any(state == 2)))
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1],

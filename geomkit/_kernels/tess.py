@@ -17,9 +17,12 @@ from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, find_span
 from .surface import D1, derivs_scratch, surface_derivs, surface_point
 
-CELL_CHUNK = 8
-"""Cells per parallel task range step (:func:`prun`)."""
-TRI_CHUNK = 32
+CELL_CHUNK = 32
+"""Cells per parallel task range step (:func:`prun`).  A call of at most one chunk runs
+in the calling thread: handing a few cells to the thread pool costs more than their
+work (~0.1 ms per task on an idle machine, several ms when the cores are busy)."""
+TRI_CHUNK = 128
+"""Triangles (or chords) per parallel task range step."""
 
 
 @jit_inline
