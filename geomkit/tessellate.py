@@ -108,34 +108,45 @@ class _TrimPolylines:
         s = self.surface
         (u0, u1), (v0, v1) = s.domain
         lo, hi = np.array([u0, v0]), np.array([u1, v1])
+        mids = np.array([0.25, 0.5, 0.75])
         out = []
         for c in loop.pieces:
             p = c.degree
             t = np.unique(c.knots[p: len(c.knots) - p])
             if not c.is_polyline:  # a few samples per span to start
                 t = np.unique(np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])]))
+            # trim curves may stray outside the domain by the validation tolerance:
+            # the mesh boundary follows them clipped to it (S is not defined outside)
+            C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
+            P = _points(s, C)
+            todo = np.arange(len(t) - 1)  # segments not yet within chord_tol
             for _ in range(60):
-                mids = np.array([0.25, 0.5, 0.75])
-                tm = t[:-1, None] + (t[1:] - t[:-1])[:, None] * mids[None, :]
-                # trim curves may stray outside the domain by the validation tolerance:
-                # the mesh boundary follows them clipped to it (S is not defined outside)
-                C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
-                Cm = np.clip(evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, 3, 2)
-                P = _points(s, C)
-                dev = np.empty(len(t) - 1)
+                ta, tb = t[todo], t[todo + 1]
+                tm = ta[:, None] + (tb - ta)[:, None] * mids[None, :]
+                Ca, Cb = C[todo], C[todo + 1]
+                # samples of the exact curve, then of the UV chord: the mesh boundary
+                # also passes through points of the UV chord (where it crosses cell
+                # edges), mapped by S; their images must stay near the 3-D chord too,
+                # or a non-uniform parametrisation bows the boundary out
+                mid_uv = np.empty((len(todo), 2 * len(mids), 2))
+                mid_uv[:, :len(mids)] = np.clip(
+                    evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, len(mids), 2)
+                mid_uv[:, len(mids):] = Ca[:, None, :] + (Cb - Ca)[:, None, :] * mids[None, :, None]
+                dev = np.empty(len(todo))
                 chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Cm), dev)
-                # the mesh boundary also passes through points of the UV chord (where it
-                # crosses cell edges), mapped by S: their images must stay near the 3-D
-                # chord too, or a non-uniform parametrisation bows the boundary out
-                Lm = C[:-1, None, :] + (C[1:] - C[:-1])[:, None, :] * mids[None, :, None]
-                dev_uv = np.empty(len(t) - 1)
-                chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Lm), dev_uv)
-                bad = np.maximum(dev, dev_uv) > chord_tol
-                if not bad.any():
+                                Ca, Cb, P[todo], P[todo + 1], mid_uv, dev)
+                bad = todo[dev > chord_tol]
+                if not len(bad):
                     break
-                t = np.sort(np.concatenate([t, 0.5 * (t[:-1] + t[1:])[bad]]))
+                # split the failing segments at their parameter midpoints; the halves
+                # are the next round's segments (only they are measured again)
+                tn = 0.5 * (t[bad] + t[bad + 1])
+                Cn = np.clip(evaluate_trim_curve(c, tn)[:, 0, :], lo, hi)
+                t = np.insert(t, bad + 1, tn)
+                C = np.insert(C, bad + 1, Cn, axis=0)
+                P = np.insert(P, bad + 1, _points(s, Cn), axis=0)
+                left = bad + np.arange(len(bad))
+                todo = np.sort(np.concatenate([left, left + 1]))
             out.append(C if not out else C[1:])
         pts = np.concatenate(out)
         pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
@@ -159,9 +170,9 @@ class _TrimPolylines:
 
 
 # ------------------------------------------------------------------ triangles
-def _closed_directions(s: Surface) -> tuple[bool, bool]:
+def _closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     (u0, u1), (v0, v1) = s.domain
-    eps = 1e-10 * s.size
+    eps = 1e-10 * size
     t = np.linspace(0.0, 1.0, 17)
     v = v0 + (v1 - v0) * t
     u = u0 + (u1 - u0) * t
@@ -249,7 +260,7 @@ def _triangulate_cut(lat, cells, cut, index, trim):
 
 
 # ------------------------------------------------------------------ assembly
-def _weld(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
+def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
     UVs within rounding of each other: trim crossings computed in two cells), then
     coincident boundary vertices in 3-D (poles, seams); drops the triangles that
@@ -272,7 +283,7 @@ def _weld(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
                      | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
     if len(bnd):
-        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * s.size, output_type="ndarray")])
+        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * size, output_type="ndarray")])
     pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
     n = len(uniq)
     if not len(pairs):  # nothing to merge
@@ -295,24 +306,25 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     t0 = time.perf_counter()
     ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
     vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
-    lat = qt.Lattice(ub, vb)
-    cells = lat.roots()
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    size = s.size
     if not s.trim and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
             tri_uv, dev, cells = grid
-            V, F, UV, good = _weld(s, tri_uv, near_uv=False)
-            closed = _closed_directions(s)
+            V, F, UV, good = _weld(s, tri_uv, size, near_uv=False)
+            closed = _closed_directions(s, size)
             stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
                      "collapsed_dropped": int(np.count_nonzero(~good)),
                      "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
                      "seconds": time.perf_counter() - t0}
             return V, F[good], UV, dev[good], tri_uv[good], stats
+    lat = qt.Lattice(ub, vb)
+    cells = lat.roots()
     trim = _TrimPolylines(s, tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
-    closed = _closed_directions(s)
+    closed = _closed_directions(s, size)
     force = None
     known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
@@ -362,7 +374,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                 fanned.add(key)
             else:
                 force[ci] = True
-    V, F, UV, good = _weld(s, tri_uv, near_uv=bool(np.any(state == 2)))
+    V, F, UV, good = _weld(s, tri_uv, size, near_uv=bool(np.any(state == 2)))
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1],
