@@ -161,7 +161,7 @@ class _TrimPolylines:
         if len(self.segments):
             boxes = shapely.box(uv[:, 0], uv[:, 2], uv[:, 1], uv[:, 3])
             hit = self.tree.query(boxes, predicate="intersects")[0]
-            state[np.unique(hit)] = 2
+            state[hit] = 2
         rest = state != 2
         cu = 0.5 * (uv[rest, 0] + uv[rest, 1])
         cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
@@ -199,13 +199,16 @@ def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     """UV triangles (M, 3, 2) and the index of the cell each came from."""
     pts = qt.lattice_points(cells[state > 0])
     cu, cv = closed
-    if cu:  # mirror seam points so both sides of a closed seam get the same vertices
-        on = pts[(pts[:, 0] == 0) | (pts[:, 0] == lat.gu_max)]
-        pts = np.unique(np.concatenate([pts, np.c_[lat.gu_max - on[:, 0], on[:, 1]]]), axis=0)
-    if cv:
-        on = pts[(pts[:, 1] == 0) | (pts[:, 1] == lat.gv_max)]
-        pts = np.unique(np.concatenate([pts, np.c_[on[:, 0], lat.gv_max - on[:, 1]]]), axis=0)
-    index = qt.EdgeIndex(pts)
+    if cu or cv:  # mirror seam points so both sides of a closed seam get the same vertices
+        if cu:
+            on = pts[(pts[:, 0] == 0) | (pts[:, 0] == lat.gu_max)]
+            pts = np.concatenate([pts, np.c_[lat.gu_max - on[:, 0], on[:, 1]]])
+        if cv:
+            on = pts[(pts[:, 1] == 0) | (pts[:, 1] == lat.gv_max)]
+            pts = np.concatenate([pts, np.c_[on[:, 0], lat.gv_max - on[:, 1]]])
+        keys = qt.unique_ints(pts[:, 1] * qt.KEY + pts[:, 0])
+        pts = np.stack([keys % qt.KEY, keys // qt.KEY], axis=1)
+    index = qt.EdgeIndex(pts, sorted_rows=True)
     inside = np.nonzero(state == 1)[0]
     c = cells[inside]
     counts = index.counts(c)
@@ -257,6 +260,48 @@ def _triangulate_cut(lat, cells, cut, index, trim):
     flip = area2[keep] < 0
     coords[flip] = coords[flip][:, ::-1]
     return coords, cut[idx[keep]]
+
+
+class _Measured:
+    """Deviations of UV triangles measured in earlier rounds, found again by their
+    corner coordinates (the same UV corners are the same flat triangle): a hash of
+    the corners' bits, sorted, then an exact comparison of the 6 coordinates."""
+
+    _MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9,
+                     0xD6E8FEB86659FD93, 0xFF51AFD7ED558CCD, 0xC4CEB9FE1A85EC53],
+                    dtype=np.uint64)
+
+    def __init__(self):
+        self.h = np.empty(0, dtype=np.uint64)
+        self.bits = np.empty((0, 6), dtype=np.int64)
+        self.dev = np.empty(0)
+
+    @classmethod
+    def _keys(cls, tri_uv):
+        bits = np.ascontiguousarray(tri_uv, dtype=np.float64).reshape(-1, 6).view(np.int64)
+        u = bits.view(np.uint64) * cls._MIX
+        h = u[:, 0] ^ (u[:, 1] >> np.uint64(7)) ^ u[:, 2] ^ (u[:, 3] >> np.uint64(13)) \
+            ^ u[:, 4] ^ (u[:, 5] >> np.uint64(29))
+        return h, bits
+
+    def get(self, tri_uv) -> np.ndarray:
+        """(n,) earlier deviation of each triangle, NaN if not measured before."""
+        out = np.full(len(tri_uv), np.nan)
+        if not len(self.h) or not len(tri_uv):
+            return out
+        h, bits = self._keys(tri_uv)
+        i = np.minimum(np.searchsorted(self.h, h), len(self.h) - 1)
+        hit = (self.h[i] == h) & np.all(self.bits[i] == bits, axis=1)
+        out[hit] = self.dev[i[hit]]
+        return out
+
+    def add(self, tri_uv, dev) -> None:
+        h, bits = self._keys(tri_uv)
+        h = np.concatenate([self.h, h])
+        order = np.argsort(h, kind="stable")
+        self.h = h[order]
+        self.bits = np.concatenate([self.bits, bits])[order]
+        self.dev = np.concatenate([self.dev, dev])[order]
 
 
 # ------------------------------------------------------------------ assembly
@@ -328,7 +373,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     force = None
     known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
-    measured = {}   # UV triangle (bytes of its corners) -> measured deviation
+    fan_ll = np.empty(0, dtype=np.int64)  # their lower-left corners (a quick pre-test)
+    measured = _Measured()
     rounds = 0
     for rounds in range(1, 40):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
@@ -338,21 +384,19 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                                  CELL_TARGET * tol, MAX_HANGING)
         known = (E, M)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
-        centre = np.array([tuple(c) in fanned for c in cells.tolist()], dtype=bool) \
-            if fanned else np.zeros(len(cells), dtype=bool)
+        centre = np.zeros(len(cells), dtype=bool)
+        if fanned:
+            cand = np.nonzero(np.isin(cells[:, 0] * qt.KEY + cells[:, 2], fan_ll))[0]
+            for i in cand.tolist():
+                centre[i] = tuple(cells[i].tolist()) in fanned
         tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed, centre)
         todo = np.nonzero(np.isnan(dev))[0]
-        keys = None
         if len(todo):
             # triangles measured in an earlier round (same UV corners: same triangle)
-            keys = np.ascontiguousarray(tri_uv[todo]).reshape(len(todo), 6) \
-                .view(np.dtype((np.void, 48))).ravel().tolist()
-            if measured:
-                old = np.array([measured.get(key, np.nan) for key in keys])
-                hit = ~np.isnan(old)
-                dev[todo[hit]] = old[hit]
-                keys = [key for key, h in zip(keys, hit.tolist()) if not h]
-                todo = todo[~hit]
+            old = measured.get(tri_uv[todo])
+            hit = ~np.isnan(old)
+            dev[todo[hit]] = old[hit]
+            todo = todo[~hit]
         if len(todo):
             sub = np.ascontiguousarray(tri_uv[todo])
             tri_xyz = _points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
@@ -361,19 +405,20 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
                                sub, tri_xyz, k, u0, u1, v0, v1, EXACT_ABOVE * tol, out)
             dev[todo] = out
-            measured.update(zip(keys, out.tolist()))
+            measured.add(sub, out)
         bad = dev > tol
         if not bad.any():
             break
         # a failing split or fan first becomes a centre fan (better shaped pieces);
         # a failing centre fan or trimmed cell is split
         force = np.zeros(len(cells), dtype=bool)
-        for ci in np.unique(owner[bad]):
+        for ci in qt.unique_ints(owner[bad]).tolist():
             key = tuple(cells[ci].tolist())
             if state[ci] == 1 and key not in fanned:
                 fanned.add(key)
             else:
                 force[ci] = True
+        fan_ll = np.array([a * qt.KEY + c for a, _, c, _ in fanned], dtype=np.int64)
     V, F, UV, good = _weld(s, tri_uv, size, near_uv=bool(np.any(state == 2)))
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
