@@ -26,25 +26,25 @@ class Lattice:
     def __init__(self, ub: np.ndarray, vb: np.ndarray):
         self.ub = np.asarray(ub, dtype=np.float64)
         self.vb = np.asarray(vb, dtype=np.float64)
+        self.dub = np.diff(self.ub)
+        self.dvb = np.diff(self.vb)
         self.gu_max = (len(self.ub) - 1) * UNIT
         self.gv_max = (len(self.vb) - 1) * UNIT
 
     @staticmethod
-    def _map(g, b):
+    def _map(g, b, db):
         g = np.asarray(g, dtype=np.int64)
-        span = g >> LEVELS
-        s = np.minimum(span, len(b) - 2)
+        s = np.minimum(g >> LEVELS, len(b) - 2)
         f = (g - s * UNIT) / float(UNIT)
-        out = b[s] + f * (b[s + 1] - b[s])
-        exact = (g & (UNIT - 1)) == 0
-        out = np.where(exact, b[np.minimum(span, len(b) - 1)], out)
+        out = b[s] + f * db[s]  # exact at span starts: f == 0
+        out[g == (len(b) - 1) * UNIT] = b[-1]  # the last breakpoint exactly
         return out
 
     def u(self, g):
-        return self._map(g, self.ub)
+        return self._map(g, self.ub, self.dub)
 
     def v(self, g):
-        return self._map(g, self.vb)
+        return self._map(g, self.vb, self.dvb)
 
     def roots(self) -> np.ndarray:
         nu, nv = len(self.ub) - 1, len(self.vb) - 1

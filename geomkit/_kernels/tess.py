@@ -244,15 +244,18 @@ def point_triangle_closest(px, py, pz, V, a, b, c):
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, hu, hv):
+             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, hu, hv, floor):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
     points of the samples are read from the grid ``G`` (k+1, k+1, 3) of a cell
     (:func:`_cell_grid`) whose corners A, B, C are the grid nodes
     ``gc = (a_u, a_v, b_u, b_v, c_u, c_v)`` (each 0 or k) instead of evaluated.
+    Returns ``max(floor, deviation)``: a sample whose gap is at most the running
+    maximum cannot raise it (its value is at most its gap), so its exact one-sided
+    distances are not measured.
     """
-    worst = 0.0
+    worst = floor
     for i in range(k + 1):
         for j in range(k + 1 - i):
             l1 = i / k
@@ -277,7 +280,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
             y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
             z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
             gap = _dist3(x, y, z, P[0], P[1], P[2])
-            if gap > exact_above:
+            if gap > exact_above and gap > worst:
                 d_st = point_triangle_distance(P[0], P[1], P[2], T)
                 d_ts = gap
                 uu = u
@@ -339,7 +342,7 @@ def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, 
     for t in range(i0, i1):
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, 0.0, 0.0)
+                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, 0.0, 0.0, 0.0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -463,7 +466,7 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
                                             left, right, tmp, P, Q, scr, SKL, bin_, G, gc,
                                             (cells[c, 1] - cells[c, 0]) / k,
-                                            (cells[c, 3] - cells[c, 2]) / k))
+                                            (cells[c, 3] - cells[c, 2]) / k, worst))
             out[c, diag] = worst
 
 

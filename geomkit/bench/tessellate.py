@@ -19,7 +19,7 @@ from geomkit import samples, tessellate
 from geomkit.evaluation import derivatives, evaluate
 
 CASES = ["sphere", "torus", "cylinder_quarter", "freeform_1", "crease", "wave_seed003",
-         "heavy_weights", "saddle", "plate_with_hole"]
+         "heavy_weights", "saddle", "plate_with_hole", "offset_planes"]
 
 
 def sampled_deviation(surface, V, F, FUV, per_face=12, max_faces=40_000, seed=0,
