@@ -879,3 +879,23 @@ def test_measured_triangles_are_found_only_when_identical():
     want = np.where(np.arange(500)[::-1] < 400, np.arange(500.0)[::-1], np.nan)
     want[100] = np.nan
     assert np.array_equal(got, want, equal_nan=True)
+
+
+@pytest.mark.parametrize("order", ["aab", "abb", "aba", "collinear"])
+def test_closest_on_degenerate_triangles_is_the_segment_distance(order):
+    """Triangles with coincident or collinear corners (poles make them): the distance
+    equals the exact point-to-segment distance (closed form), in every corner order;
+    contracted products once sent b == c into the interior branch (errors ~100)."""
+    from geomkit._kernels.tess import closest_on_triangle
+
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        x, y, p = rng.normal(size=(3, 3))
+        tri = {"aab": (x, x.copy(), y), "abb": (x, y, y.copy()), "aba": (x, y, x.copy()),
+               "collinear": (x, y, x + 0.3 * (y - x))}[order]
+        d, s, w = closest_on_triangle(*p, *tri[0], *tri[1], *tri[2])
+        t = np.clip(np.dot(p - x, y - x) / np.dot(y - x, y - x), 0.0, 1.0)
+        exact = np.linalg.norm(x + t * (y - x) - p)
+        q = tri[0] + s * (tri[1] - tri[0]) + w * (tri[2] - tri[0])
+        assert abs(d - exact) <= 1e-12 * (1 + exact)
+        assert abs(np.linalg.norm(q - p) - d) <= 1e-12 * (1 + exact)

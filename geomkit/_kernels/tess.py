@@ -174,6 +174,24 @@ def _seg_closest(px, py, pz, ax, ay, az, bx, by, bz):
     return ex * ex + ey * ey + ez * ez, t
 
 
+DEGENERATE_REL2 = 1e-24
+"""A triangle with ``|ab x ac|^2 <= DEGENERATE_REL2 |ab|^2 |ac|^2`` (sine of its angle at
+a below 1e-12) is handled as its three edges by :func:`closest_on_triangle`."""
+
+
+@jit
+def _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """:func:`closest_on_triangle` of a degenerate triangle: the nearest of its edges."""
+    e0, t0 = _seg_closest(px, py, pz, ax, ay, az, bx, by, bz)
+    e1, t1 = _seg_closest(px, py, pz, bx, by, bz, cx, cy, cz)
+    e2, t2 = _seg_closest(px, py, pz, ax, ay, az, cx, cy, cz)
+    if e0 <= e1 and e0 <= e2:
+        return math.sqrt(e0), t0, 0.0
+    if e1 <= e2:
+        return math.sqrt(e1), 1.0 - t1, t1
+    return math.sqrt(e2), 0.0, t2
+
+
 @jit
 def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """Closest point of the triangle abc to p (Ericson, Real-Time Collision Detection
@@ -184,6 +202,17 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """
     abx, aby, abz = bx - ax, by - ay, bz - az
     acx, acy, acz = cx - ax, cy - ay, cz - az
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    if not (nx * nx + ny * ny + nz * nz
+            > DEGENERATE_REL2 * (abx * abx + aby * aby + abz * abz)
+            * (acx * acx + acy * acy + acz * acz)):
+        # collinear or coincident corners: with contracted (fused) products the
+        # region tests below do not cancel exactly and could send the point into
+        # the "interior" with arbitrary barycentrics (b == c gave distances off by
+        # hundreds); the nearest of the three edges is exact
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
     apx, apy, apz = px - ax, py - ay, pz - az
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz
@@ -213,15 +242,8 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
         return (_dist3(px, py, pz, bx + w * (cx - bx), by + w * (cy - by), bz + w * (cz - bz)),
                 1.0 - w, w)
     den = va + vb + vc
-    if not den > 0.0:  # degenerate (collinear) triangle: nearest of its three edges
-        e0, t0 = _seg_closest(px, py, pz, ax, ay, az, bx, by, bz)
-        e1, t1 = _seg_closest(px, py, pz, bx, by, bz, cx, cy, cz)
-        e2, t2 = _seg_closest(px, py, pz, ax, ay, az, cx, cy, cz)
-        if e0 <= e1 and e0 <= e2:
-            return math.sqrt(e0), t0, 0.0
-        if e1 <= e2:
-            return math.sqrt(e1), 1.0 - t1, t1
-        return math.sqrt(e2), 0.0, t2
+    if not den > 0.0:  # degenerate after all: nearest of its three edges
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
     s = vb / den
     w = vc / den
     return (_dist3(px, py, pz, ax + abx * s + acx * w, ay + aby * s + acy * w,
@@ -320,7 +342,9 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                     # chord step next: keep the Jacobian, move the residual's base point
                     for r in range(3):
                         SKL[0, 0, r] = Q[r]
-                gap = max(d_st, d_ts)
+                # never more than the gap, which bounds both distances (a near-degenerate
+                # triangle at a pole can make the closest-point rounding exceed it)
+                gap = min(gap, max(d_st, d_ts))
             worst = max(worst, gap)
     return worst
 
