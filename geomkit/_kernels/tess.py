@@ -15,7 +15,7 @@ import numpy as np
 
 from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, find_span
-from .surface import D1, derivs_scratch, surface_derivs, surface_point
+from .surface import surface_point
 
 CELL_CHUNK = 32
 """Cells per parallel task range step (:func:`prun`).  A call of at most one chunk runs
@@ -266,7 +266,7 @@ def point_triangle_closest(px, py, pz, V, a, b, c):
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, hu, hv, floor):
+             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, hu, hv, floor):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
@@ -319,7 +319,18 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                         SKL[1, 0, r] = (G[gb, gv, r] - G[ga, gv, r]) / ((gb - ga) * hu)
                         SKL[0, 1, r] = (G[gu, hb, r] - G[gu, ha, r]) / ((hb - ha) * hv)
                 else:
-                    surface_derivs(Pw, p, q, U, V, uu, vv, D1, bin_, scr, SKL)
+                    # forward differences at one sample spacing (hu, hv), stepping
+                    # inward at the domain's upper ends (no derivative kernel: it cost
+                    # ~4 s of this group's first-run compile, for steering only)
+                    su = hu if uu + hu <= umax else -hu
+                    sv = hv if vv + hv <= vmax else -hv
+                    surface_point(Pw, p, q, U, V, uu + su, vv, Nu, Nv, left, right, tmp, Q)
+                    for r in range(3):
+                        SKL[0, 0, r] = P[r]
+                        SKL[1, 0, r] = (Q[r] - P[r]) / su
+                    surface_point(Pw, p, q, U, V, uu, vv + sv, Nu, Nv, left, right, tmp, Q)
+                    for r in range(3):
+                        SKL[0, 1, r] = (Q[r] - P[r]) / sv
                 for it in range(2):
                     r0 = x - SKL[0, 0, 0]
                     r1 = y - SKL[0, 0, 1]
@@ -353,8 +364,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
 def _dev_scratch(p, q):
     mm = max(p, q) + 1
     return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
-            np.empty(3), np.empty(3), derivs_scratch(p, q, D1), np.empty((2, 2, 3)),
-            np.ones((2, 2)))
+            np.empty(3), np.empty(3), np.empty((2, 2, 3)))
 
 
 @jit
@@ -362,11 +372,19 @@ def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, 
                               vmax, exact_above, out):
     G = np.empty((1, 1, 3))
     gc = np.full(6, -1, dtype=np.int64)   # no grid: evaluate every sample
-    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
+    tiny_u = 1e-9 * (umax - umin)
+    tiny_v = 1e-9 * (vmax - vmin)
     for t in range(i0, i1):
+        # difference steps: the triangle's UV extent over k (the sample spacing)
+        hu = (max(tri_uv[t, 0, 0], max(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))
+              - min(tri_uv[t, 0, 0], min(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))) / k
+        hv = (max(tri_uv[t, 0, 1], max(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))
+              - min(tri_uv[t, 0, 1], min(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))) / k
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, 0.0, 0.0, 0.0)
+                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, max(hu, tiny_u),
+                          max(hv, tiny_v), 0.0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -380,9 +398,10 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     * where it exceeds ``exact_above``, the two one-sided distances are measured
       instead: ``dist(P, triangle)`` exactly, and ``dist(X, surface)`` from above by
       ``|X - S(uv')|`` after two Gauss–Newton (chord) steps ``uv -> uv'`` toward the
-      foot of ``X``, both with the Jacobian at ``uv`` (exact derivatives here, grid
-      differences in :func:`cell_deviation`; any surface point bounds the distance
-      from above, so the Jacobian only steers), stopping once ``|X - S(uv')|`` is at
+      foot of ``X``, both with the Jacobian at ``uv`` (forward differences at one
+      sample spacing here, grid differences in :func:`cell_deviation`; any surface
+      point bounds the distance from above, so the Jacobian only steers), stopping
+      once ``|X - S(uv')|`` is at
       most ``dist(P, triangle)`` or ``exact_above``; the sample's value is
       the larger of the two (and never more than the gap).
 
@@ -438,7 +457,7 @@ def _cell_grid(Pw, p, q, U, V, u0, u1, v0, v1, k, Nu, Nv, left, right, Bu, Bv, H
 @jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                           exact_above, target, out):
-    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
     G = np.empty((k + 1, k + 1, 3))
     Bu = np.empty((k + 1, p + 1))
     Bv = np.empty((k + 1, q + 1))
@@ -488,7 +507,7 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
                 gc[5] = k if cc >= 2 else 0
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
-                                            left, right, tmp, P, Q, scr, SKL, bin_, G, gc,
+                                            left, right, tmp, P, Q, SKL, G, gc,
                                             (cells[c, 1] - cells[c, 0]) / k,
                                             (cells[c, 3] - cells[c, 2]) / k, worst))
             out[c, diag] = worst

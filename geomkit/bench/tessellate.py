@@ -90,8 +90,10 @@ def _occ(face, tol, occ):
 
 
 def _repeats(seconds: float, repeat: int) -> int:
-    """Runs for a call that took ``seconds`` once: ``repeat``, fewer for slow calls
-    (at least 3, so the median is of three)."""
+    """Runs for a call that took ``seconds`` once: ``repeat``, three times as many for
+    calls of milliseconds, fewer for slow calls (at least 3: a median of three)."""
+    if seconds < 0.02:  # milliseconds: more runs against the noise of a shared machine
+        return 3 * repeat
     return repeat if seconds < 0.2 else max(3, min(repeat, int(2.0 / max(seconds, 1e-9))))
 
 
@@ -210,8 +212,32 @@ def main(argv=None):
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--repeat", type=int, default=15,
                     help="timed runs per row (fewer, at least 3, for calls over 0.2 s)")
+    ap.add_argument("--markdown", action="store_true",
+                    help="also print the rows as a markdown table (docs/benchmarks.md)")
     a = ap.parse_args(argv)
-    run(a.cases.split(","), [float(t) for t in a.tols.split(",")], repeat=a.repeat)
+    rows = run(a.cases.split(","), [float(t) for t in a.tols.split(",")], repeat=a.repeat)
+    if a.markdown:
+        print(markdown(rows))
+
+
+def _ms(t: float) -> str:
+    return f"{t * 1e3:.3g} ms" if t < 1 else f"{t:.3g} s"
+
+
+def markdown(rows) -> str:
+    """The rows of :func:`run` as the table of docs/benchmarks.md."""
+    out = ["| case | tol | geomkit faces | time | sampled dev/tol | reported | OCC faces "
+           "| OCC time | OCC dev/tol | faces ratio | time ratio | runs |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        occ = ("| - | - | - | - | -" if "occ_s" not in r else
+               f"| {r['occ_faces']:,} | {_ms(r['occ_s'])} | {r['occ_dev'] / r['tol']:.2f} "
+               f"| {r['gk_faces'] / max(r['occ_faces'], 1):.2f} "
+               f"| {r['gk_s'] / r['occ_s']:.2f}")
+        out.append(f"| {r['case']} | {r['tol']:.0e} | {r['gk_faces']:,} | {_ms(r['gk_s'])} "
+                   f"| {r['gk_dev'] / r['tol']:.2f} | {r['gk_reported'] / r['tol']:.2f} {occ} "
+                   f"| {r['repeats']} |")
+    return "\n".join(out)
 
 
 if __name__ == "__main__":
