@@ -335,15 +335,18 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         cv = nv.reshape(nsu, nsv).max(axis=0)
         if int(cu.sum()) * int(cv.sum()) > max_cells:
             return None
-        u = _lines(ub, cu)
-        v = _lines(vb, cv)
-        iu, iv = len(u) - 1, len(v) - 1
-        gi = np.repeat(np.arange(iu), iv)
-        gj = np.tile(np.arange(iv), iu)
-        cells = np.stack([u[gi], u[gi + 1], v[gj], v[gj + 1]], axis=1)
-        Ec = np.empty((len(cells), 5))
-        cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v,
-                    surface.knots_u, surface.knots_v, cells, m, Ec)
+        if cu.max() == 1 and cv.max() == 1:  # the root spans themselves
+            cells, Ec = roots, E
+        else:
+            u = _lines(ub, cu)
+            v = _lines(vb, cv)
+            iu, iv = len(u) - 1, len(v) - 1
+            gi = np.repeat(np.arange(iu), iv)
+            gj = np.tile(np.arange(iv), iu)
+            cells = np.stack([u[gi], u[gi + 1], v[gj], v[gj + 1]], axis=1)
+            Ec = np.empty((len(cells), 5))
+            cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v,
+                        surface.knots_u, surface.knots_v, cells, m, Ec)
         first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
         M = np.empty((len(cells), 2))
         cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,

@@ -25,6 +25,16 @@ TRI_CHUNK = 128
 """Triangles (or chords) per parallel task range step."""
 
 
+def _run(worker, n, chunk, *args):
+    """:func:`prun`, or the worker directly for at most one chunk (skips the thread
+    query and dispatch of ``prun``: a few tens of microseconds per call, which is the
+    order of a whole small tessellation)."""
+    if n <= chunk:
+        worker(0, n, *args)
+    else:
+        prun(worker, n, chunk, *args)
+
+
 @jit_inline
 def _dist3(a0, a1, a2, b0, b1, b2):
     d0 = a0 - b0
@@ -154,7 +164,7 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         3: gap of v-line chords (u fixed) across the cell (need to split v);
         4: largest 3-D edge length of the cell's corners (for ``max_edge``).
     """
-    prun(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
+    _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
 
 
 @jit
@@ -408,7 +418,7 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
     value of triangle t.
     """
-    prun(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
+    _run(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
          tri_xyz, k, umin, umax, vmin, vmax, exact_above, out)
 
 
@@ -522,7 +532,7 @@ def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exac
     triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
     when it is within ``target`` the other is not measured (+inf).
     """
-    prun(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
+    _run(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
          umin, umax, vmin, vmax, exact_above, target, out)
 
 
@@ -563,5 +573,5 @@ def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
     ends (e.g. a trim curve at interior parameters); ``out[i]`` is the largest
     distance from ``S(mid_uv[i, s])`` to the 3-D segment ``xyz_a[i]``–``xyz_b[i]``.
     """
-    prun(_chord_deviation_range, mid_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, uv_a, uv_b, xyz_a,
+    _run(_chord_deviation_range, mid_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, uv_a, uv_b, xyz_a,
          xyz_b, mid_uv, out)
