@@ -347,6 +347,29 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     return P[keep_ids], F, uniq[keep_ids], good
 
 
+def _affine_plane(s: Surface, ub, vb, size: float):
+    """Two triangles for a bilinear patch that is an affine map of its domain (a
+    parallelogram control net with equal weights): the flat triangles *are* the
+    surface, so their deviation is 0.  None for any other surface."""
+    if s.degree_u != 1 or s.degree_v != 1 or len(ub) != 2 or len(vb) != 2:
+        return None
+    if s.weights is not None and np.ptp(s.weights) != 0:
+        return None
+    P = s.control_points
+    if P.shape[:2] != (2, 2):
+        return None
+    eu, ev = P[1, 0] - P[0, 0], P[0, 1] - P[0, 0]
+    n = np.cross(eu, ev)
+    twist = np.abs(P[1, 1] - P[1, 0] - ev).max()
+    if twist > 1e-14 * size or not np.dot(n, n) > (1e-12 * np.dot(eu, eu) * np.dot(ev, ev)):
+        return None  # twisted (not planar-affine) or degenerate: the general paths
+    (u0, u1), (v0, v1) = (ub[0], ub[1]), (vb[0], vb[1])
+    UV = np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
+    V = np.ascontiguousarray(P[[0, 1, 1, 0], [0, 0, 1, 1]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
+    return V, F, UV, np.zeros(2), UV[F]
+
+
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     t0 = time.perf_counter()
     ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
@@ -354,6 +377,11 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     size = s.size
     if not s.trim and max_angle is None and max_edge is None:
+        flat = _affine_plane(s, ub, vb, size)
+        if flat is not None:
+            return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
+                            "closed_u": False, "closed_v": False, "affine_plane": True,
+                            "seconds": time.perf_counter() - t0},)
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
