@@ -899,3 +899,26 @@ def test_closest_on_degenerate_triangles_is_the_segment_distance(order):
         q = tri[0] + s * (tri[1] - tri[0]) + w * (tri[2] - tri[0])
         assert abs(d - exact) <= 1e-12 * (1 + exact)
         assert abs(np.linalg.norm(q - p) - d) <= 1e-12 * (1 + exact)
+
+
+def test_affine_plane_is_its_two_triangles_and_twisted_is_not():
+    """A parallelogram net (any orientation, equal weights) is meshed as its own two
+    triangles with deviation 0; a twisted bilinear patch (saddle) or a rational one
+    with unequal weights goes through the measured paths."""
+    rng = np.random.default_rng(5)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    o, a, b = rng.normal(size=3), 3.0 * Q[0], 0.5 * Q[1] + 2.0 * Q[2]
+    net = np.array([[o, o + b], [o + a, o + a + b]])
+    plane = Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], net)
+    m = tessellate(plane, 1e-3)
+    assert m.stats["surfaces"][0].get("affine_plane") is True
+    assert len(m.faces) == 2 and m.max_deviation == 0.0
+    assert np.allclose(plane.evaluate(m.uv), m.vertices, atol=1e-14)
+    r = naive.sample_mesh_deviation(m, [plane], exact_above=1e-3)
+    assert r["to_surface"] <= 1e-12 and r["to_mesh"] <= 1e-12
+    twisted = net.copy()
+    twisted[1, 1] += 0.3 * np.cross(a, b) / np.linalg.norm(np.cross(a, b))
+    rational = Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], net, weights=[[1, 2], [1, 1]])
+    for s in (Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], twisted), rational):
+        st = tessellate(s, 1e-3).stats["surfaces"][0]
+        assert "affine_plane" not in st
