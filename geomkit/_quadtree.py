@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels.tess import cell_deviation, cell_errors
-from ._kernels.tess_lattice import fill_rings
+from ._kernels.tess_lattice import edge_counts, fill_rings
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -26,25 +26,25 @@ class Lattice:
     def __init__(self, ub: np.ndarray, vb: np.ndarray):
         self.ub = np.asarray(ub, dtype=np.float64)
         self.vb = np.asarray(vb, dtype=np.float64)
+        self.dub = np.diff(self.ub)
+        self.dvb = np.diff(self.vb)
         self.gu_max = (len(self.ub) - 1) * UNIT
         self.gv_max = (len(self.vb) - 1) * UNIT
 
     @staticmethod
-    def _map(g, b):
+    def _map(g, b, db):
         g = np.asarray(g, dtype=np.int64)
-        span = g >> LEVELS
-        s = np.minimum(span, len(b) - 2)
+        s = np.minimum(g >> LEVELS, len(b) - 2)
         f = (g - s * UNIT) / float(UNIT)
-        out = b[s] + f * (b[s + 1] - b[s])
-        exact = (g & (UNIT - 1)) == 0
-        out = np.where(exact, b[np.minimum(span, len(b) - 1)], out)
+        out = b[s] + f * db[s]  # exact at span starts: f == 0
+        out[g == (len(b) - 1) * UNIT] = b[-1]  # the last breakpoint exactly
         return out
 
     def u(self, g):
-        return self._map(g, self.ub)
+        return self._map(g, self.ub, self.dub)
 
     def v(self, g):
-        return self._map(g, self.vb)
+        return self._map(g, self.vb, self.dvb)
 
     def roots(self) -> np.ndarray:
         nu, nv = len(self.ub) - 1, len(self.vb) - 1
@@ -238,7 +238,7 @@ def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarr
     would miss the peak) and the conforming fans stay well shaped.
     Returns ``(cells, E, M)``."""
     for _ in range(max_rounds):
-        cnt = EdgeIndex(lattice_points(cells)).counts(cells)
+        cnt = EdgeIndex(lattice_points(cells), sorted_rows=True).counts(cells)
         hu = np.maximum(cnt[:, 0], cnt[:, 2])
         hv = np.maximum(cnt[:, 1], cnt[:, 3])
         wu = cells[:, 1] - cells[:, 0]
@@ -256,35 +256,39 @@ def balance(surface, lat: Lattice, cells: np.ndarray, E: np.ndarray, M: np.ndarr
 
 
 def lattice_points(cells: np.ndarray) -> np.ndarray:
-    """(k, 2) unique lattice corners ``(gu, gv)`` of the cells."""
-    keys = np.unique(np.concatenate([cells[:, 2] * KEY + cells[:, 0], cells[:, 2] * KEY + cells[:, 1],
-                                     cells[:, 3] * KEY + cells[:, 1], cells[:, 3] * KEY + cells[:, 0]]))
+    """(k, 2) unique lattice corners ``(gu, gv)`` of the cells, sorted by ``(gv, gu)``."""
+    keys = unique_ints(np.concatenate([cells[:, 2] * KEY + cells[:, 0],
+                                       cells[:, 2] * KEY + cells[:, 1],
+                                       cells[:, 3] * KEY + cells[:, 1],
+                                       cells[:, 3] * KEY + cells[:, 0]]))
     return np.stack([keys % KEY, keys // KEY], axis=1)
+
+
+def unique_ints(a: np.ndarray) -> np.ndarray:
+    """Sorted unique values of a 1-D integer array.  ``np.unique`` hashes integer
+    arrays in numpy 2.x, measured 13x slower here than a sort and a neighbour test."""
+    a = np.sort(a)
+    if len(a) < 2:
+        return a
+    keep = np.empty(len(a), dtype=bool)
+    keep[0] = True
+    np.not_equal(a[1:], a[:-1], out=keep[1:])
+    return a[keep]
 
 
 class EdgeIndex:
     """Finds lattice points strictly inside cell edges (the hanging nodes)."""
 
-    def __init__(self, pts: np.ndarray):
-        self.h = np.sort(pts[:, 1] * KEY + pts[:, 0])  # rows: v major
+    def __init__(self, pts: np.ndarray, sorted_rows: bool = False):
+        h = pts[:, 1] * KEY + pts[:, 0]
+        self.h = h if sorted_rows else np.sort(h)  # rows: v major
         self.v = np.sort(pts[:, 0] * KEY + pts[:, 1])  # columns: u major
-
-    def _range(self, keys, major, lo, hi):
-        a = np.searchsorted(keys, major * KEY + lo, side="right")
-        b = np.searchsorted(keys, major * KEY + hi, side="left")
-        return a, b
 
     def counts(self, cells: np.ndarray) -> np.ndarray:
         """(N, 4) numbers of hanging nodes on the bottom, right, top, left edges."""
         out = np.empty((cells.shape[0], 4), dtype=np.int64)
-        a, b = self._range(self.h, cells[:, 2], cells[:, 0], cells[:, 1])
-        out[:, 0] = b - a
-        a, b = self._range(self.v, cells[:, 1], cells[:, 2], cells[:, 3])
-        out[:, 1] = b - a
-        a, b = self._range(self.h, cells[:, 3], cells[:, 0], cells[:, 1])
-        out[:, 2] = b - a
-        a, b = self._range(self.v, cells[:, 0], cells[:, 2], cells[:, 3])
-        out[:, 3] = b - a
+        if len(cells):
+            edge_counts(self.h, self.v, KEY, np.ascontiguousarray(cells), out)
         return out
 
     def rings(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -299,3 +303,77 @@ class EdgeIndex:
         if len(cells):
             fill_rings(self.h, self.v, KEY, np.ascontiguousarray(cells), starts, out)
         return starts, out
+
+
+def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
+                 target: float, exact_above: float, max_cells: int):
+    """One tensor grid of cells for a surface whose first estimate asks for few cells.
+
+    Each root span gets ``nu x nv`` equal children from :func:`split_counts` of its
+    estimate for ``target`` (the largest count of its row / column, so the grid has
+    no hanging nodes); every cell's two-triangle split is measured (``cell_deviation``,
+    as in :func:`measure`) and its better diagonal kept; if a cell fails ``tol``, one
+    more grid is tried with ``target`` scaled down by the excess.  Returns ``(tri_uv (M, 3, 2), dev (M,), cells)``, triangles
+    counter-clockwise in UV, or None when the grid would exceed ``max_cells`` or a
+    cell fails ``tol`` (the adaptive path then takes over).  The measurement is the
+    one adaptive refinement accepts cells with, so the stated bound is the same.
+    """
+    nsu, nsv = len(ub) - 1, len(vb) - 1
+    if nsu * nsv > max_cells:
+        return None
+    ru = np.repeat(np.arange(nsu), nsv)
+    rv = np.tile(np.arange(nsv), nsu)
+    roots = np.stack([ub[ru], ub[ru + 1], vb[rv], vb[rv + 1]], axis=1)
+    E = np.empty((len(roots), 5))
+    cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v, surface.knots_u,
+                surface.knots_v, roots, m, E)
+    (u0, u1), (v0, v1) = surface.domain
+    for _ in range(2):  # a second try with the target scaled by the first's excess
+        nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
+                              max_parts=max_cells)
+        cu = nu.reshape(nsu, nsv).max(axis=1)
+        cv = nv.reshape(nsu, nsv).max(axis=0)
+        if int(cu.sum()) * int(cv.sum()) > max_cells:
+            return None
+        if cu.max() == 1 and cv.max() == 1:  # the root spans themselves
+            cells, Ec = roots, E
+        else:
+            u = _lines(ub, cu)
+            v = _lines(vb, cv)
+            iu, iv = len(u) - 1, len(v) - 1
+            gi = np.repeat(np.arange(iu), iv)
+            gj = np.tile(np.arange(iv), iu)
+            cells = np.stack([u[gi], u[gi + 1], v[gj], v[gj + 1]], axis=1)
+            Ec = np.empty((len(cells), 5))
+            cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v,
+                        surface.knots_u, surface.knots_v, cells, m, Ec)
+        first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
+        M = np.empty((len(cells), 2))
+        cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,
+                       surface.knots_u, surface.knots_v, cells, first, k, u0, u1, v0, v1,
+                       exact_above, tol, M)
+        diag = np.argmin(M, axis=1)
+        dev = M[np.arange(len(cells)), diag]
+        worst = float(dev.max())
+        if worst <= tol:
+            break
+        # errors fall with the square of the cell size: aim the retry below target
+        target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+    else:
+        return None
+    # corners A=(u0,v0) B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 is AC, 1 is BD
+    A = cells[:, [0, 2]]
+    B = cells[:, [1, 2]]
+    C = cells[:, [1, 3]]
+    D = cells[:, [0, 3]]
+    d1 = (diag == 1)[:, None]
+    t0 = np.stack([A, B, np.where(d1, D, C)], axis=1)
+    t1 = np.stack([np.where(d1, B, A), C, D], axis=1)
+    tri_uv = np.stack([t0, t1], axis=1).reshape(-1, 3, 2)
+    return tri_uv, np.repeat(dev, 2), cells
+
+
+def _lines(b: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Breakpoints ``b`` with ``counts[i]`` equal parts in span i (span ends exact)."""
+    parts = [b[i] + (b[i + 1] - b[i]) * (np.arange(c) / c) for i, c in enumerate(counts.tolist())]
+    return np.concatenate(parts + [b[-1:]])

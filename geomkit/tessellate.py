@@ -37,11 +37,11 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
+from ._kernels.surface import surface_points
 from ._kernels.tess import chord_deviation, triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
 from ._validate import as_int
 from .errors import InvalidInputError
-from .evaluation import evaluate
 from .trimming import evaluate_trim_curve
 from .types import Mesh, Surface
 
@@ -59,6 +59,10 @@ EXACT_ABOVE = 1.0
 distances measured instead (see :func:`geomkit._kernels.tess.triangle_deviation`)."""
 MAX_HANGING = 2
 """Grading: a cell edge carries at most this many hanging nodes (finer neighbours)."""
+GRID_CELLS = 4096
+"""Untrimmed surfaces whose first estimate asks for at most this many cells are tried
+as one uniform grid first (:func:`geomkit._quadtree.uniform_grid`): small meshes then
+cost a few kernel calls instead of the adaptive rounds' per-call overhead."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -104,34 +108,45 @@ class _TrimPolylines:
         s = self.surface
         (u0, u1), (v0, v1) = s.domain
         lo, hi = np.array([u0, v0]), np.array([u1, v1])
+        mids = np.array([0.25, 0.5, 0.75])
         out = []
         for c in loop.pieces:
             p = c.degree
             t = np.unique(c.knots[p: len(c.knots) - p])
             if not c.is_polyline:  # a few samples per span to start
                 t = np.unique(np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])]))
+            # trim curves may stray outside the domain by the validation tolerance:
+            # the mesh boundary follows them clipped to it (S is not defined outside)
+            C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
+            P = _points(s, C)
+            todo = np.arange(len(t) - 1)  # segments not yet within chord_tol
             for _ in range(60):
-                mids = np.array([0.25, 0.5, 0.75])
-                tm = t[:-1, None] + (t[1:] - t[:-1])[:, None] * mids[None, :]
-                # trim curves may stray outside the domain by the validation tolerance:
-                # the mesh boundary follows them clipped to it (S is not defined outside)
-                C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
-                Cm = np.clip(evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, 3, 2)
-                P = evaluate(s, C)
-                dev = np.empty(len(t) - 1)
+                ta, tb = t[todo], t[todo + 1]
+                tm = ta[:, None] + (tb - ta)[:, None] * mids[None, :]
+                Ca, Cb = C[todo], C[todo + 1]
+                # samples of the exact curve, then of the UV chord: the mesh boundary
+                # also passes through points of the UV chord (where it crosses cell
+                # edges), mapped by S; their images must stay near the 3-D chord too,
+                # or a non-uniform parametrisation bows the boundary out
+                mid_uv = np.empty((len(todo), 2 * len(mids), 2))
+                mid_uv[:, :len(mids)] = np.clip(
+                    evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, len(mids), 2)
+                mid_uv[:, len(mids):] = Ca[:, None, :] + (Cb - Ca)[:, None, :] * mids[None, :, None]
+                dev = np.empty(len(todo))
                 chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Cm), dev)
-                # the mesh boundary also passes through points of the UV chord (where it
-                # crosses cell edges), mapped by S: their images must stay near the 3-D
-                # chord too, or a non-uniform parametrisation bows the boundary out
-                Lm = C[:-1, None, :] + (C[1:] - C[:-1])[:, None, :] * mids[None, :, None]
-                dev_uv = np.empty(len(t) - 1)
-                chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                C[:-1], C[1:], P[:-1], P[1:], np.ascontiguousarray(Lm), dev_uv)
-                bad = np.maximum(dev, dev_uv) > chord_tol
-                if not bad.any():
+                                Ca, Cb, P[todo], P[todo + 1], mid_uv, dev)
+                bad = todo[dev > chord_tol]
+                if not len(bad):
                     break
-                t = np.sort(np.concatenate([t, 0.5 * (t[:-1] + t[1:])[bad]]))
+                # split the failing segments at their parameter midpoints; the halves
+                # are the next round's segments (only they are measured again)
+                tn = 0.5 * (t[bad] + t[bad + 1])
+                Cn = np.clip(evaluate_trim_curve(c, tn)[:, 0, :], lo, hi)
+                t = np.insert(t, bad + 1, tn)
+                C = np.insert(C, bad + 1, Cn, axis=0)
+                P = np.insert(P, bad + 1, _points(s, Cn), axis=0)
+                left = bad + np.arange(len(bad))
+                todo = np.sort(np.concatenate([left, left + 1]))
             out.append(C if not out else C[1:])
         pts = np.concatenate(out)
         pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
@@ -146,7 +161,7 @@ class _TrimPolylines:
         if len(self.segments):
             boxes = shapely.box(uv[:, 0], uv[:, 2], uv[:, 1], uv[:, 3])
             hit = self.tree.query(boxes, predicate="intersects")[0]
-            state[np.unique(hit)] = 2
+            state[hit] = 2
         rest = state != 2
         cu = 0.5 * (uv[rest, 0] + uv[rest, 1])
         cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
@@ -155,28 +170,45 @@ class _TrimPolylines:
 
 
 # ------------------------------------------------------------------ triangles
-def _closed_directions(s: Surface) -> tuple[bool, bool]:
+def _closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     (u0, u1), (v0, v1) = s.domain
-    eps = 1e-10 * s.size
+    eps = 1e-10 * size
     t = np.linspace(0.0, 1.0, 17)
     v = v0 + (v1 - v0) * t
     u = u0 + (u1 - u0) * t
-    cu = np.max(np.abs(evaluate(s, np.c_[np.full(17, u0), v]) - evaluate(s, np.c_[np.full(17, u1), v])))
-    cv = np.max(np.abs(evaluate(s, np.c_[u, np.full(17, v0)]) - evaluate(s, np.c_[u, np.full(17, v1)])))
+    uv = np.empty((4, 17, 2))  # the u0, u1, v0, v1 edges, in one evaluation
+    uv[0, :, 0], uv[1, :, 0], uv[:2, :, 1] = u0, u1, v
+    uv[2, :, 1], uv[3, :, 1], uv[2:, :, 0] = v0, v1, u
+    P = _points(s, uv.reshape(-1, 2)).reshape(4, 17, 3)
+    cu = np.max(np.abs(P[0] - P[1]))
+    cv = np.max(np.abs(P[2] - P[3]))
     return bool(cu <= eps), bool(cv <= eps)
+
+
+def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
+    """S(uv) for (n, 2) parameters already in the domain (no validation: the callers
+    make them; :func:`geomkit.evaluation.evaluate` checks user input)."""
+    uv = np.ascontiguousarray(uv, dtype=np.float64)
+    out = np.empty((uv.shape[0], 3))
+    if uv.shape[0]:
+        surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
+    return out
 
 
 def _triangulate(s, lat, cells, M, state, trim, closed, centre):
     """UV triangles (M, 3, 2) and the index of the cell each came from."""
     pts = qt.lattice_points(cells[state > 0])
     cu, cv = closed
-    if cu:  # mirror seam points so both sides of a closed seam get the same vertices
-        on = pts[(pts[:, 0] == 0) | (pts[:, 0] == lat.gu_max)]
-        pts = np.unique(np.concatenate([pts, np.c_[lat.gu_max - on[:, 0], on[:, 1]]]), axis=0)
-    if cv:
-        on = pts[(pts[:, 1] == 0) | (pts[:, 1] == lat.gv_max)]
-        pts = np.unique(np.concatenate([pts, np.c_[on[:, 0], lat.gv_max - on[:, 1]]]), axis=0)
-    index = qt.EdgeIndex(pts)
+    if cu or cv:  # mirror seam points so both sides of a closed seam get the same vertices
+        if cu:
+            on = pts[(pts[:, 0] == 0) | (pts[:, 0] == lat.gu_max)]
+            pts = np.concatenate([pts, np.c_[lat.gu_max - on[:, 0], on[:, 1]]])
+        if cv:
+            on = pts[(pts[:, 1] == 0) | (pts[:, 1] == lat.gv_max)]
+            pts = np.concatenate([pts, np.c_[on[:, 0], lat.gv_max - on[:, 1]]])
+        keys = qt.unique_ints(pts[:, 1] * qt.KEY + pts[:, 0])
+        pts = np.stack([keys % qt.KEY, keys // qt.KEY], axis=1)
+    index = qt.EdgeIndex(pts, sorted_rows=True)
     inside = np.nonzero(state == 1)[0]
     c = cells[inside]
     counts = index.counts(c)
@@ -230,10 +262,54 @@ def _triangulate_cut(lat, cells, cut, index, trim):
     return coords, cut[idx[keep]]
 
 
+class _Measured:
+    """Deviations of UV triangles measured in earlier rounds, found again by their
+    corner coordinates (the same UV corners are the same flat triangle): a hash of
+    the corners' bits, sorted, then an exact comparison of the 6 coordinates."""
+
+    _MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9,
+                     0xD6E8FEB86659FD93, 0xFF51AFD7ED558CCD, 0xC4CEB9FE1A85EC53],
+                    dtype=np.uint64)
+
+    def __init__(self):
+        self.h = np.empty(0, dtype=np.uint64)
+        self.bits = np.empty((0, 6), dtype=np.int64)
+        self.dev = np.empty(0)
+
+    @classmethod
+    def _keys(cls, tri_uv):
+        bits = np.ascontiguousarray(tri_uv, dtype=np.float64).reshape(-1, 6).view(np.int64)
+        u = bits.view(np.uint64) * cls._MIX
+        h = u[:, 0] ^ (u[:, 1] >> np.uint64(7)) ^ u[:, 2] ^ (u[:, 3] >> np.uint64(13)) \
+            ^ u[:, 4] ^ (u[:, 5] >> np.uint64(29))
+        return h, bits
+
+    def get(self, tri_uv) -> np.ndarray:
+        """(n,) earlier deviation of each triangle, NaN if not measured before."""
+        out = np.full(len(tri_uv), np.nan)
+        if not len(self.h) or not len(tri_uv):
+            return out
+        h, bits = self._keys(tri_uv)
+        i = np.minimum(np.searchsorted(self.h, h), len(self.h) - 1)
+        hit = (self.h[i] == h) & np.all(self.bits[i] == bits, axis=1)
+        out[hit] = self.dev[i[hit]]
+        return out
+
+    def add(self, tri_uv, dev) -> None:
+        h, bits = self._keys(tri_uv)
+        h = np.concatenate([self.h, h])
+        order = np.argsort(h, kind="stable")
+        self.h = h[order]
+        self.bits = np.concatenate([self.bits, bits])[order]
+        self.dev = np.concatenate([self.dev, dev])[order]
+
+
 # ------------------------------------------------------------------ assembly
-def _weld(s: Surface, tri_uv: np.ndarray):
-    """Vertices, faces and per-vertex UV; merges equal UVs, then coincident boundary
-    vertices in 3-D (poles, seams); drops the triangles that collapse."""
+def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
+    """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
+    UVs within rounding of each other: trim crossings computed in two cells), then
+    coincident boundary vertices in 3-D (poles, seams); drops the triangles that
+    collapse."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
@@ -246,15 +322,19 @@ def _weld(s: Surface, tri_uv: np.ndarray):
     uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
     uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
     inv = inv.ravel()
-    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")]
-    P = evaluate(s, uniq)
+    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")] if near_uv else []
+    P = _points(s, uniq)
     eps = 1e-12 * dom
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
                      | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
     if len(bnd):
-        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * s.size, output_type="ndarray")])
-    pairs = np.concatenate(pairs).reshape(-1, 2)
+        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * size, output_type="ndarray")])
+    pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
     n = len(uniq)
+    if not len(pairs):  # nothing to merge
+        F = inv.reshape(-1, 3)
+        good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+        return P, F, uniq, good
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     # representative of each component: its first member
@@ -267,20 +347,62 @@ def _weld(s: Surface, tri_uv: np.ndarray):
     return P[keep_ids], F, uniq[keep_ids], good
 
 
+def _affine_plane(s: Surface, ub, vb, size: float):
+    """Two triangles for a bilinear patch that is an affine map of its domain (a
+    parallelogram control net with equal weights): the flat triangles *are* the
+    surface, so their deviation is 0.  None for any other surface."""
+    if s.degree_u != 1 or s.degree_v != 1 or len(ub) != 2 or len(vb) != 2:
+        return None
+    if s.weights is not None and np.ptp(s.weights) != 0:
+        return None
+    P = s.control_points
+    if P.shape[:2] != (2, 2):
+        return None
+    eu, ev = P[1, 0] - P[0, 0], P[0, 1] - P[0, 0]
+    n = np.cross(eu, ev)
+    twist = np.abs(P[1, 1] - P[1, 0] - ev).max()
+    if twist > 1e-14 * size or not np.dot(n, n) > (1e-12 * np.dot(eu, eu) * np.dot(ev, ev)):
+        return None  # twisted (not planar-affine) or degenerate: the general paths
+    (u0, u1), (v0, v1) = (ub[0], ub[1]), (vb[0], vb[1])
+    UV = np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
+    V = np.ascontiguousarray(P[[0, 1, 1, 0], [0, 0, 1, 1]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
+    return V, F, UV, np.zeros(2), UV[F]
+
+
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     t0 = time.perf_counter()
     ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
     vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    size = s.size
+    if not s.trim and max_angle is None and max_edge is None:
+        flat = _affine_plane(s, ub, vb, size)
+        if flat is not None:
+            return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
+                            "closed_u": False, "closed_v": False, "affine_plane": True,
+                            "seconds": time.perf_counter() - t0},)
+        grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
+                               GRID_CELLS)
+        if grid is not None:
+            tri_uv, dev, cells = grid
+            V, F, UV, good = _weld(s, tri_uv, size, near_uv=False)
+            closed = _closed_directions(s, size)
+            stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
+                     "collapsed_dropped": int(np.count_nonzero(~good)),
+                     "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
+                     "seconds": time.perf_counter() - t0}
+            return V, F[good], UV, dev[good], tri_uv[good], stats
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
-    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     trim = _TrimPolylines(s, tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
-    closed = _closed_directions(s)
+    closed = _closed_directions(s, size)
     force = None
     known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
-    measured = {}   # UV triangle (bytes of its corners) -> measured deviation
+    fan_ll = np.empty(0, dtype=np.int64)  # their lower-left corners (a quick pre-test)
+    measured = _Measured()
     rounds = 0
     for rounds in range(1, 40):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
@@ -290,43 +412,42 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                                  CELL_TARGET * tol, MAX_HANGING)
         known = (E, M)
         state = trim.classify(lat, cells) if trim is not None else np.ones(len(cells), np.int8)
-        centre = np.array([tuple(c) in fanned for c in cells.tolist()], dtype=bool) \
-            if fanned else np.zeros(len(cells), dtype=bool)
+        centre = np.zeros(len(cells), dtype=bool)
+        if fanned:
+            cand = np.nonzero(np.isin(cells[:, 0] * qt.KEY + cells[:, 2], fan_ll))[0]
+            for i in cand.tolist():
+                centre[i] = tuple(cells[i].tolist()) in fanned
         tri_uv, owner, dev = _triangulate(s, lat, cells, M, state, trim, closed, centre)
         todo = np.nonzero(np.isnan(dev))[0]
-        keys = None
         if len(todo):
             # triangles measured in an earlier round (same UV corners: same triangle)
-            keys = np.ascontiguousarray(tri_uv[todo]).reshape(len(todo), 6) \
-                .view(np.dtype((np.void, 48))).ravel().tolist()
-            if measured:
-                old = np.array([measured.get(key, np.nan) for key in keys])
-                hit = ~np.isnan(old)
-                dev[todo[hit]] = old[hit]
-                keys = [key for key, h in zip(keys, hit.tolist()) if not h]
-                todo = todo[~hit]
+            old = measured.get(tri_uv[todo])
+            hit = ~np.isnan(old)
+            dev[todo[hit]] = old[hit]
+            todo = todo[~hit]
         if len(todo):
             sub = np.ascontiguousarray(tri_uv[todo])
-            tri_xyz = evaluate(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+            tri_xyz = _points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
             out = np.empty(len(todo))
             (u0, u1), (v0, v1) = s.domain
             triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
                                sub, tri_xyz, k, u0, u1, v0, v1, EXACT_ABOVE * tol, out)
             dev[todo] = out
-            measured.update(zip(keys, out.tolist()))
+            measured.add(sub, out)
         bad = dev > tol
         if not bad.any():
             break
         # a failing split or fan first becomes a centre fan (better shaped pieces);
         # a failing centre fan or trimmed cell is split
         force = np.zeros(len(cells), dtype=bool)
-        for ci in np.unique(owner[bad]):
+        for ci in qt.unique_ints(owner[bad]).tolist():
             key = tuple(cells[ci].tolist())
             if state[ci] == 1 and key not in fanned:
                 fanned.add(key)
             else:
                 force[ci] = True
-    V, F, UV, good = _weld(s, tri_uv)
+        fan_ll = np.array([a * qt.KEY + c for a, _, c, _ in fanned], dtype=np.int64)
+    V, F, UV, good = _weld(s, tri_uv, size, near_uv=bool(np.any(state == 2)))
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1],

@@ -792,3 +792,133 @@ def test_trim_loop_straying_outside_the_domain_within_tolerance():
     assert np.allclose(mesh.vertices.min(axis=0), 0) and np.allclose(mesh.vertices.max(axis=0),
                                                                      [1, 1, 0])
     assert abs(mesh.area - 1.0) < 1e-12
+
+
+# ======================================================================== 8. fast paths
+def test_uniform_grid_and_adaptive_paths_both_hold_tol(monkeypatch):
+    """A small untrimmed surface is meshed as one measured uniform grid; with the grid
+    path switched off the adaptive path meshes it instead: both meshes pass the
+    independent sampler and have comparable sizes."""
+    import importlib
+
+    T = importlib.import_module("geomkit.tessellate")  # the module, not the function
+    case = case_of("cylinder_quarter")
+    tol = 1e-3
+    grid = tessellate(case.surfaces, tol)
+    monkeypatch.setattr(T, "GRID_CELLS", 0)
+    adaptive = tessellate(case.surfaces, tol)
+    assert grid.stats["surfaces"][0].get("uniform_grid") is True
+    assert "uniform_grid" not in adaptive.stats["surfaces"][0]
+    for mesh in (grid, adaptive):
+        assert mesh.max_deviation <= tol
+        r = naive.sample_mesh_deviation(mesh, case.surfaces, exact_above=tol)
+        assert r["to_surface"] <= tol * REL and r["to_mesh"] <= tol * REL, r
+        assert_manifold_oriented(mesh.faces)
+    assert 0.5 <= len(grid.faces) / len(adaptive.faces) <= 1.5
+
+
+def test_uniform_grid_refuses_a_failing_grid():
+    """A grid whose cells fail the measurement is not returned (the adaptive path
+    takes over): heavy_weights with the grid predicted for 1000 x tol."""
+    from geomkit import _quadtree as qt
+
+    s = samples.load("heavy_weights")[0]
+    ub = np.unique(s.knots_u[s.degree_u:len(s.knots_u) - s.degree_u])
+    vb = np.unique(s.knots_v[s.degree_v:len(s.knots_v) - s.degree_v])
+    # target = 100 tol: the predicted grid is much too coarse for tol, twice
+    assert qt.uniform_grid(s, ub, vb, 7, 6, 1e-3, 1e3 * 1e-3, 1e-3, 4096) is None
+    c = samples.load("cylinder_quarter")[0]  # a grid that passes, for contrast
+    out = qt.uniform_grid(c, np.array([0.0, 1.0]), np.array([0.0, 1.0]), 5, 6, 1e-3, 0.9e-3,
+                          1e-3, 4096)
+    assert out is not None and 0 < out[1].max() <= 1e-3 and len(out[0]) == 2 * len(out[2])
+
+
+def test_hanging_node_counts_match_brute_force():
+    """Kernel counts of lattice points strictly inside each cell edge, against a
+    direct count over all points, on a randomly refined cell set."""
+    from geomkit import _quadtree as qt
+
+    rng = np.random.default_rng(3)
+    lat = qt.Lattice(np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0]))
+    cells = lat.roots()
+    for _ in range(6):
+        pick = rng.random(len(cells)) < 0.4
+        nu = np.where(pick, rng.integers(1, 4, len(cells)), 1)
+        nv = np.where(pick, rng.integers(1, 4, len(cells)), 1)
+        cells = qt.split(cells, nu, nv)
+    pts = qt.lattice_points(cells)
+    got = qt.EdgeIndex(pts, sorted_rows=True).counts(cells)
+    gu, gv = pts[:, 0][None, :], pts[:, 1][None, :]
+    iu0, iu1, iv0, iv1 = (cells[:, i][:, None] for i in range(4))
+    inside_u = (gu > iu0) & (gu < iu1)
+    inside_v = (gv > iv0) & (gv < iv1)
+    want = np.stack([(inside_u & (gv == iv0)).sum(1), (inside_v & (gu == iu1)).sum(1),
+                     (inside_u & (gv == iv1)).sum(1), (inside_v & (gu == iu0)).sum(1)], 1)
+    assert np.array_equal(got, want)
+    assert got.sum() > 0  # the refinement left hanging nodes to count
+    keys = np.concatenate([cells[:, 2] * qt.KEY + cells[:, 0], cells[:, 3] * qt.KEY + cells[:, 1]])
+    assert np.array_equal(qt.unique_ints(keys), np.unique(keys))
+
+
+def test_measured_triangles_are_found_only_when_identical():
+    """The cache of earlier measurements returns a value only for a triangle with the
+    same six UV coordinates (bit for bit), NaN otherwise."""
+    import importlib
+
+    _Measured = importlib.import_module("geomkit.tessellate")._Measured
+    rng = np.random.default_rng(0)
+    tri = rng.random((500, 3, 2))
+    cache = _Measured()
+    assert np.isnan(cache.get(tri)).all()
+    cache.add(tri[:300], np.arange(300.0))
+    cache.add(tri[300:400], np.arange(300.0, 400.0))
+    probe = tri[::-1].copy()
+    probe[0, 0, 0] = np.nextafter(probe[0, 0, 0], 2.0)  # one ulp off: tri[499], unseen
+    probe[100, 2, 1] = np.nextafter(probe[100, 2, 1], 2.0)  # tri[399] moved: not found
+    got = cache.get(probe)
+    want = np.where(np.arange(500)[::-1] < 400, np.arange(500.0)[::-1], np.nan)
+    want[100] = np.nan
+    assert np.array_equal(got, want, equal_nan=True)
+
+
+@pytest.mark.parametrize("order", ["aab", "abb", "aba", "collinear"])
+def test_closest_on_degenerate_triangles_is_the_segment_distance(order):
+    """Triangles with coincident or collinear corners (poles make them): the distance
+    equals the exact point-to-segment distance (closed form), in every corner order;
+    contracted products once sent b == c into the interior branch (errors ~100)."""
+    from geomkit._kernels.tess import closest_on_triangle
+
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        x, y, p = rng.normal(size=(3, 3))
+        tri = {"aab": (x, x.copy(), y), "abb": (x, y, y.copy()), "aba": (x, y, x.copy()),
+               "collinear": (x, y, x + 0.3 * (y - x))}[order]
+        d, s, w = closest_on_triangle(*p, *tri[0], *tri[1], *tri[2])
+        t = np.clip(np.dot(p - x, y - x) / np.dot(y - x, y - x), 0.0, 1.0)
+        exact = np.linalg.norm(x + t * (y - x) - p)
+        q = tri[0] + s * (tri[1] - tri[0]) + w * (tri[2] - tri[0])
+        assert abs(d - exact) <= 1e-12 * (1 + exact)
+        assert abs(np.linalg.norm(q - p) - d) <= 1e-12 * (1 + exact)
+
+
+def test_affine_plane_is_its_two_triangles_and_twisted_is_not():
+    """A parallelogram net (any orientation, equal weights) is meshed as its own two
+    triangles with deviation 0; a twisted bilinear patch (saddle) or a rational one
+    with unequal weights goes through the measured paths."""
+    rng = np.random.default_rng(5)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    o, a, b = rng.normal(size=3), 3.0 * Q[0], 0.5 * Q[1] + 2.0 * Q[2]
+    net = np.array([[o, o + b], [o + a, o + a + b]])
+    plane = Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], net)
+    m = tessellate(plane, 1e-3)
+    assert m.stats["surfaces"][0].get("affine_plane") is True
+    assert len(m.faces) == 2 and m.max_deviation == 0.0
+    assert np.allclose(plane.evaluate(m.uv), m.vertices, atol=1e-14)
+    r = naive.sample_mesh_deviation(m, [plane], exact_above=1e-3)
+    assert r["to_surface"] <= 1e-12 and r["to_mesh"] <= 1e-12
+    twisted = net.copy()
+    twisted[1, 1] += 0.3 * np.cross(a, b) / np.linalg.norm(np.cross(a, b))
+    rational = Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], net, weights=[[1, 2], [1, 1]])
+    for s in (Surface(1, 1, [0, 0, 2, 2], [0, 0, 1, 1], twisted), rational):
+        st = tessellate(s, 1e-3).stats["surfaces"][0]
+        assert "affine_plane" not in st

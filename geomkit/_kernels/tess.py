@@ -15,11 +15,24 @@ import numpy as np
 
 from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, find_span
-from .surface import D1, derivs_scratch, surface_derivs, surface_point
+from .surface import surface_point
 
-CELL_CHUNK = 8
-"""Cells per parallel task range step (:func:`prun`)."""
-TRI_CHUNK = 32
+CELL_CHUNK = 32
+"""Cells per parallel task range step (:func:`prun`).  A call of at most one chunk runs
+in the calling thread: handing a few cells to the thread pool costs more than their
+work (~0.1 ms per task on an idle machine, several ms when the cores are busy)."""
+TRI_CHUNK = 128
+"""Triangles (or chords) per parallel task range step."""
+
+
+def _run(worker, n, chunk, *args):
+    """:func:`prun`, or the worker directly for at most one chunk (skips the thread
+    query and dispatch of ``prun``: a few tens of microseconds per call, which is the
+    order of a whole small tessellation)."""
+    if n <= chunk:
+        worker(0, n, *args)
+    else:
+        prun(worker, n, chunk, *args)
 
 
 @jit_inline
@@ -151,7 +164,7 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         3: gap of v-line chords (u fixed) across the cell (need to split v);
         4: largest 3-D edge length of the cell's corners (for ``max_edge``).
     """
-    prun(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
+    _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
 
 
 @jit
@@ -171,6 +184,24 @@ def _seg_closest(px, py, pz, ax, ay, az, bx, by, bz):
     return ex * ex + ey * ey + ez * ez, t
 
 
+DEGENERATE_REL2 = 1e-24
+"""A triangle with ``|ab x ac|^2 <= DEGENERATE_REL2 |ab|^2 |ac|^2`` (sine of its angle at
+a below 1e-12) is handled as its three edges by :func:`closest_on_triangle`."""
+
+
+@jit
+def _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """:func:`closest_on_triangle` of a degenerate triangle: the nearest of its edges."""
+    e0, t0 = _seg_closest(px, py, pz, ax, ay, az, bx, by, bz)
+    e1, t1 = _seg_closest(px, py, pz, bx, by, bz, cx, cy, cz)
+    e2, t2 = _seg_closest(px, py, pz, ax, ay, az, cx, cy, cz)
+    if e0 <= e1 and e0 <= e2:
+        return math.sqrt(e0), t0, 0.0
+    if e1 <= e2:
+        return math.sqrt(e1), 1.0 - t1, t1
+    return math.sqrt(e2), 0.0, t2
+
+
 @jit
 def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """Closest point of the triangle abc to p (Ericson, Real-Time Collision Detection
@@ -181,6 +212,17 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """
     abx, aby, abz = bx - ax, by - ay, bz - az
     acx, acy, acz = cx - ax, cy - ay, cz - az
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    if not (nx * nx + ny * ny + nz * nz
+            > DEGENERATE_REL2 * (abx * abx + aby * aby + abz * abz)
+            * (acx * acx + acy * acy + acz * acz)):
+        # collinear or coincident corners: with contracted (fused) products the
+        # region tests below do not cancel exactly and could send the point into
+        # the "interior" with arbitrary barycentrics (b == c gave distances off by
+        # hundreds); the nearest of the three edges is exact
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
     apx, apy, apz = px - ax, py - ay, pz - az
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz
@@ -210,15 +252,8 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
         return (_dist3(px, py, pz, bx + w * (cx - bx), by + w * (cy - by), bz + w * (cz - bz)),
                 1.0 - w, w)
     den = va + vb + vc
-    if not den > 0.0:  # degenerate (collinear) triangle: nearest of its three edges
-        e0, t0 = _seg_closest(px, py, pz, ax, ay, az, bx, by, bz)
-        e1, t1 = _seg_closest(px, py, pz, bx, by, bz, cx, cy, cz)
-        e2, t2 = _seg_closest(px, py, pz, ax, ay, az, cx, cy, cz)
-        if e0 <= e1 and e0 <= e2:
-            return math.sqrt(e0), t0, 0.0
-        if e1 <= e2:
-            return math.sqrt(e1), 1.0 - t1, t1
-        return math.sqrt(e2), 0.0, t2
+    if not den > 0.0:  # degenerate after all: nearest of its three edges
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
     s = vb / den
     w = vc / den
     return (_dist3(px, py, pz, ax + abx * s + acx * w, ay + aby * s + acy * w,
@@ -241,15 +276,18 @@ def point_triangle_closest(px, py, pz, V, a, b, c):
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, hu, hv):
+             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, hu, hv, floor):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
     points of the samples are read from the grid ``G`` (k+1, k+1, 3) of a cell
     (:func:`_cell_grid`) whose corners A, B, C are the grid nodes
     ``gc = (a_u, a_v, b_u, b_v, c_u, c_v)`` (each 0 or k) instead of evaluated.
+    Returns ``max(floor, deviation)``: a sample whose gap is at most the running
+    maximum cannot raise it (its value is at most its gap), so its exact one-sided
+    distances are not measured.
     """
-    worst = 0.0
+    worst = floor
     for i in range(k + 1):
         for j in range(k + 1 - i):
             l1 = i / k
@@ -274,7 +312,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
             y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
             z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
             gap = _dist3(x, y, z, P[0], P[1], P[2])
-            if gap > exact_above:
+            if gap > exact_above and gap > worst:
                 d_st = point_triangle_distance(P[0], P[1], P[2], T)
                 d_ts = gap
                 uu = u
@@ -291,7 +329,18 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                         SKL[1, 0, r] = (G[gb, gv, r] - G[ga, gv, r]) / ((gb - ga) * hu)
                         SKL[0, 1, r] = (G[gu, hb, r] - G[gu, ha, r]) / ((hb - ha) * hv)
                 else:
-                    surface_derivs(Pw, p, q, U, V, uu, vv, D1, bin_, scr, SKL)
+                    # forward differences at one sample spacing (hu, hv), stepping
+                    # inward at the domain's upper ends (no derivative kernel: it cost
+                    # ~4 s of this group's first-run compile, for steering only)
+                    su = hu if uu + hu <= umax else -hu
+                    sv = hv if vv + hv <= vmax else -hv
+                    surface_point(Pw, p, q, U, V, uu + su, vv, Nu, Nv, left, right, tmp, Q)
+                    for r in range(3):
+                        SKL[0, 0, r] = P[r]
+                        SKL[1, 0, r] = (Q[r] - P[r]) / su
+                    surface_point(Pw, p, q, U, V, uu, vv + sv, Nu, Nv, left, right, tmp, Q)
+                    for r in range(3):
+                        SKL[0, 1, r] = (Q[r] - P[r]) / sv
                 for it in range(2):
                     r0 = x - SKL[0, 0, 0]
                     r1 = y - SKL[0, 0, 1]
@@ -314,7 +363,9 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                     # chord step next: keep the Jacobian, move the residual's base point
                     for r in range(3):
                         SKL[0, 0, r] = Q[r]
-                gap = max(d_st, d_ts)
+                # never more than the gap, which bounds both distances (a near-degenerate
+                # triangle at a pole can make the closest-point rounding exceed it)
+                gap = min(gap, max(d_st, d_ts))
             worst = max(worst, gap)
     return worst
 
@@ -323,8 +374,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
 def _dev_scratch(p, q):
     mm = max(p, q) + 1
     return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
-            np.empty(3), np.empty(3), derivs_scratch(p, q, D1), np.empty((2, 2, 3)),
-            np.ones((2, 2)))
+            np.empty(3), np.empty(3), np.empty((2, 2, 3)))
 
 
 @jit
@@ -332,11 +382,19 @@ def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, 
                               vmax, exact_above, out):
     G = np.empty((1, 1, 3))
     gc = np.full(6, -1, dtype=np.int64)   # no grid: evaluate every sample
-    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
+    tiny_u = 1e-9 * (umax - umin)
+    tiny_v = 1e-9 * (vmax - vmin)
     for t in range(i0, i1):
+        # difference steps: the triangle's UV extent over k (the sample spacing)
+        hu = (max(tri_uv[t, 0, 0], max(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))
+              - min(tri_uv[t, 0, 0], min(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))) / k
+        hv = (max(tri_uv[t, 0, 1], max(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))
+              - min(tri_uv[t, 0, 1], min(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))) / k
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_, G, gc, 0.0, 0.0)
+                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, max(hu, tiny_u),
+                          max(hv, tiny_v), 0.0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -350,16 +408,17 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     * where it exceeds ``exact_above``, the two one-sided distances are measured
       instead: ``dist(P, triangle)`` exactly, and ``dist(X, surface)`` from above by
       ``|X - S(uv')|`` after two Gauss–Newton (chord) steps ``uv -> uv'`` toward the
-      foot of ``X``, both with the Jacobian at ``uv`` (exact derivatives here, grid
-      differences in :func:`cell_deviation`; any surface point bounds the distance
-      from above, so the Jacobian only steers), stopping once ``|X - S(uv')|`` is at
+      foot of ``X``, both with the Jacobian at ``uv`` (forward differences at one
+      sample spacing here, grid differences in :func:`cell_deviation`; any surface
+      point bounds the distance from above, so the Jacobian only steers), stopping
+      once ``|X - S(uv')|`` is at
       most ``dist(P, triangle)`` or ``exact_above``; the sample's value is
       the larger of the two (and never more than the gap).
 
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
     value of triangle t.
     """
-    prun(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
+    _run(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
          tri_xyz, k, umin, umax, vmin, vmax, exact_above, out)
 
 
@@ -408,7 +467,7 @@ def _cell_grid(Pw, p, q, U, V, u0, u1, v0, v1, k, Nu, Nv, left, right, Bu, Bv, H
 @jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                           exact_above, target, out):
-    Nu, Nv, left, right, tmp, P, Q, scr, SKL, bin_ = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
     G = np.empty((k + 1, k + 1, 3))
     Bu = np.empty((k + 1, p + 1))
     Bv = np.empty((k + 1, q + 1))
@@ -458,9 +517,9 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
                 gc[5] = k if cc >= 2 else 0
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
-                                            left, right, tmp, P, Q, scr, SKL, bin_, G, gc,
+                                            left, right, tmp, P, Q, SKL, G, gc,
                                             (cells[c, 1] - cells[c, 0]) / k,
-                                            (cells[c, 3] - cells[c, 2]) / k))
+                                            (cells[c, 3] - cells[c, 2]) / k, worst))
             out[c, diag] = worst
 
 
@@ -473,7 +532,7 @@ def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exac
     triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
     when it is within ``target`` the other is not measured (+inf).
     """
-    prun(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
+    _run(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
          umin, umax, vmin, vmax, exact_above, target, out)
 
 
@@ -514,5 +573,5 @@ def chord_deviation(Pw, p, q, U, V, uv_a, uv_b, xyz_a, xyz_b, mid_uv, out):
     ends (e.g. a trim curve at interior parameters); ``out[i]`` is the largest
     distance from ``S(mid_uv[i, s])`` to the 3-D segment ``xyz_a[i]``–``xyz_b[i]``.
     """
-    prun(_chord_deviation_range, mid_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, uv_a, uv_b, xyz_a,
+    _run(_chord_deviation_range, mid_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, uv_a, uv_b, xyz_a,
          xyz_b, mid_uv, out)

@@ -19,7 +19,7 @@ from geomkit import samples, tessellate
 from geomkit.evaluation import derivatives, evaluate
 
 CASES = ["sphere", "torus", "cylinder_quarter", "freeform_1", "crease", "wave_seed003",
-         "heavy_weights", "saddle", "plate_with_hole"]
+         "heavy_weights", "saddle", "plate_with_hole", "offset_planes"]
 
 
 def sampled_deviation(surface, V, F, FUV, per_face=12, max_faces=40_000, seed=0,
@@ -84,15 +84,22 @@ def _geomkit(s, tol):
     return m.vertices, m.faces, m.face_uv, dt, m.max_deviation
 
 
-def _occ(s, tol, occ):
-    face = occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,
-                         s.weights, trim=[[c.to_dict() for c in loop.pieces] for loop in s.trim]
-                         or None)
+def _occ(face, tol, occ):
     V, F, UV, dt = occ.mesh(face, tol, angle=0.5)
     return V, F, UV[F], dt
 
 
-def run(cases=CASES, tols=(1e-2, 1e-3), out=print):
+def _repeats(seconds: float, repeat: int) -> int:
+    """Runs for a call that took ``seconds`` once: ``repeat``, three times as many for
+    calls of milliseconds, fewer for slow calls (at least 3: a median of three)."""
+    if seconds < 0.02:  # milliseconds: more runs against the noise of a shared machine
+        return 3 * repeat
+    return repeat if seconds < 0.2 else max(3, min(repeat, int(2.0 / max(seconds, 1e-9))))
+
+
+def run(cases=CASES, tols=(1e-2, 1e-3), out=print, repeat=15):
+    """Print one row per case and tolerance: medians of interleaved repeats (geomkit,
+    then OCC, alternately, so load from other jobs hits both alike)."""
     try:
         from geomkit.oracles import occ
         have_occ = occ.HAVE_OCP
@@ -107,19 +114,33 @@ def run(cases=CASES, tols=(1e-2, 1e-3), out=print):
     rows = []
     for name in cases:
         s = samples.load(name)[0]
+        face = None
+        if have_occ:
+            face = occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                                 s.control_points, s.weights,
+                                 trim=[[c.to_dict() for c in lp.pieces] for lp in s.trim] or None)
         for tol in tols:
             V, F, UV, dt, rep = _geomkit(s, tol)
+            n = _repeats(dt, repeat)
+            ts, ots = [dt], []
+            for i in range(n):
+                if have_occ:
+                    oV, oF, oUV, odt = _occ(face, tol, occ)
+                    ots.append(odt)
+                if i + 1 < n:
+                    ts.append(_geomkit(s, tol)[3])
+            dt = float(np.median(ts))
             dev = sampled_deviation(s, V, F, UV)
             row = {"case": name, "tol": tol, "gk_faces": len(F), "gk_s": dt,
-                   "gk_dev": dev, "gk_reported": rep}
+                   "gk_dev": dev, "gk_reported": rep, "repeats": n}
             occ_txt = f"{'-':>9s} {'-':>7s} {'-':>11s} | {'-':>11s} {'-':>10s}"
             if have_occ:
-                oV, oF, oUV, odt = _occ(s, tol, occ)
+                odt = float(np.median(ots))
                 odev = sampled_deviation(s, oV, oF, oUV)
                 row.update(occ_faces=len(oF), occ_s=odt, occ_dev=odev)
-                occ_txt = (f"{len(oF):9d} {odt:7.3f} {odev / tol:11.3f} | "
+                occ_txt = (f"{len(oF):9d} {odt:8.4f} {odev / tol:11.3f} | "
                            f"{len(F) / max(len(oF), 1):11.2f} {dt / max(odt, 1e-9):10.2f}")
-            out(f"{name:16s} {tol:7.0e} | {len(F):9d} {dt:7.3f} {dev / tol:10.3f} "
+            out(f"{name:16s} {tol:7.0e} | {len(F):9d} {dt:8.4f} {dev / tol:10.3f} "
                 f"{rep / tol:10.3f} | {occ_txt}")
             rows.append(row)
     if have_occ:
@@ -189,8 +210,34 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tols", default="1e-2,1e-3")
     ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--repeat", type=int, default=15,
+                    help="timed runs per row (fewer, at least 3, for calls over 0.2 s)")
+    ap.add_argument("--markdown", action="store_true",
+                    help="also print the rows as a markdown table (docs/benchmarks.md)")
     a = ap.parse_args(argv)
-    run(a.cases.split(","), [float(t) for t in a.tols.split(",")])
+    rows = run(a.cases.split(","), [float(t) for t in a.tols.split(",")], repeat=a.repeat)
+    if a.markdown:
+        print(markdown(rows))
+
+
+def _ms(t: float) -> str:
+    return f"{t * 1e3:.3g} ms" if t < 1 else f"{t:.3g} s"
+
+
+def markdown(rows) -> str:
+    """The rows of :func:`run` as the table of docs/benchmarks.md."""
+    out = ["| case | tol | geomkit faces | time | sampled dev/tol | reported | OCC faces "
+           "| OCC time | OCC dev/tol | faces ratio | time ratio | runs |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        occ = ("| - | - | - | - | -" if "occ_s" not in r else
+               f"| {r['occ_faces']:,} | {_ms(r['occ_s'])} | {r['occ_dev'] / r['tol']:.2f} "
+               f"| {r['gk_faces'] / max(r['occ_faces'], 1):.2f} "
+               f"| {r['gk_s'] / r['occ_s']:.2f}")
+        out.append(f"| {r['case']} | {r['tol']:.0e} | {r['gk_faces']:,} | {_ms(r['gk_s'])} "
+                   f"| {r['gk_dev'] / r['tol']:.2f} | {r['gk_reported'] / r['tol']:.2f} {occ} "
+                   f"| {r['repeats']} |")
+    return "\n".join(out)
 
 
 if __name__ == "__main__":
