@@ -255,7 +255,7 @@ class Projector:
         self.closed = np.zeros((len(self.surfaces), 2), dtype=np.int64)
         self.free_edges = np.ones((len(self.surfaces), 4), dtype=bool)
         for i, s in enumerate(self.surfaces):
-            cu, cv = _closed_directions(s)
+            cu, cv = _closed_directions(s, s.size)
             self.closed[i] = (cu, cv)
             H = s.homogeneous
             X = H[..., :3] / H[..., 3:]

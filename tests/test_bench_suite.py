@@ -148,3 +148,22 @@ def test_cli_bench_end_to_end(tmp_path):
     (tmp_path / "f").write_text("a file")  # the folder's parent is a file: refused first
     r = cli("bench", "--engines", "evaluation", "-o", tmp_path / "f" / "b")
     assert_one_line_error(r, "cannot write here")
+
+
+def test_projection_mesh_rows_beside_libigl_and_trimesh():
+    """The suite's projection engine carries the mesh-query references (issue 15): one
+    row per reference, each with its own time and error against geomkit's exact
+    distance."""
+    pytest.importorskip("igl")
+    pytest.importorskip("rtree")
+    from geomkit.bench.projection import mesh_sweep
+
+    rows = mesh_sweep(("plate_with_hole",), n=300, repeat=1, trimesh_n=20)
+    names = {r["reference_name"].split(" (")[0] for r in rows}
+    assert names == {"libigl point_mesh_squared_distance", "libigl AABB, tree prebuilt",
+                     "trimesh closest_point"}
+    assert {r["case"] for r in rows} == {"plate_with_hole/scan", "plate_with_hole/box"}
+    for r in rows:
+        assert r["geomkit_seconds"] > 0 and r["reference_seconds"] > 0
+        if r["reference_error"] is not None:  # a 1e-3 mesh: its error is about that
+            assert 0 <= r["reference_error"] < 5e-3

@@ -175,14 +175,15 @@ SWEEP_CASES = ("sphere", "torus")
 
 
 def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), n=4_000, occ_n=100,
-          margin=10.0, repeat=3, seed=0):
+          margin=10.0, repeat=3, seed=0, mesh_cases=(), mesh_n=2_000, trimesh_n=200):
     """Rows of the common schema (:mod:`geomkit.bench._common`): for each case with a
     closed-form distance and each Newton tolerance, seconds per point of
     ``Projector.project`` (``n`` random points in the box grown by ``margin``, after
     warm-up; the candidate mesh build is not timed) and of ``GeomAPI_ProjectPointOnSurf``
     at the same Extrema tolerance on the first ``occ_n`` points; errors are the
     largest |distance - analytic distance| (geomkit over all ``n`` points, OCC over
-    its subset)."""
+    its subset).  ``mesh_cases``: also the mesh-query rows of :func:`mesh_sweep`
+    (libigl per call and with a prebuilt tree, trimesh) on ``mesh_n`` points."""
     from ._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
 
     occ = occ_or_none()
@@ -211,6 +212,8 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), n=4_000, occ_n=100,
                                 f"{k} runs; {int(np.isnan(d).sum())} without answer")
             rows.append(make_row("projection", name, "tol", tol, t / len(P), err,
                                  per="point", repeats=repeat, **ref))
+    if mesh_cases:
+        rows += mesh_sweep(mesh_cases, mesh_n, repeat, seed, trimesh_n)
     return rows
 
 
@@ -232,26 +235,32 @@ def main(argv=None):
 
 
 def mesh_sweep(cases=("freeform_1", "sphere", "torus", "plate_with_hole", "impeller"),
-               n=10_000, repeat=3, seed=0):
-    """Rows of the common schema: geomkit ``project`` against libigl's
-    ``point_mesh_squared_distance`` on a 1e-3 mesh (mesh-only; its error against
-    geomkit's exact distance in ``reference_error``), scan and box points
-    (:mod:`geomkit.bench.projection_mesh`; cases it cannot load are skipped)."""
+               n=10_000, repeat=3, seed=0, trimesh_n=200):
+    """Rows of the common schema: geomkit's exact ``project`` beside the mesh-only
+    queries on a 1e-3 mesh of the same faces (their error against geomkit's exact
+    distance in ``reference_error``), scan and box points
+    (:mod:`geomkit.bench.projection_mesh`; cases it cannot load are skipped): one row
+    per reference — libigl ``point_mesh_squared_distance`` (tree built per call),
+    libigl ``AABB.squared_distance`` (tree built once) and trimesh
+    ``proximity.closest_point`` (on the first ``trimesh_n`` points; it needs rtree)."""
     from ._common import make_row
     from .projection_mesh import run as run_mesh
 
+    refs = (("igl_us", "libigl point_mesh_squared_distance (1e-3 mesh)", "igl_err"),
+            ("aabb_us", "libigl AABB, tree prebuilt (1e-3 mesh)", "igl_err"),
+            ("trimesh_us", f"trimesh closest_point (1e-3 mesh, {trimesh_n} points)", None))
     rows = []
-    for r in run_mesh(n, repeat, cases, seed=seed, trimesh_n=0):
-        ref = {}
-        if "igl_us" in r:
-            ref = dict(reference_name="libigl point_mesh_squared_distance (1e-3 mesh)",
-                       reference_seconds=r["igl_us"] * 1e-6, reference_error=r["igl_err"])
-        rows.append(make_row("projection", f"{r['case']}/{r['points']}", "mesh_tol", 1e-3,
-                             r["gk_us"] * 1e-6, None, per="point", repeats=repeat,
-                             note=f"AABB prebuilt {r.get('aabb_us', float('nan')):.2f} us; "
-                                  f"stages search/newton/trim/finish us "
-                                  f"{r['search_us']:.2f}/{r['newton_us']:.2f}/"
-                                  f"{r['trim_us']:.2f}/{r['finish_us']:.2f}", **ref))
+    for r in run_mesh(n, repeat, cases, seed=seed, trimesh_n=trimesh_n):
+        note = (f"stages search/newton/trim/finish us {r['search_us']:.2f}/"
+                f"{r['newton_us']:.2f}/{r['trim_us']:.2f}/{r['finish_us']:.2f}")
+        for key, ref_name, err_key in refs:
+            if key not in r:
+                continue
+            rows.append(make_row("projection", f"{r['case']}/{r['points']}", "mesh_tol",
+                                 1e-3, r["gk_us"] * 1e-6, None, per="point",
+                                 repeats=repeat, note=note, reference_name=ref_name,
+                                 reference_seconds=r[key] * 1e-6,
+                                 reference_error=r.get(err_key) if err_key else None))
     return rows
 
 
