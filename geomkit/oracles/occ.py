@@ -36,7 +36,8 @@ import time
 
 import numpy as np
 
-from ._occ_common import HAVE_OCP, _cast, _gp_pnt, _require_ocp, _xyz
+from ._occ_common import (HAVE_OCP, _array1_double, _array1_int,  # noqa: F401 - re-exported
+                          _cast, _gp_pnt, _knots_to_occ, _ocp_array, _require_ocp, _xyz)
 from .occ_faces import (area, face_from_surface, face_surface, is_valid, make_face,
                         make_surface)
 
