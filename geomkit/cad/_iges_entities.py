@@ -263,6 +263,8 @@ def surface(rd, de: int):
             p, U, Pw = c2
             c2 = (p, 1.0 - np.asarray(U)[::-1], Pw[::-1].copy())
             g2 = None if g2 is None else (lambda s, g=g2: 1.0 - g(1.0 - np.asarray(s)))
+        if rd.dir[de].d.get("form_number", 0) == 0:
+            _equal_arc_length(rd, de, (c1, g1), (c2, g2))
         if g1 is not None or g2 is not None:
             # rulings join equal entity parameters: exact only where both curves
             # carry them to equal NURBS parameters (arcs / ellipses of equal sweep)
@@ -294,6 +296,60 @@ def surface(rd, de: int):
         P = args[4] @ Mt[:3, :3].T + Mt[:3, 3]
         args = args[:4] + (P,) + args[5:]
     return args, fu, fv
+
+
+RULED_ARC_TOL = 1e-9
+"""A 118 of form 0 (rulings at equal relative arc length) is read as form 1 (equal
+relative parameter) when neither curve's relative arc length strays from its relative
+entity parameter by more than this x the model size, or the file's resolution when that
+is larger (the rulings' ends then move by at most that along the curves)."""
+
+
+def _arc_fraction(c, g, n: int = 256):
+    """Relative arc length of the normalised curve ``c`` at the entity parameters
+    ``e = 0, 1/n, ..., 1`` (``g`` maps them to the NURBS parameter), and its length.
+    Gauss-Legendre (10 points) on 8 pieces between consecutive samples and knots."""
+    from .brep import _curve_derivs
+
+    p, U, Pw = c
+    e = np.linspace(0.0, 1.0, n + 1)
+    t = e if g is None else np.asarray(g(e), float)
+    U = np.asarray(U, float)
+    br = np.unique(np.concatenate([t, U[(U > t.min()) & (U < t.max())]]))
+    x, w = np.polynomial.legendre.leggauss(10)
+    cuts = br[:-1, None] + np.diff(br)[:, None] * np.linspace(0.0, 1.0, 9)[None, :]
+    lo, hi = cuts[:, :-1].ravel(), cuts[:, 1:].ravel()
+    q = 0.5 * (lo + hi)[:, None] + 0.5 * (hi - lo)[:, None] * x[None, :]
+    speed = np.linalg.norm(_curve_derivs(c, q.ravel(), 1)[:, 1], axis=1).reshape(q.shape)
+    piece = 0.5 * (hi - lo) * (speed @ w)
+    cum = np.concatenate([[0.0], np.cumsum(piece.reshape(len(br) - 1, 8).sum(axis=1))])
+    at = cum[np.searchsorted(br, t)]
+    total = float(at[-1] - at[0])
+    return e, np.abs(at - at[0]) / total, total
+
+
+def _equal_arc_length(rd, de, *curves):
+    """Form 0 of entity 118 joins points at equal relative arc length.  geomkit's ruled
+    surface joins equal relative entity parameters (form 1): the same surface where
+    both curves run at constant speed in their parameters (lines, circular arcs).
+    Otherwise there is no exact NURBS: Unsupported, never a silently different surface.
+    The achieved error (how far a ruling's end moves along its curve) is stated."""
+    from ._iges_file import units
+
+    size = max(float(np.ptp(np.asarray(c[2])[:, :3] / np.asarray(c[2])[:, 3:], axis=0).max())
+               for c, _ in curves) or 1.0
+    tol = max(RULED_ARC_TOL * size, units(rd.glob)[1] or 0.0)
+    err = 0.0
+    for c, g in curves:
+        e, lam, length = _arc_fraction(c, g)
+        err = max(err, float(np.abs(lam - e).max()) * length)
+    if err > tol:
+        raise Unsupported(f"ruled surface DE {de} is form 0 (rulings at equal arc length) "
+                          "between curves that do not run at constant speed in their "
+                          f"parameters (a ruling end would move by up to {err:.3g}, "
+                          f"tolerance {tol:.3g}); no exact NURBS")
+    if err > 1e-12 * size:
+        rd.approx[de] = max(rd.approx.get(de, 0.0), err)
 
 
 def _compatible(c1, c2, de):

@@ -184,14 +184,19 @@ def analytic(rd, de: int) -> Analytic:
 
 
 # --------------------------------------------------------------------- edges
-def _eval(curve, t):
+def _curve_derivs(curve, t, d):
+    """Points and derivatives up to order ``d`` of a ``(p, U, Pw)`` curve: (m, d+1, 3)."""
     from .._kernels.bezier import curve_points
 
     p, U, Pw = curve
-    out = np.empty((len(t), 1, 3))
+    out = np.empty((len(t), d + 1, 3))
     curve_points(np.ascontiguousarray(Pw, float), p, np.asarray(U, float),
-                 np.ascontiguousarray(t, float), 0, out)
-    return out[:, 0, :]
+                 np.ascontiguousarray(t, float), d, out)
+    return out
+
+
+def _eval(curve, t):
+    return _curve_derivs(curve, t, 0)[:, 0, :]
 
 
 class _Edge:
