@@ -217,3 +217,28 @@ def test_work_cap_keeps_the_interval_honest():
     r = surface_distance(up, tor, tol=1e-9, max_pairs=100)
     assert _contains(r, truth) and abs(r.distance - truth) <= 1e-9
     assert r.stats["stop"] == "max_pairs" and not r.certified
+
+
+# ---------------------------------------------------------------- untrimmed kernels
+@pytest.mark.parametrize("name", ["sphere_pair", "offset_planes"])
+def test_untrimmed_specialisation_matches_general_kernels(name, monkeypatch):
+    """Untrimmed scenes run the specialisation of the kernels without the trim paths
+    (seg_all None, numba prunes those branches: less to compile on a first run); on an
+    untrimmed scene the general kernels take none of those paths, so both give the
+    same bits."""
+    import geomkit.distance as gd
+    from geomkit._kernels import distance as dk
+
+    a, b = samples.load(name)
+    assert not a.is_trimmed and not b.is_trimmed
+    r1 = surface_distance(a, b, tol=1e-9)
+    none_sigs = [s for s in dk.branch_and_bound.signatures if str(s[11]) == "none"]
+    assert none_sigs, "the untrimmed specialisation was not used"
+    monkeypatch.setattr(gd, "_UNTRIMMED_KERNELS", False)
+    r2 = surface_distance(a, b, tol=1e-9)
+    assert any(str(s[11]) != "none" for s in dk.branch_and_bound.signatures)
+    assert (r1.lower, r1.upper) == (r2.lower, r2.upper)
+    np.testing.assert_array_equal(r1.point_a, r2.point_a)
+    np.testing.assert_array_equal(r1.point_b, r2.point_b)
+    truth = samples.load_case(name).truth["min_distance"]
+    assert _contains(r1, truth)

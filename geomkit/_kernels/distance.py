@@ -68,8 +68,13 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     ``out_i = (surface a, surface b, pairs popped, pairs split, pairs pushed,
     nodes, newton runs, stop code, peak heap, pruned pairs)``.
     Returns the final pools (for inspection and memory accounting).
+    ``seg_all`` None: no face is trimmed; numba prunes the ``seg_all is None`` branches
+    of that specialisation, so the trim classification and the trim-edge search
+    (``alternate_feet``) are not compiled for it.
     """
-    pmax1 = seg_all.shape[1]
+    pmax1 = np.int64(1)
+    if seg_all is not None:
+        pmax1 = seg_all.shape[1]
     winding = np.zeros(_max_loops(trim_meta), dtype=np.int64)
     stack = np.empty((MAX_DEPTH + 2, pmax1, 3))
     depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
@@ -137,10 +142,14 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
         d = newton4(Pw_all, U_all, V_all, meta, dom, bsa, bsb, x4, step_tol, bin_, scra,
                     scrb, SA, SB)
         newton_runs += 1
-        if d < upper and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, bsa, x4[0], x4[1],
-                                    uv_tol, winding, stack, depths, tleft, tright) \
-                and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, bsb, x4[2], x4[3],
-                               uv_tol, winding, stack, depths, tleft, tright):
+        ok = d < upper
+        if seg_all is not None:
+            if ok:
+                ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, bsa, x4[0], x4[1],
+                                uv_tol, winding, stack, depths, tleft, tright) \
+                    and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, bsb, x4[2], x4[3],
+                                   uv_tol, winding, stack, depths, tleft, tright)
+        if ok:
             upper = d
             for c in range(3):
                 bx[2 + c] = SA[0, 0, c]
@@ -228,12 +237,16 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                     d = newton4(Pw_all, U_all, V_all, meta, dom, sa, sb, x4, step_tol, bin_,
                                 scra, scrb, SA, SB)
                     newton_runs += 1
-                    if d < upper and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sa,
-                                                x4[0], x4[1], uv_tol, winding, stack, depths,
-                                                tleft, tright) \
-                            and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sb, x4[2],
-                                           x4[3], uv_tol, winding, stack, depths, tleft,
-                                           tright):
+                    ok = d < upper
+                    if seg_all is not None:
+                        if ok:
+                            ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sa, x4[0],
+                                            x4[1], uv_tol, winding, stack, depths, tleft,
+                                            tright) \
+                                and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sb,
+                                               x4[2], x4[3], uv_tol, winding, stack, depths,
+                                               tleft, tright)
+                    if ok:
                         upper = d
                         bsa = sa
                         bsb = sb
@@ -242,6 +255,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                             bx[5 + c] = SB[0, 0, c]
                         for c in range(4):
                             bx[8 + c] = x4[c]
+                    elif seg_all is None:
+                        pass  # untrimmed faces: no trim edge to follow
                     elif trim_meta[sa, 1] > 0 or trim_meta[sb, 1] > 0:
                         x4[0] = nf[a, F_REPUV]
                         x4[1] = nf[a, F_REPUV + 1]
@@ -325,7 +340,9 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 nf[c, F_V1] = v1
                 _node_box(ctrl, ni[c, I_OFF], p, q, nf, c)
                 st = ni[k, I_STATE]
-                if st == ST_MIXED:
+                if seg_all is None:
+                    pass
+                elif st == ST_MIXED:
                     st = _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s,
                                          u0, u1, v0, v1, uv_tol, winding, stack, depths,
                                          tleft, tright)
@@ -334,7 +351,9 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 nf[c, F_REPUV] = 0.5 * (u0 + u1)
                 nf[c, F_REPUV + 1] = 0.5 * (v0 + v1)
                 ok = st == ST_INSIDE
-                if st == ST_MIXED:
+                if seg_all is None:
+                    pass
+                elif st == ST_MIXED:
                     ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s,
                                     nf[c, F_REPUV], nf[c, F_REPUV + 1], uv_tol, winding,
                                     stack, depths, tleft, tright)

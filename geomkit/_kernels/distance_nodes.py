@@ -262,8 +262,11 @@ def pair_lower_bound(ctrl, ni, nf, a, b):
 @jit
 def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, uv_tol):
     """Fill boxes, trim states and representative points of the root nodes ``0..n-1``
-    (offset, degrees, surface and UV box already set)."""
-    pmax1 = seg_all.shape[1]
+    (offset, degrees, surface and UV box already set).  ``seg_all`` None: no face is
+    trimmed (the trim classification is then not compiled)."""
+    pmax1 = np.int64(1)
+    if seg_all is not None:
+        pmax1 = seg_all.shape[1]
     winding = np.zeros(_max_loops(trim_meta), dtype=np.int64)
     stack = np.empty((MAX_DEPTH + 2, pmax1, 3))
     depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
@@ -279,8 +282,10 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
         u1 = nf[k, F_U1]
         v0 = nf[k, F_V0]
         v1 = nf[k, F_V1]
-        st = _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1, v0,
-                             v1, uv_tol, winding, stack, depths, tleft, tright)
+        st = ST_INSIDE
+        if seg_all is not None:
+            st = _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1,
+                                 v0, v1, uv_tol, winding, stack, depths, tleft, tright)
         ni[k, I_STATE] = st
         ni[k, I_C0] = -1
         ni[k, I_C1] = -1
@@ -288,7 +293,9 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
         nf[k, F_REPUV] = 0.5 * (u0 + u1)
         nf[k, F_REPUV + 1] = 0.5 * (v0 + v1)
         ok = st == ST_INSIDE
-        if st == ST_MIXED:
+        if seg_all is None:
+            pass
+        elif st == ST_MIXED:
             ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s, nf[k, F_REPUV],
                             nf[k, F_REPUV + 1], uv_tol, winding, stack, depths, tleft, tright)
         ni[k, I_REPOK] = 1 if ok else 0
