@@ -9,7 +9,8 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    and e_t the triangle's deviation bound, every t with
    ``d_t - e_t <= min(d_t' + e_t')``; ``min(d_t - e_t)`` is the reported lower bound;
 3. from every candidate whose lower bound is below the best bound so far (the mesh
-   upper bound, then the nearest foot on an untrimmed surface) a
+   upper bound, then the nearest foot inside its face: untrimmed, or classified
+   inside the trim loops in the kernel) a
    safeguarded Newton iteration on the exact surface finds the foot
    (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
    active set on the domain box, backtracking);

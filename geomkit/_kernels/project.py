@@ -425,7 +425,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         nf = 0
         # the mesh upper bound holds for trimmed faces too (their triangles lie on
         # the face); a Newton foot on a trimmed surface may lie outside the face,
-        # so its distance is no upper bound and must not prune candidates
+        # so only a foot classified inside its face is an upper bound (below)
         best = UB
         if k == 0:
             flags |= 2
