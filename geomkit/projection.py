@@ -9,7 +9,8 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    and e_t the triangle's deviation bound, every t with
    ``d_t - e_t <= min(d_t' + e_t')``; ``min(d_t - e_t)`` is the reported lower bound;
 3. from every candidate whose lower bound is below the best bound so far (the mesh
-   upper bound, then the nearest foot on an untrimmed surface) a
+   upper bound, then the nearest foot inside its face: untrimmed, or classified
+   inside the trim loops in the kernel) a
    safeguarded Newton iteration on the exact surface finds the foot
    (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
    active set on the domain box, backtracking);
@@ -35,11 +36,12 @@ from scipy.spatial import cKDTree
 from . import results as R
 from ._kernels import project as _pk
 from ._kernels import trim_feet as _tf
+from . import tolerances as tols
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
 from .tessellate import TRIM_TARGET, _closed_directions, tessellate
-from .trimming import INSIDE, OUTSIDE, _segments, classify_uv
+from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
 from .types import Surface
 from .voxel import VoxelGrid
 
@@ -182,6 +184,36 @@ def _c0_breaks(surfaces):
     return np.ascontiguousarray(np.concatenate(parts)), off
 
 
+def _pack_trims(surfaces):
+    """Trim segments of all surfaces for the kernel's foot classification
+    (:func:`geomkit._kernels.project._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
+    ``tloop`` (S,), ``toff[s] = (offset, count, loops)`` and the band ``ttol[s]``
+    (:func:`geomkit.trimming.classify_uv`'s default)."""
+    parts = [_segments(s) if s.is_trimmed else None for s in surfaces]
+    p1 = max([2] + [t[0].shape[1] for t in parts if t is not None])
+    toff = np.zeros((len(surfaces), 3), dtype=np.int64)
+    ttol = np.zeros(len(surfaces))
+    seg, deg, lp, o = [], [], [], 0
+    for i, (s, t) in enumerate(zip(surfaces, parts)):
+        (u0, u1), (v0, v1) = s.domain
+        ttol[i] = tols.TRIM_TOL * max(u1 - u0, v1 - v0)
+        if t is None:
+            continue
+        q = np.ones((t[0].shape[0], p1, 3))
+        q[:, :t[0].shape[1]] = t[0]
+        seg.append(q)
+        deg.append(t[1])
+        lp.append(t[2])
+        toff[i] = (o, q.shape[0], t[3])
+        o += q.shape[0]
+    if not seg:
+        return (np.ones((0, p1, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64), toff,
+                ttol)
+    return (np.ascontiguousarray(np.concatenate(seg)),
+            np.ascontiguousarray(np.concatenate(deg), dtype=np.int64),
+            np.ascontiguousarray(np.concatenate(lp), dtype=np.int64), toff, ttol)
+
+
 class _TrimData:
     """Trim segments of one surface and dense samples on their images."""
 
@@ -271,6 +303,7 @@ class Projector:
                                            for s in self.surfaces])
         self.approx_error = float(self.face_approx_error.max())
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
+        self.trim_pack = _pack_trims(self.surfaces)
         self.morton = False  # Morton-ordered points: same answers, speed gain not
         # shown on the loaded machine (-20% .. +16% per case), so off by default
         self.build_time = time.perf_counter() - t0
@@ -291,6 +324,7 @@ class Projector:
         fuv = np.zeros((n, K, 2))
         fd = np.full((n, K), np.inf)
         fst = np.zeros((n, K), dtype=np.int64)
+        fcls = np.zeros((n, K), dtype=np.int8)
         nf = np.zeros(n, dtype=np.int64)
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
@@ -304,29 +338,25 @@ class Projector:
         Pk = P if order is None else np.ascontiguousarray(P[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
-                          self.trimmed, *self.breaks, step_tol, max_distance, K, fs, fuv, fd,
-                          fst, nf, lb,
-                          rest, flags, work)
+                          self.trimmed, *self.breaks, *self.trim_pack, step_tol, max_distance,
+                          K, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
-            fs, fuv, fd, fst, nf, lb, rest, flags, work = (
-                a[inv] for a in (fs, fuv, fd, fst, nf, lb, rest, flags, work))
+            fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work = (
+                a[inv] for a in (fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work))
         t1 = time.perf_counter()
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
-        # trimmed faces: feet outside the face are replaced by the trim-boundary foot
+        # trimmed faces: feet outside the face (classified in the kernel) are replaced
+        # by the trim-boundary foot
         extra_d = np.full(n, np.inf)
         extra_uv = np.zeros((n, 2))
         extra_s = np.full(n, -1, dtype=np.int64)
         fdf = fd.reshape(-1)
-        fuvf = fuv.reshape(-1, 2)
         for si, flat in _groups(fs.reshape(-1), np.isfinite(fdf)
-                                & (self.trimmed[np.maximum(fs, 0)].reshape(-1) != 0)):
+                                & (fcls.reshape(-1) == OUTSIDE)):
             td = self.trims[si]
-            flat = flat[classify_uv(self.surfaces[si], fuvf[flat]) == OUTSIDE]
-            if not flat.size:
-                continue
             fdf[flat] = np.inf
             rows = np.unique(flat // K)
             s = self.surfaces[si]
@@ -360,6 +390,7 @@ class Projector:
         dist = np.where(use_trim, extra_d, best_d)
         uv = np.where(use_trim[:, None], extra_uv, fuv[rows, j])
         surf = np.where(use_trim, extra_s, fs[rows, j])
+        cls = np.where(use_trim, BOUNDARY, fcls[rows, j])
         newton_ok = np.where(use_trim, True, fst[rows, j] == _pk.FOOT_OK)
         status = np.full(n, R.INTERIOR, dtype=np.int8)
         status[use_trim] = R.TRIM_EDGE
@@ -389,7 +420,7 @@ class Projector:
             if s.is_trimmed:
                 inner = st == R.INTERIOR
                 if inner.any():
-                    c = classify_uv(s, q[inner])
+                    c = cls[sel][inner]  # the kernel's class of the foot (classify_uv's)
                     sub = st[inner]
                     sub[c != INSIDE] = R.TRIM_EDGE
                     st[inner] = sub

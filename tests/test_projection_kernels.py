@@ -88,3 +88,48 @@ def test_scan_points_are_proven():
     pr = geomkit.project_points(s, P)
     assert pr.stats["candidate_overflow"] == 0
     assert pr.stats["not_proven"] == 0
+
+
+def test_kernel_foot_class_equals_classify_uv():
+    """The batch kernel classifies every Newton foot against its face's trim loops
+    (a foot inside its face prunes candidates; the trim and finish stages reuse the
+    class): the classes equal :func:`geomkit.trimming.classify_uv` on the same (u, v),
+    here for feet inside the plate, outside it over the hole and on the hole's edge
+    band, and on a second trimmed face with another degree of trim curve."""
+    from geomkit._kernels import project as pk
+    from geomkit.projection import STEP_TOL
+
+    plate = samples.load("plate_with_hole")[0]
+    P0 = np.zeros((2, 2, 3))
+    P0[..., 0] = np.array([0.0, 100.0])[:, None]
+    P0[..., 1] = np.array([0.0, 100.0])[None, :]
+    tri = geomkit.Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], P0 + [0, 0, -5.0],
+                          trim=[[[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.1, 0.1]]])
+    surfaces = [plate, tri]
+    pr = geomkit.Projector(surfaces)
+    rng = np.random.default_rng(4)
+    P = np.c_[rng.uniform(-10, 110, (3000, 2)), rng.uniform(-8, 4, 3000)]
+    P[:200, :2] = [50.0, 50.0] + 20.0 * np.c_[np.cos(a := rng.uniform(0, 7, 200)),
+                                             np.sin(a)] * (1 + 1e-12 * rng.normal(size=(200, 1)))
+    n, K = len(P), 16
+    fs = np.full((n, K), -1, dtype=np.int64)
+    fuv = np.zeros((n, K, 2))
+    fd = np.full((n, K), np.inf)
+    fst = np.zeros((n, K), dtype=np.int64)
+    fcls = np.full((n, K), 9, dtype=np.int8)
+    nf = np.zeros(n, dtype=np.int64)
+    g = pr.grid
+    pk.project_batch(P, g.vertices, g.faces, pr.fdev, pr.face_surf, pr.face_uv, pr.dmax,
+                     *g._args(), *pr.packed, pr.closed, pr.trimmed, *pr.breaks,
+                     *pr.trim_pack, STEP_TOL * pr.size, np.inf, K, fs, fuv, fd, fst, fcls,
+                     nf, np.zeros(n), np.full(n, np.inf), np.zeros(n, dtype=np.int64),
+                     np.zeros((n, 3), dtype=np.int64))
+    seen = set()
+    for si, s in enumerate(surfaces):
+        m = fs == si
+        assert m.any()
+        ref = s.classify_uv(fuv[m])
+        assert np.array_equal(fcls[m], ref)
+        seen |= {(si, int(c)) for c in np.unique(ref)}
+    assert {(0, geomkit.INSIDE), (0, geomkit.OUTSIDE), (1, geomkit.INSIDE),
+            (1, geomkit.OUTSIDE)} <= seen

@@ -25,6 +25,7 @@ import numpy as np
 
 from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
+from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 from .voxel import point_candidates
 
 MAX_ITER = 100
@@ -199,16 +200,9 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                         f = bf
                         continue
         if full_step <= step_tol:
-            un = _wrap(u + du, umin, umax, closed_u)
-            vn = _wrap(v + dv, vmin, vmax, closed_v)
-            _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
-            fn = _f(SKL, x)
-            if fn <= f:
-                u = un
-                v = vn
-                f = fn
-            else:
-                _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
+            # converged: the remaining step is below tol (the foot moves by less than
+            # tol, the distance by O(tol^2 / radius)); it is not taken, which saves an
+            # evaluation per run (SKL already holds the derivatives at (u, v))
             status = FOOT_OK
             break
         alpha = 1.0
@@ -359,10 +353,36 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
 
 
 @jit
+def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, depths, left,
+                right):
+    """INSIDE / OUTSIDE / BOUNDARY of the foot (u, v) on trimmed surface ``s``: the
+    domain rectangle, then the trim loops (:func:`geomkit._kernels.trim.classify_point`)
+    — the same answer as :func:`geomkit.trimming.classify_uv` with its default band
+    ``ttol[s]``."""
+    tol = ttol[s]
+    dd = min(min(u - dom[s, 0], dom[s, 1] - u), min(v - dom[s, 2], dom[s, 3] - v))
+    if dd < -tol:
+        return OUTSIDE
+    out = BOUNDARY if dd <= tol else INSIDE
+    o = toff[s, 0]
+    n = toff[s, 1]
+    if n == 0:
+        return out
+    res = classify_point(tseg[o:o + n], tdeg[o:o + n], tloop[o:o + n], toff[s, 2], u, v,
+                         tol, winding, stack, depths, left, right)
+    if res == OUTSIDE:
+        return OUTSIDE
+    if res == BOUNDARY:
+        return BOUNDARY
+    return out
+
+
+@jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv,
-                   out_d, out_st, out_nf, out_lb, out_rest, out_flags, out_work):
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
+                   max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+                   out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -382,6 +402,13 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         pmax = max(pmax, meta[s, 3])
         qmax = max(qmax, meta[s, 4])
     scr = derivs_scratch(pmax, qmax, D2)
+    # trim classification scratch (as trim._classify_points_range)
+    p1 = tseg.shape[1]
+    winding = np.empty(max(np.int64(1), np.max(toff[:, 2])), dtype=np.int64)
+    stack = np.empty((MAX_DEPTH + 2, p1, 3))
+    depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
+    left = np.empty((p1, 3))
+    right = np.empty((p1, 3))
     x = np.empty(3)
     for i in range(i0, i1):
         x[0] = P[i, 0]
@@ -398,7 +425,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         nf = 0
         # the mesh upper bound holds for trimmed faces too (their triangles lie on
         # the face); a Newton foot on a trimmed surface may lie outside the face,
-        # so its distance is no upper bound and must not prune candidates
+        # so only a foot classified inside its face is an upper bound (below)
         best = UB
         if k == 0:
             flags |= 2
@@ -434,6 +461,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             u, v, d, it, st = foot_c0(Pw, p, q, U, Vk, dom[s], bu, bv,
                                       closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
                                       step_tol, bin_, scr, SKL)
+            cl = INSIDE
+            if trimmed[s] != 0:
+                cl = _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding,
+                                 stack, depths, left, right)
             # insert sorted by distance
             j = nf
             while j > 0 and out_d[i, j - 1] > d:
@@ -442,14 +473,19 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                 out_uv[i, j, 1] = out_uv[i, j - 1, 1]
                 out_d[i, j] = out_d[i, j - 1]
                 out_st[i, j] = out_st[i, j - 1]
+                out_cls[i, j] = out_cls[i, j - 1]
                 j -= 1
             out_s[i, j] = s
             out_uv[i, j, 0] = u
             out_uv[i, j, 1] = v
             out_d[i, j] = d
             out_st[i, j] = st
+            out_cls[i, j] = cl
             nf += 1
-            if trimmed[s] == 0:
+            # a foot inside its face (untrimmed surface, or strictly inside the trim
+            # loops) is a point of the model: its distance prunes; a foot outside
+            # or within the trim band of a trimmed face prunes nothing
+            if cl == INSIDE:
                 best = min(best, d)
         out_nf[i] = nf
         out_rest[i] = rest
@@ -458,27 +494,30 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, step_tol, max_dist,
-                  max_starts, out_s, out_uv, out_d, out_st, out_nf, out_lb, out_rest, out_flags,
-                  out_work):
+                  brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
+                  max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+                  out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
-    ``out_uv[i, j]``, ``out_d[i, j]`` (distance) and ``out_st[i, j]`` (Newton status),
-    nearest first: every candidate whose lower bound is below the best bound so far
+    ``out_uv[i, j]``, ``out_d[i, j]`` (distance), ``out_st[i, j]`` (Newton status) and
+    ``out_cls[i, j]`` (the foot's INSIDE / OUTSIDE / BOUNDARY class on its trimmed face,
+    INSIDE on an untrimmed one; trim segments of surface s are ``tseg[toff[s, 0]:][:toff[s,
+    1]]`` with ``toff[s, 2]`` loops, band ``ttol[s]``), nearest first: every candidate whose lower bound is below the best bound so far
     is tried, up to ``max_starts``; ``out_rest[i]`` is the smallest lower bound of the
     candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
-    trimmed surfaces, whose untrimmed Newton feet prune no candidate.  ``out_flags[i]`` bit 0:
+    trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates).
     Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, step_tol, max_dist, max_starts, out_s, out_uv, out_d,
-         out_st, out_nf, out_lb, out_rest, out_flags, out_work)
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
+         max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest, out_flags,
+         out_work)
 
 
 @jit
