@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, jit_inline
-from .bvh import refit_kdop, rigid_code
+from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
@@ -53,7 +53,8 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
 
 @jit_inline
 def box_separation(Rab, T, a, b, early, Ab):
-    """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3).
+    """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3),
+    or (without ``early``) the gap of their circumscribed spheres when larger.
 
     ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
@@ -95,6 +96,15 @@ def box_separation(Rab, T, a, b, early, Ab):
                     s /= np.sqrt(ln2)
                     if s > best:
                         best = s
+    # the boxes' circumscribed spheres: centre distance minus the half diagonals
+    # (tighter than every single axis when the boxes are apart diagonally), made
+    # smaller than any rounding of it
+    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
+    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
+        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    s = dc - rs - 1e-12 * (dc + rs)
+    if s > best:
+        best = s
     return best
 
 
@@ -136,6 +146,18 @@ def _move(T, r, M, m, out):
         x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
         for k in range(3):
             out[v, k] = M[k, 0] * x + M[k, 1] * y + M[k, 2] * z + m[k]
+
+
+@jit_inline
+def _sphere(t, out):
+    """A sphere around triangle ``t`` (3, 3): centroid ``out[:3]``, radius ``out[3]``
+    (largest corner distance)."""
+    for k in range(3):
+        out[k] = (t[0, k] + t[1, k] + t[2, k]) / 3.0
+    r = 0.0
+    for v in range(3):
+        r = max(r, (t[v, 0] - out[0]) ** 2 + (t[v, 1] - out[1]) ** 2 + (t[v, 2] - out[2]) ** 2)
+    out[3] = np.sqrt(r)
 
 
 @jit
@@ -235,9 +257,11 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
-    hit = np.empty(3)
+    sa = np.empty(4)
     ta = np.empty((3, 3))
     tb = np.empty((3, 3))
+    tbs = np.empty((LEAF_BUF, 3, 3))
+    sph = np.empty((LEAF_BUF, 4))
     p = np.empty(3)
     q = np.empty(3)
     best = margin if margin > 0.0 else np.inf
@@ -258,11 +282,31 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
+            rb0 = rngB[j, 0]
+            nbl = rngB[j, 1] - rb0
+            if nbl <= LEAF_BUF:     # B's leaf triangles moved once, with their spheres
+                for rb in range(nbl):
+                    _move(TB, rb0 + rb, MB, mB, tbs[rb])
+                    _sphere(tbs[rb], sph[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 _move(TA, ra, MA, mA, ta)
-                for rb in range(rngB[j, 0], rngB[j, 1]):
-                    _move(TB, rb, MB, mB, tb)
-                    d = triangle_triangle_distance(ta, tb, p, q)
+                _sphere(ta, sa)
+                for rb in range(rb0, rngB[j, 1]):
+                    if nbl <= LEAF_BUF:
+                        trb = tbs[rb - rb0]
+                        # bounding spheres of the two triangles: skip the exact
+                        # distance when their gap (made smaller than any rounding
+                        # of it) already reaches the best distance
+                        dc = np.sqrt((sa[0] - sph[rb - rb0, 0]) ** 2 +
+                                     (sa[1] - sph[rb - rb0, 1]) ** 2 +
+                                     (sa[2] - sph[rb - rb0, 2]) ** 2)
+                        rs = sa[3] + sph[rb - rb0, 3]
+                        if dc - rs - 1e-12 * (dc + rs) >= best:
+                            continue
+                    else:
+                        _move(TB, rb, MB, mB, tb)
+                        trb = tb
+                    d = triangle_triangle_distance(ta, trb, p, q)
                     if d < best:
                         best = d
                         fa = orderA[ra]
@@ -473,30 +517,6 @@ def _relative(Pa, Pb, Rr, tr):
             Pa[2, r] * (Pb[2, 3] - Pa[2, 3])
         for c in range(3):
             Rr[r, c] = Pa[0, r] * Pb[0, c] + Pa[1, r] * Pb[1, c] + Pa[2, r] * Pb[2, c]
-
-
-@jit
-def collide_posed(IA, NA, TA, orderA, tagsA, IB, NB, TB, orderB, tagsB, Pa, Pb, pose_tol,
-                  first_only, out_pairs, out_tags):
-    """One :func:`collide_boxes` call (packed box trees) straight from the two (4, 4)
-    poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for the first
-    one that is not rigid, nothing traversed), forms the relative motion and writes
-    the face tags of the pairs found.  Returns ``(n_pairs, bv_tests, bad)``."""
-    if rigid_code(Pa, pose_tol)[0] != 0:
-        return 0, 0, 1
-    if rigid_code(Pb, pose_tol)[0] != 0:
-        return 0, 0, 2
-    Rr = np.empty((3, 3))
-    tr = np.empty(3)
-    _relative(Pa, Pb, Rr, tr)
-    seed = np.full(2, -1, dtype=np.int64)
-    n, tests = collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only,
-                             out_pairs, np.empty((STACK, 2), dtype=np.int64),
-                             np.empty((4, 3, 3)), np.empty((LEAF_BUF, 3, 3)), seed)
-    for k in range(min(n, out_pairs.shape[0])):
-        out_tags[k, 0] = tagsA[out_pairs[k, 0]]
-        out_tags[k, 1] = tagsB[out_pairs[k, 1]]
-    return n, tests, 0
 
 
 @jit
