@@ -51,7 +51,7 @@ from numba._dispatcher import compute_fingerprint
 from ._collision_types import Body, Contact, Contacts, Distance, _contact
 from ._kernels import bvh as kb
 from ._kernels._numba import prun
-from ._kernels import bvh_posed as kp
+from ._kernels import bvh_boxes as kp
 from ._kernels import bvh_query as kq
 from ._validate import as_float_array, as_int, as_mesh_arrays
 from .errors import InvalidInputError
@@ -66,7 +66,6 @@ POSE_TOL = 1e-9
 _E3 = np.empty((0, 3))
 _E33 = np.empty((0, 3, 3))
 _EK = np.empty((0, 14))
-_EI = np.empty((0, 4), dtype=np.int64)
 _EN = np.empty((0, 16))
 
 
@@ -83,6 +82,9 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
                                 "obb_center")
     leaf_size = as_int(leaf_size, "leaf_size", minimum=1)
     V, F, tags = _mesh_arrays(mesh)
+    if F.shape[0] > kp.MAX_TRIANGLES:
+        raise InvalidInputError(f"at most {kp.MAX_TRIANGLES} triangles, got {F.shape[0]}",
+                                "mesh")
     if face_tags is not None:
         tags = face_tags
     if tags is None:
@@ -103,35 +105,32 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
     body.T = kb.leaf_triangles(V, F, order)
     body._pf = None
     if kind == 2:
-        body.I, body.N = _EI, _EN
-    else:   # one record per node for the traversal (kq.pack_boxes), in two buffers
-        I, N = kq.pack_boxes(child, rng, C, R, E)
-        _pack(body, I, N)
+        body.N = _EN
+    else:   # one record per node for the traversal (kp.pack_boxes), in one buffer
+        _pack(body, kp.pack_boxes(child, rng, C, R, E))
     body.depth, body.n_nodes = int(depth), int(child.shape[0])
     body._world_pose = None      # 14-DOP trees: pose of the cached world refit
     body._world_K = None
 
 
-def _pack(body, I, N):
+def _pack(body, N):
     """One buffer per box tree for the single-call kernel (layout in
-    :mod:`geomkit._kernels.bvh_posed`); the body's ``N``, ``T``, ``I``, ``order``,
+    :mod:`geomkit._kernels.bvh_boxes`); the body's ``N``, ``T``, ``order`` and
     ``face_tags`` become views into it (nothing stored twice)."""
     n, m = N.shape[0], body.T.shape[0]
     nf = 16 * n + 9 * m
-    buf = np.empty(nf + 4 * n + 2 * m + 2)
+    buf = np.empty(nf + 2 * m + 2)
     bi = buf.view(np.int64)
     buf[:16 * n] = N.ravel()
     buf[16 * n:nf] = body.T.ravel()
-    bi[nf:nf + 4 * n] = I.ravel()
-    bi[nf + 4 * n:nf + 4 * n + m] = body.order
-    bi[nf + 4 * n + m:nf + 4 * n + 2 * m] = body.face_tags
+    bi[nf:nf + m] = body.order
+    bi[nf + m:nf + 2 * m] = body.face_tags
     bi[-2:] = n, m
     body._pf = buf
     body.N = buf[:16 * n].reshape(n, 16)
     body.T = buf[16 * n:nf].reshape(m, 3, 3)
-    body.I = bi[nf:nf + 4 * n].reshape(n, 4)
-    body.order = bi[nf + 4 * n:nf + 4 * n + m]
-    body.face_tags = bi[nf + 4 * n + m:nf + 4 * n + 2 * m]
+    body.order = bi[nf:nf + m]
+    body.face_tags = bi[nf + m:nf + 2 * m]
 
 
 def _body(x, field):
@@ -342,7 +341,7 @@ _NO_PAIRS.flags.writeable = False
 def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
     """:func:`collide` for n pose pairs in one call (serial kernel workers over pose
     ranges, on threads for batches longer than :data:`_MANY_CHUNK`; box trees reuse
-    the previous pose's first hit, see :func:`geomkit._kernels.bvh_query.collide_boxes`).
+    the previous pose's first hit, see :func:`geomkit._kernels.bvh_boxes.collide_boxes`).
 
     Parameters
     ----------
@@ -376,8 +375,8 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
         prun(kq.collide_many_kdops, n, max(4, -(-n // nt)), a.child, a.rng, a.K, a.T, a.order,
              b.child, b.rng, b.K, b.T, b.order, PA, PB, kb.KDOP_ORDER, first, col, cnt, tests)
     else:
-        prun(kq.collide_many_boxes, n, _MANY_CHUNK, a.I, a.N, a.T, a.order, b.I, b.N, b.T,
-             b.order, PA, PB, first, col, cnt, tests)
+        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a.N, a.T, a.order, b.N, b.T, b.order,
+             PA, PB, first, col, cnt, tests)
     return Contacts(col, cnt, tests)
 
 
