@@ -26,7 +26,7 @@ class Body:
     face_tags : (m,) int, optional
         A tag per face (e.g. its CAD face); defaults to ``mesh.face_surface`` for a
         :class:`geomkit.Mesh`, else zeros.  Reported with contacts.
-    leaf_size : int >= 1
+    leaf_size : int, 1 to 16
         Largest number of triangles in a leaf (default 4).
     obb_center : {"covariance", "regions"}
         Centre of the covariance that orients each OBB: the area centroid, or

@@ -81,6 +81,9 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
         raise InvalidInputError(f"expected 'covariance' or 'regions', got {obb_center!r}",
                                 "obb_center")
     leaf_size = as_int(leaf_size, "leaf_size", minimum=1)
+    if leaf_size > kq.LEAF_BUF:
+        raise InvalidInputError(f"must be <= {kq.LEAF_BUF} (the leaf tests hold a leaf's "
+                                f"triangles in a fixed buffer), got {leaf_size}", "leaf_size")
     V, F, tags = _mesh_arrays(mesh)
     if F.shape[0] > kp.MAX_TRIANGLES:
         raise InvalidInputError(f"at most {kp.MAX_TRIANGLES} triangles, got {F.shape[0]}",

@@ -302,6 +302,8 @@ def test_bad_inputs():
         Body((V[:, :2], F))
     with pytest.raises(InvalidInputError, match="face_tags"):
         Body((V, F), face_tags=[1, 2])
+    with pytest.raises(InvalidInputError, match="leaf_size: must be <= 16"):
+        Body((V, F), leaf_size=17)
     with pytest.raises(InvalidInputError, match="14-DOP"):
         collide(body("box", "obb"), np.eye(4), body("box", "kdop14"), np.eye(4))
     with pytest.raises(InvalidInputError, match="margin"):

@@ -134,23 +134,16 @@ def _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
 def _leaf_pair(NA, TA, orderA, NB, TB, orderB, i, j, Rr, tr, first_only, out_pairs,
                npairs, tbs, M, hit):
     """Triangle tests of the leaf pair ``(i, j)`` (B's triangles moved by ``(Rr,
-    tr)``); returns the new pair count (one more than ``npairs`` at most with
-    ``first_only``)."""
+    tr)``, at most ``LEAF_BUF`` of them: ``leaf_size`` is checked); returns the new
+    pair count (one more than ``npairs`` at most with ``first_only``)."""
     cap = out_pairs.shape[0]
     ra0, ra1 = _leaf_range(NA, i)
     rb0, rb1 = _leaf_range(NB, j)
-    nbl = rb1 - rb0
-    if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
-        for rb in range(nbl):
-            _move(TB, rb0 + rb, Rr, tr, tbs[rb])
+    for rb in range(rb1 - rb0):   # B's leaf triangles moved once per leaf pair
+        _move(TB, rb0 + rb, Rr, tr, tbs[rb])
     for ra in range(ra0, ra1):
         for rb in range(rb0, rb1):
-            if nbl <= LEAF_BUF:
-                trb = tbs[rb - rb0]
-            else:
-                _move(TB, rb, Rr, tr, M)
-                trb = M
-            if _intersect_point(TA[ra], trb, hit):
+            if _intersect_point(TA[ra], tbs[rb - rb0], hit):
                 if npairs < cap:
                     out_pairs[npairs, 0] = orderA[ra]
                     out_pairs[npairs, 1] = orderB[rb]

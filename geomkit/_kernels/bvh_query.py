@@ -178,7 +178,6 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     tbs = np.empty((LEAF_BUF, 3, 3))
     hit = np.empty(3)
     ta = np.empty((3, 3))
-    tb = np.empty((3, 3))
     cap = out_pairs.shape[0]
     npairs = 0
     tests = 0
@@ -202,10 +201,9 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         lb = childB[j, 0] < 0
         if la and lb:
             rb0 = rngB[j, 0]
-            nbl = rngB[j, 1] - rb0
-            if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
-                for rb in range(nbl):
-                    _move(TB, rb0 + rb, MB, mB, tbs[rb])
+            # B's leaf triangles (at most LEAF_BUF: leaf_size is checked) moved once
+            for rb in range(rngB[j, 1] - rb0):
+                _move(TB, rb0 + rb, MB, mB, tbs[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 if kind == 2:
                     _move(TA, ra, MA, mA, ta)
@@ -213,12 +211,7 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                 else:             # box trees traverse in A's frame: A does not move
                     tra = TA[ra]
                 for rb in range(rngB[j, 0], rngB[j, 1]):
-                    if nbl <= LEAF_BUF:
-                        trb = tbs[rb - rb0]
-                    else:
-                        _move(TB, rb, MB, mB, tb)
-                        trb = tb
-                    if _intersect_point(tra, trb, hit):
+                    if _intersect_point(tra, tbs[rb - rb0], hit):
                         if npairs < cap:
                             out_pairs[npairs, 0] = orderA[ra]
                             out_pairs[npairs, 1] = orderB[rb]
@@ -259,7 +252,6 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     scr = np.empty((2, 3, 3))
     sa = np.empty(4)
     ta = np.empty((3, 3))
-    tb = np.empty((3, 3))
     tbs = np.empty((LEAF_BUF, 3, 3))
     sph = np.empty((LEAF_BUF, 4))
     p = np.empty(3)
@@ -283,34 +275,27 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         lb = childB[j, 0] < 0
         if la and lb:
             rb0 = rngB[j, 0]
-            nbl = rngB[j, 1] - rb0
-            if nbl <= LEAF_BUF:     # B's leaf triangles moved once, with their spheres
-                for rb in range(nbl):
-                    _move(TB, rb0 + rb, MB, mB, tbs[rb])
-                    _sphere(tbs[rb], sph[rb])
+            # B's leaf triangles (at most LEAF_BUF: leaf_size is checked) moved once,
+            # with their bounding spheres
+            for rb in range(rngB[j, 1] - rb0):
+                _move(TB, rb0 + rb, MB, mB, tbs[rb])
+                _sphere(tbs[rb], sph[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 _move(TA, ra, MA, mA, ta)
                 _sphere(ta, sa)
-                for rb in range(rb0, rngB[j, 1]):
-                    if nbl <= LEAF_BUF:
-                        trb = tbs[rb - rb0]
-                        # bounding spheres of the two triangles: skip the exact
-                        # distance when their gap (made smaller than any rounding
-                        # of it) already reaches the best distance
-                        dc = np.sqrt((sa[0] - sph[rb - rb0, 0]) ** 2 +
-                                     (sa[1] - sph[rb - rb0, 1]) ** 2 +
-                                     (sa[2] - sph[rb - rb0, 2]) ** 2)
-                        rs = sa[3] + sph[rb - rb0, 3]
-                        if dc - rs - 1e-12 * (dc + rs) >= best:
-                            continue
-                    else:
-                        _move(TB, rb, MB, mB, tb)
-                        trb = tb
-                    d = triangle_triangle_distance(ta, trb, p, q)
+                for rb in range(rngB[j, 1] - rb0):
+                    # the two triangles' spheres: skip the exact distance when their
+                    # gap (made smaller than any rounding of it) reaches the best
+                    dc = np.sqrt((sa[0] - sph[rb, 0]) ** 2 + (sa[1] - sph[rb, 1]) ** 2 +
+                                 (sa[2] - sph[rb, 2]) ** 2)
+                    rs = sa[3] + sph[rb, 3]
+                    if dc - rs - 1e-12 * (dc + rs) >= best:
+                        continue
+                    d = triangle_triangle_distance(ta, tbs[rb], p, q)
                     if d < best:
                         best = d
                         fa = orderA[ra]
-                        fb = orderB[rb]
+                        fb = orderB[rb0 + rb]
                         out_p[:] = p
                         out_q[:] = q
                         if margin > 0.0 or d == 0.0:
