@@ -46,7 +46,11 @@ import threading
 
 import numba
 import numpy as np
-from numba._dispatcher import compute_fingerprint
+
+try:    # numba's own type fingerprint of a value (C, ~0.1 µs): what its dispatcher matches
+    from numba._dispatcher import compute_fingerprint
+except ImportError:     # pragma: no cover - a numba without it
+    compute_fingerprint = None
 
 from ._collision_types import Body, Contact, Contacts, Distance, _contact
 from ._kernels import bvh as kb
@@ -319,12 +323,19 @@ def _posed_first(*args):
     return r
 
 
+def _fp_python(x):
+    """What numba's fingerprint tells apart, for a numba without that private helper."""
+    if type(x) is not np.ndarray:
+        return None
+    f = x.flags
+    return x.dtype.str, x.ndim, f.c_contiguous, f.writeable
+
+
 _posed = None
-_fp = compute_fingerprint
-_FP44 = compute_fingerprint(np.eye(4))
+_fp = compute_fingerprint or _fp_python
+_FP44 = _fp(np.eye(4))
 _MISSES = {}
 """Non-colliding :class:`Contact` results by ``2 * bv_tests`` (immutable: shared)."""
-_S44 = (4, 4)
 
 
 _FAST_CAP = 64
