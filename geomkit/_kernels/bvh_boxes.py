@@ -86,8 +86,8 @@ def _extent(N, i):
 
 @jit_inline
 def _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
-    """:func:`geomkit._kernels.bvh_query.box_separation` ``> 0`` with ``early`` for packed nodes (same
-    arithmetic as ``_rel_box`` + :func:`geomkit._kernels.bvh_query.box_separation`): B-node ``j`` carried
+    """``box_separation(...) > 0`` with ``early`` for packed nodes (same arithmetic as
+    ``_rel_box`` + ``box_separation`` of :mod:`geomkit._kernels.bvh_query`): B-node ``j`` carried
     into A-node ``i``'s axes by the relative motion ``(Rr, tr)``."""
     for r in range(3):
         for c in range(3):
