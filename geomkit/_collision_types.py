@@ -26,7 +26,7 @@ class Body:
     face_tags : (m,) int, optional
         A tag per face (e.g. its CAD face); defaults to ``mesh.face_surface`` for a
         :class:`geomkit.Mesh`, else zeros.  Reported with contacts.
-    leaf_size : int >= 1
+    leaf_size : int, 1 to 16
         Largest number of triangles in a leaf (default 4).
     obb_center : {"covariance", "regions"}
         Centre of the covariance that orients each OBB: the area centroid, or
@@ -41,8 +41,8 @@ class Body:
     vertices : (n, 3) float; faces : (m, 3) int64; face_tags : (m,) int64
     bv : str; leaf_size : int; depth : int, depth of the tree (root depth 0)
     n_nodes : int
-    N, I : box trees' packed node records (n_nodes, 16) float64 and (n_nodes, 4)
-        int64 read by the traversal (see :mod:`geomkit._kernels.bvh_query`)
+    N : box trees' packed node records (n_nodes, 16) float64 read by the traversal
+        (see :mod:`geomkit._kernels.bvh_boxes`)
     """
 
     def __init__(self, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="covariance"):

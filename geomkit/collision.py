@@ -47,9 +47,15 @@ import threading
 import numba
 import numpy as np
 
+try:    # numba's own type fingerprint of a value (C, ~0.1 µs): what its dispatcher matches
+    from numba._dispatcher import compute_fingerprint
+except ImportError:     # pragma: no cover - a numba without it
+    compute_fingerprint = None
+
 from ._collision_types import Body, Contact, Contacts, Distance, _contact
 from ._kernels import bvh as kb
 from ._kernels._numba import prun
+from ._kernels import bvh_boxes as kp
 from ._kernels import bvh_query as kq
 from ._validate import as_float_array, as_int, as_mesh_arrays
 from .errors import InvalidInputError
@@ -64,7 +70,6 @@ POSE_TOL = 1e-9
 _E3 = np.empty((0, 3))
 _E33 = np.empty((0, 3, 3))
 _EK = np.empty((0, 14))
-_EI = np.empty((0, 4), dtype=np.int64)
 _EN = np.empty((0, 16))
 
 
@@ -80,7 +85,13 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
         raise InvalidInputError(f"expected 'covariance' or 'regions', got {obb_center!r}",
                                 "obb_center")
     leaf_size = as_int(leaf_size, "leaf_size", minimum=1)
+    if leaf_size > kq.LEAF_BUF:
+        raise InvalidInputError(f"must be <= {kq.LEAF_BUF} (the leaf tests hold a leaf's "
+                                f"triangles in a fixed buffer), got {leaf_size}", "leaf_size")
     V, F, tags = _mesh_arrays(mesh)
+    if F.shape[0] > kp.MAX_TRIANGLES:
+        raise InvalidInputError(f"at most {kp.MAX_TRIANGLES} triangles, got {F.shape[0]}",
+                                "mesh")
     if face_tags is not None:
         tags = face_tags
     if tags is None:
@@ -99,13 +110,34 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
     body.C, body.R, body.E = C, R, E
     body.K = K if kind == 2 else _EK
     body.T = kb.leaf_triangles(V, F, order)
+    body._pf = None
     if kind == 2:
-        body.I, body.N = _EI, _EN
-    else:   # one record per node for the traversal (kq.pack_boxes)
-        body.I, body.N = kq.pack_boxes(child, rng, C, R, E)
+        body.N = _EN
+    else:   # one record per node for the traversal (kp.pack_boxes), in one buffer
+        _pack(body, kp.pack_boxes(child, rng, C, R, E))
     body.depth, body.n_nodes = int(depth), int(child.shape[0])
     body._world_pose = None      # 14-DOP trees: pose of the cached world refit
     body._world_K = None
+
+
+def _pack(body, N):
+    """One buffer per box tree for the single-call kernel (layout in
+    :mod:`geomkit._kernels.bvh_boxes`); the body's ``N``, ``T``, ``order`` and
+    ``face_tags`` become views into it (nothing stored twice)."""
+    n, m = N.shape[0], body.T.shape[0]
+    nf = 16 * n + 9 * m
+    buf = np.empty(nf + 2 * m + 2)
+    bi = buf.view(np.int64)
+    buf[:16 * n] = N.ravel()
+    buf[16 * n:nf] = body.T.ravel()
+    bi[nf:nf + m] = body.order
+    bi[nf + m:nf + 2 * m] = body.face_tags
+    bi[-2:] = n, m
+    body._pf = buf
+    body.N = buf[:16 * n].reshape(n, 16)
+    body.T = buf[16 * n:nf].reshape(m, 3, 3)
+    body.order = bi[nf:nf + m]
+    body.face_tags = bi[nf + m:nf + 2 * m]
 
 
 def _body(x, field):
@@ -209,18 +241,29 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
         ``colliding`` is exact up to the orientation predicates of the triangle
         test (closed triangles: touching counts); ``pairs`` (k, 2) sorted.
     """
-    if type(a) is Body and type(b) is Body and a.kind != 2 and b.kind != 2:
-        # box trees: one kernel call (pose checks, relative motion, traversal, tags);
-        # a pose the kernel cannot take as is goes through validate_pose first
-        if not (type(pose_a) is np.ndarray and pose_a.dtype is _F64 and
-                pose_a.shape == (4, 4) and pose_a.flags.c_contiguous):
-            pose_a = validate_pose(pose_a, "pose_a")
-        if not (type(pose_b) is np.ndarray and pose_b.dtype is _F64 and
-                pose_b.shape == (4, 4) and pose_b.flags.c_contiguous):
-            pose_b = validate_pose(pose_b, "pose_b")
-        c = _collide_boxes(a, pose_a, b, pose_b, all_pairs)
-        if c is not None:
-            return c
+    if type(a) is Body and type(b) is Body and a._pf is not None and b._pf is not None:
+        # box trees: one kernel call (pose checks, relative motion, traversal, tags)
+        try:
+            W = _scratch.w
+        except AttributeError:     # per-thread scratch, reused (results are copied out)
+            W = _scratch.w = _posed_scratch(_FAST_CAP)
+        try:
+            fast = _fp(pose_a) == _FP44 and _fp(pose_b) == _FP44
+        except NotImplementedError:     # a type numba does not know
+            fast = False
+        if not fast:    # not float64 C-contiguous writable 2-D arrays: checked, converted
+            pose_a = np.array(validate_pose(pose_a, "pose_a"))
+            pose_b = np.array(validate_pose(pose_b, "pose_b"))
+        r = (_posed or _posed_first)(a._pf, b._pf, pose_a, pose_b, not all_pairs, W)
+        if r >= 0:
+            if not r & 1:
+                c = _MISSES.get(r)
+                if c is None:
+                    c = _contact(False, _NO_PAIRS, _NO_PAIRS, r >> 1)
+                    if r < 8192:
+                        _MISSES[r] = c
+                return c
+            return _hits(a, pose_a, b, pose_b, not all_pairs, W)
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
     Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")
@@ -239,31 +282,60 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
     return Contact(bool(n > 0), pairs, tags.reshape(-1, 2), int(tests))
 
 
-def _collide_boxes(a, Pa, b, Pb, all_pairs):
-    """:func:`collide` for box trees and (4, 4) float64 C-contiguous poses: pose
-    checks, relative motion, traversal and face tags in one kernel call (a single
-    call costs about what coal's does).  ``None`` for a pose that is not rigid (the
-    general path then raises the usual error)."""
-    out = _scratch.__dict__.get("out")
-    if out is None:     # per-thread output buffer (pairs, tags), reused (results copy)
-        out = _scratch.out = np.empty((2, _FAST_CAP, 2), dtype=np.int64)
-    while True:
-        n, tests, bad = kq.collide_posed(a.I, a.N, a.T, a.order, a.face_tags, b.I, b.N, b.T,
-                                         b.order, b.face_tags, Pa, Pb, POSE_TOL,
-                                         not all_pairs, out[0], out[1])
-        if bad:
-            return None
-        if n <= out.shape[1]:
-            break
-        out = np.empty((2, n, 2), dtype=np.int64)     # more pairs than the buffer
-    if n == 0:
-        return _contact(False, _NO_PAIRS, _NO_PAIRS, tests)
-    res = out[:, :n].copy()             # one copy: pairs res[0], tags res[1]
-    pairs, tags = res[0], res[1]
+def _hits(a, Pa, b, Pb, first_only, W):
+    """The :class:`Contact` of a hit found by the single-call kernel (pairs and tags
+    copied out of the scratch ``W``, sorted)."""
+    n, tests = W[kp.POSED_ANSWER:kp.POSED_ANSWER + 2].tolist()
+    cap = (W.shape[0] - kp.POSED_FIXED) // 4
+    if n > cap:                 # more pairs than the buffer: once more, larger
+        W = _posed_scratch(n)
+        kp.collide_packed(a._pf, b._pf, Pa, Pb, first_only, W)
+        cap = n
+    o = kp.POSED_FIXED
+    pairs = W[o:o + 2 * n].reshape(n, 2).copy()
+    tags = W[o + 2 * cap:o + 2 * cap + 2 * n].reshape(n, 2).copy()
     if n > 1:
-        o = np.lexsort((pairs[:, 1], pairs[:, 0]))
-        pairs, tags = pairs[o], tags[o]
+        k = np.lexsort((pairs[:, 1], pairs[:, 0]))
+        pairs, tags = pairs[k], tags[k]
     return _contact(True, pairs, tags, tests)
+
+
+def _posed_scratch(cap):
+    W = np.zeros(kp.posed_scratch_size(cap), dtype=np.int64)
+    W[kp.POSED_FIXED - 1:kp.POSED_FIXED].view(np.float64)[0] = POSE_TOL
+    return W
+
+
+def _posed_first(*args):
+    """First call of the single-call kernel, through numba's dispatcher (compiles it
+    or loads it from the cache); then keep the compiled entry point of its one
+    signature (float64 / int64 C-contiguous writable arrays, a bool) so that later
+    calls skip the dispatcher's type matching (~0.15 µs per argument).  The caller
+    passes only those types: the bodies' buffers and scratch are built so, and a
+    pose goes in only when its numba fingerprint (dtype, ndim, layout,
+    writability: what the dispatcher itself matches) is that of a float64
+    C-contiguous writable 2-D array; the kernel checks the shape."""
+    global _posed
+    r = kp.collide_packed(*args)
+    sig = tuple(numba.typeof(x) for x in args)
+    if sig in kp.collide_packed.overloads:
+        _posed = kp.collide_packed.overloads[sig].entry_point
+    return r
+
+
+def _fp_python(x):
+    """What numba's fingerprint tells apart, for a numba without that private helper."""
+    if type(x) is not np.ndarray:
+        return None
+    f = x.flags
+    return x.dtype.str, x.ndim, f.c_contiguous, f.writeable
+
+
+_posed = None
+_fp = compute_fingerprint or _fp_python
+_FP44 = _fp(np.eye(4))
+_MISSES = {}
+"""Non-colliding :class:`Contact` results by ``2 * bv_tests`` (immutable: shared)."""
 
 
 _FAST_CAP = 64
@@ -283,7 +355,7 @@ _NO_PAIRS.flags.writeable = False
 def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
     """:func:`collide` for n pose pairs in one call (serial kernel workers over pose
     ranges, on threads for batches longer than :data:`_MANY_CHUNK`; box trees reuse
-    the previous pose's first hit, see :func:`geomkit._kernels.bvh_query.collide_boxes`).
+    the previous pose's first hit, see :func:`geomkit._kernels.bvh_boxes.collide_boxes`).
 
     Parameters
     ----------
@@ -317,8 +389,8 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
         prun(kq.collide_many_kdops, n, max(4, -(-n // nt)), a.child, a.rng, a.K, a.T, a.order,
              b.child, b.rng, b.K, b.T, b.order, PA, PB, kb.KDOP_ORDER, first, col, cnt, tests)
     else:
-        prun(kq.collide_many_boxes, n, _MANY_CHUNK, a.I, a.N, a.T, a.order, b.I, b.N, b.T,
-             b.order, PA, PB, first, col, cnt, tests)
+        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a.N, a.T, a.order, b.N, b.T, b.order,
+             PA, PB, first, col, cnt, tests)
     return Contacts(col, cnt, tests)
 
 

@@ -302,6 +302,8 @@ def test_bad_inputs():
         Body((V[:, :2], F))
     with pytest.raises(InvalidInputError, match="face_tags"):
         Body((V, F), face_tags=[1, 2])
+    with pytest.raises(InvalidInputError, match="leaf_size: must be <= 16"):
+        Body((V, F), leaf_size=17)
     with pytest.raises(InvalidInputError, match="14-DOP"):
         collide(body("box", "obb"), np.eye(4), body("box", "kdop14"), np.eye(4))
     with pytest.raises(InvalidInputError, match="margin"):
@@ -357,13 +359,62 @@ def test_collide_pose_layouts_agree():
     assert c.colliding and c.pairs.flags.c_contiguous and c.tags.flags.c_contiguous
     with pytest.raises(InvalidInputError, match="pose_b"):
         collide(a, np.eye(4), b, np.diag([1.0, 1.0, -1.0, 1.0]))
+    # float64 C-contiguous 2-D arrays of another shape reach the kernel, which
+    # checks the shape; read-only poses take the validated path
+    for bad, msg in ((np.eye(5), "shape"), (np.eye(4)[:3].copy(), "shape"),
+                     (np.zeros((4, 4)), "last row")):
+        with pytest.raises(InvalidInputError, match="pose_a: .*" + msg):
+            collide(a, bad, b, np.eye(4))
+    Pa, Pb = random_poses(2, 5, spread=4.0)
+    ro = Pb.copy()
+    ro.flags.writeable = False
+    c, d = collide(a, Pa, b, Pb), collide(a, Pa, b, ro)
+    assert c.colliding and np.array_equal(c.pairs, d.pairs) and c.bv_tests == d.bv_tests
+
+
+def test_single_call_kernel_equals_batch_rows():
+    """The single-call kernel (packed buffers, root pre-test, results in the
+    per-thread scratch, a retry when more pairs than the scratch holds) and the
+    batch worker run the same traversal: same flags, pairs and node-test counts;
+    all pairs equal brute force (more than the 64 the scratch holds at first)."""
+    a, b = body("icosphere", "obb"), body("capsule", "obb")
+    Pa = np.eye(4)
+    for Pb in random_poses(40, 17, spread=10.0):
+        c = collide(a, Pa, b, Pb, all_pairs=False)
+        m = collide_many(a, b, Pa, Pb)    # one pose: no seed from an earlier pose
+        assert (c.colliding, c.bv_tests) == (bool(m.colliding[0]), int(m.bv_tests[0]))
+    (VA, FA), (VB, FB) = mesh("icosphere"), mesh("capsule")
+    Pb = np.eye(4)
+    Pb[0, 3] = 3.0
+    c = collide(a, Pa, b, Pb)
+    ref = brute_pairs(VA, FA, moved(VB, Pb), FB)
+    assert len(ref) > 64 and {tuple(x) for x in c.pairs.tolist()} == ref
+    assert c.pairs.tolist() == sorted(list(x) for x in ref)
+    again = collide(a, Pa, b, Pb)        # the scratch is reused: results are copies
+    assert np.array_equal(again.pairs, c.pairs) and np.array_equal(again.tags, c.tags)
+
+
+def test_packed_node_links():
+    """Each box node's record carries its first child or its leaf's triangle range
+    (children are numbered c, c + 1 by the builder)."""
+    from geomkit._kernels.bvh_boxes import LEAF_CODE
+    for name in ("torus", "capsule"):
+        b = body(name, "obb")
+        link = b.N[:, 15]
+        inner = b.child[:, 0] >= 0
+        assert np.array_equal(b.child[inner, 1], b.child[inner, 0] + 1)
+        assert np.array_equal(link[inner], b.child[inner, 0])
+        k = (-link[~inner]).astype(np.int64) - 1
+        assert np.array_equal(k % LEAF_CODE, b.rng[~inner, 0])
+        assert np.array_equal(k // LEAF_CODE, b.rng[~inner, 1])
+        assert np.array_equal(b.N[:, :3], b.C) and np.array_equal(b.N[:, 12:15], b.E)
 
 
 def test_batch_kernels_are_serial():
     """Project policy: no numba parallel=True kernels in the collision group (batch
     work runs on threads by _numba.prun)."""
-    from geomkit._kernels import bvh, bvh_query, triangles
-    for mod in (bvh, bvh_query, triangles):
+    from geomkit._kernels import bvh, bvh_boxes, bvh_query, triangles
+    for mod in (bvh, bvh_boxes, bvh_query, triangles):
         for name in dir(mod):
             f = getattr(mod, name)
             if hasattr(f, "targetoptions"):

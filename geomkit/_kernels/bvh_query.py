@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._numba import jit, jit_inline
-from .bvh import refit_kdop, rigid_code
+from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
 
 SAT_EPS = 1e-10
@@ -53,7 +53,8 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
 
 @jit_inline
 def box_separation(Rab, T, a, b, early, Ab):
-    """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3).
+    """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3),
+    or (without ``early``) the gap of their circumscribed spheres when larger.
 
     ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
@@ -95,6 +96,15 @@ def box_separation(Rab, T, a, b, early, Ab):
                     s /= np.sqrt(ln2)
                     if s > best:
                         best = s
+    # the boxes' circumscribed spheres: centre distance minus the half diagonals
+    # (tighter than every single axis when the boxes are apart diagonally), made
+    # smaller than any rounding of it
+    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
+    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
+        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    s = dc - rs - 1e-12 * (dc + rs)
+    if s > best:
+        best = s
     return best
 
 
@@ -138,6 +148,18 @@ def _move(T, r, M, m, out):
             out[v, k] = M[k, 0] * x + M[k, 1] * y + M[k, 2] * z + m[k]
 
 
+@jit_inline
+def _sphere(t, out):
+    """A sphere around triangle ``t`` (3, 3): centroid ``out[:3]``, radius ``out[3]``
+    (largest corner distance)."""
+    for k in range(3):
+        out[k] = (t[0, k] + t[1, k] + t[2, k]) / 3.0
+    r = 0.0
+    for v in range(3):
+        r = max(r, (t[v, 0] - out[0]) ** 2 + (t[v, 1] - out[1]) ** 2 + (t[v, 2] - out[2]) ** 2)
+    out[3] = np.sqrt(r)
+
+
 @jit
 def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                   childB, rngB, CB, RB, EB, KB, TB, orderB,
@@ -156,7 +178,6 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     tbs = np.empty((LEAF_BUF, 3, 3))
     hit = np.empty(3)
     ta = np.empty((3, 3))
-    tb = np.empty((3, 3))
     cap = out_pairs.shape[0]
     npairs = 0
     tests = 0
@@ -180,10 +201,9 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         lb = childB[j, 0] < 0
         if la and lb:
             rb0 = rngB[j, 0]
-            nbl = rngB[j, 1] - rb0
-            if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
-                for rb in range(nbl):
-                    _move(TB, rb0 + rb, MB, mB, tbs[rb])
+            # B's leaf triangles (at most LEAF_BUF: leaf_size is checked) moved once
+            for rb in range(rngB[j, 1] - rb0):
+                _move(TB, rb0 + rb, MB, mB, tbs[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 if kind == 2:
                     _move(TA, ra, MA, mA, ta)
@@ -191,12 +211,7 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                 else:             # box trees traverse in A's frame: A does not move
                     tra = TA[ra]
                 for rb in range(rngB[j, 0], rngB[j, 1]):
-                    if nbl <= LEAF_BUF:
-                        trb = tbs[rb - rb0]
-                    else:
-                        _move(TB, rb, MB, mB, tb)
-                        trb = tb
-                    if _intersect_point(tra, trb, hit):
+                    if _intersect_point(tra, tbs[rb - rb0], hit):
                         if npairs < cap:
                             out_pairs[npairs, 0] = orderA[ra]
                             out_pairs[npairs, 1] = orderB[rb]
@@ -235,9 +250,10 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
-    hit = np.empty(3)
+    sa = np.empty(4)
     ta = np.empty((3, 3))
-    tb = np.empty((3, 3))
+    tbs = np.empty((LEAF_BUF, 3, 3))
+    sph = np.empty((LEAF_BUF, 4))
     p = np.empty(3)
     q = np.empty(3)
     best = margin if margin > 0.0 else np.inf
@@ -258,15 +274,28 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
+            rb0 = rngB[j, 0]
+            # B's leaf triangles (at most LEAF_BUF: leaf_size is checked) moved once,
+            # with their bounding spheres
+            for rb in range(rngB[j, 1] - rb0):
+                _move(TB, rb0 + rb, MB, mB, tbs[rb])
+                _sphere(tbs[rb], sph[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 _move(TA, ra, MA, mA, ta)
-                for rb in range(rngB[j, 0], rngB[j, 1]):
-                    _move(TB, rb, MB, mB, tb)
-                    d = triangle_triangle_distance(ta, tb, p, q)
+                _sphere(ta, sa)
+                for rb in range(rngB[j, 1] - rb0):
+                    # the two triangles' spheres: skip the exact distance when their
+                    # gap (made smaller than any rounding of it) reaches the best
+                    dc = np.sqrt((sa[0] - sph[rb, 0]) ** 2 + (sa[1] - sph[rb, 1]) ** 2 +
+                                 (sa[2] - sph[rb, 2]) ** 2)
+                    rs = sa[3] + sph[rb, 3]
+                    if dc - rs - 1e-12 * (dc + rs) >= best:
+                        continue
+                    d = triangle_triangle_distance(ta, tbs[rb], p, q)
                     if d < best:
                         best = d
                         fa = orderA[ra]
-                        fb = orderB[rb]
+                        fb = orderB[rb0 + rb]
                         out_p[:] = p
                         out_q[:] = q
                         if margin > 0.0 or d == 0.0:
@@ -296,234 +325,6 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     if best == margin and margin > 0.0:
         best = np.inf
     return best, fa, fb, tests
-
-
-# ------------------------------------------------------------ packed box trees
-# Box trees (OBB / AABB) are also stored as one record per node, so that a node test
-# reads two cache lines per node instead of one line from each of five arrays (the
-# node tests of a query jump across the tree: memory latency, not arithmetic, is
-# most of their cost).  ``N`` (n, 16) float64: centre (0:3), axes row-major (3:12,
-# ``R[r, c] = N[3 + 3 r + c]``, axes as columns), half extents (12:15), largest
-# half extent (15); ``I`` (n, 4) int64: children (0:2, -1 for a leaf) and the
-# triangle range (2:4).  Built by :func:`pack_boxes`.
-
-
-@jit
-def pack_boxes(child, rng, C, R, E):
-    """The packed records ``(I, N)`` of a box tree (see above)."""
-    n = child.shape[0]
-    I = np.empty((n, 4), dtype=np.int64)
-    N = np.empty((n, 16))
-    for i in range(n):
-        I[i, 0] = child[i, 0]
-        I[i, 1] = child[i, 1]
-        I[i, 2] = rng[i, 0]
-        I[i, 3] = rng[i, 1]
-        for k in range(3):
-            N[i, k] = C[i, k]
-            N[i, 12 + k] = E[i, k]
-            for c in range(3):
-                N[i, 3 + 3 * k + c] = R[i, k, c]
-        N[i, 15] = max(E[i, 0], E[i, 1], E[i, 2])
-    return I, N
-
-
-@jit_inline
-def _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
-    """:func:`box_separation` ``> 0`` with ``early`` for packed nodes (same
-    arithmetic as :func:`_rel_box` + :func:`box_separation`): B-node ``j`` carried
-    into A-node ``i``'s axes by the relative motion ``(Rr, tr)``."""
-    for r in range(3):
-        for c in range(3):
-            M[r, c] = Rr[r, 0] * NB[j, 3 + c] + Rr[r, 1] * NB[j, 6 + c] + \
-                Rr[r, 2] * NB[j, 9 + c]
-    d0 = Rr[0, 0] * NB[j, 0] + Rr[0, 1] * NB[j, 1] + Rr[0, 2] * NB[j, 2] + tr[0] - NA[i, 0]
-    d1 = Rr[1, 0] * NB[j, 0] + Rr[1, 1] * NB[j, 1] + Rr[1, 2] * NB[j, 2] + tr[1] - NA[i, 1]
-    d2 = Rr[2, 0] * NB[j, 0] + Rr[2, 1] * NB[j, 1] + Rr[2, 2] * NB[j, 2] + tr[2] - NA[i, 2]
-    for r in range(3):
-        T[r] = NA[i, 3 + r] * d0 + NA[i, 6 + r] * d1 + NA[i, 9 + r] * d2
-        for c in range(3):
-            Rab[r, c] = NA[i, 3 + r] * M[0, c] + NA[i, 6 + r] * M[1, c] + \
-                NA[i, 9 + r] * M[2, c]
-            Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
-    a0 = NA[i, 12]
-    a1 = NA[i, 13]
-    a2 = NA[i, 14]
-    b0 = NB[j, 12]
-    b1 = NB[j, 13]
-    b2 = NB[j, 14]
-    for k in range(3):   # A's face normals
-        ak = a0 if k == 0 else (a1 if k == 1 else a2)
-        if abs(T[k]) - ak - (b0 * Ab[k, 0] + b1 * Ab[k, 1] + b2 * Ab[k, 2]) > 0.0:
-            return True
-    for k in range(3):   # B's face normals
-        bk = b0 if k == 0 else (b1 if k == 1 else b2)
-        if abs(T[0] * Rab[0, k] + T[1] * Rab[1, k] + T[2] * Rab[2, k]) - bk - \
-                (a0 * Ab[0, k] + a1 * Ab[1, k] + a2 * Ab[2, k]) > 0.0:
-            return True
-    for p in range(3):   # A_p x B_q
-        p1 = (p + 1) % 3
-        p2 = (p + 2) % 3
-        for q in range(3):
-            q1 = (q + 1) % 3
-            q2 = (q + 2) % 3
-            ra = NA[i, 12 + p1] * Ab[p2, q] + NA[i, 12 + p2] * Ab[p1, q]
-            rb = NB[j, 12 + q1] * Ab[p, q2] + NB[j, 12 + q2] * Ab[p, q1]
-            if abs(T[p2] * Rab[p1, q] - T[p1] * Rab[p2, q]) - ra - rb > 0.0:
-                return True
-    return False
-
-
-@jit_inline
-def _leaf_pair(IA, TA, orderA, IB, TB, orderB, i, j, Rr, tr, first_only, out_pairs,
-               npairs, tbs, M, hit):
-    """Triangle tests of the leaf pair ``(i, j)`` (B's triangles moved by ``(Rr,
-    tr)``); returns the new pair count (one more than ``npairs`` at most with
-    ``first_only``)."""
-    cap = out_pairs.shape[0]
-    rb0 = IB[j, 2]
-    nbl = IB[j, 3] - rb0
-    if nbl <= LEAF_BUF:   # B's leaf triangles moved once per leaf pair
-        for rb in range(nbl):
-            _move(TB, rb0 + rb, Rr, tr, tbs[rb])
-    for ra in range(IA[i, 2], IA[i, 3]):
-        for rb in range(rb0, IB[j, 3]):
-            if nbl <= LEAF_BUF:
-                trb = tbs[rb - rb0]
-            else:
-                _move(TB, rb, Rr, tr, M)
-                trb = M
-            if _intersect_point(TA[ra], trb, hit):
-                if npairs < cap:
-                    out_pairs[npairs, 0] = orderA[ra]
-                    out_pairs[npairs, 1] = orderB[rb]
-                npairs += 1
-                if first_only:
-                    return npairs
-    return npairs
-
-
-@jit
-def collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only, out_pairs,
-                  st, scr, tbs, seed):
-    """:func:`collide_trees` for packed box trees (OBB / AABB) in A's frame, B moved
-    by ``(Rr, tr)``; scratch passed in (``st`` (STACK, 2) int64, ``scr`` (4, 3, 3),
-    ``tbs`` (LEAF_BUF, 3, 3)) so that a batch allocates it once.
-
-    ``seed`` (2,) int64, temporal coherence for ``first_only``: a leaf pair tested
-    before the traversal (the pair that held the previous pose's first hit;
-    ``seed[0] < 0`` for none); a hit there ends the query, else the traversal runs
-    as without it (the seed pair's tests are counted in ``bv_tests``).  On return
-    ``seed`` holds the leaf pair of the first hit found (unchanged if none).
-    Returns ``(n_pairs, bv_tests)`` as :func:`collide_trees`.
-    """
-    Rab = scr[0]
-    M = scr[1]
-    Ab = scr[2]
-    T = scr[3, 0]
-    hit = scr[3, 1]
-    npairs = 0
-    tests = 0
-    st[0, 0] = 0
-    st[0, 1] = 0
-    top = 1
-    if first_only and seed[0] >= 0:   # the seed on top of the root: popped first
-        st[1, 0] = seed[0]
-        st[1, 1] = seed[1]
-        top = 2
-    while top > 0:
-        top -= 1
-        i = st[top, 0]
-        j = st[top, 1]
-        tests += 1
-        if _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
-            continue
-        la = IA[i, 0] < 0
-        lb = IB[j, 0] < 0
-        if la and lb:
-            n0 = npairs
-            npairs = _leaf_pair(IA, TA, orderA, IB, TB, orderB, i, j, Rr, tr, first_only,
-                                out_pairs, npairs, tbs, M, hit)
-            if npairs > n0:
-                if n0 == 0:
-                    seed[0] = i
-                    seed[1] = j
-                if first_only:
-                    return npairs, tests
-            continue
-        if lb or (not la and NA[i, 15] >= NB[j, 15]):
-            st[top, 0] = IA[i, 1]
-            st[top, 1] = j
-            st[top + 1, 0] = IA[i, 0]
-            st[top + 1, 1] = j
-        else:
-            st[top, 0] = i
-            st[top, 1] = IB[j, 1]
-            st[top + 1, 0] = i
-            st[top + 1, 1] = IB[j, 0]
-        top += 2
-    return npairs, tests
-
-
-@jit_inline
-def _relative(Pa, Pb, Rr, tr):
-    """Relative motion ``Ra^T [Rb | tb - ta]`` of two (4, 4) poses (B into A's frame)."""
-    for r in range(3):
-        tr[r] = Pa[0, r] * (Pb[0, 3] - Pa[0, 3]) + Pa[1, r] * (Pb[1, 3] - Pa[1, 3]) + \
-            Pa[2, r] * (Pb[2, 3] - Pa[2, 3])
-        for c in range(3):
-            Rr[r, c] = Pa[0, r] * Pb[0, c] + Pa[1, r] * Pb[1, c] + Pa[2, r] * Pb[2, c]
-
-
-@jit
-def collide_posed(IA, NA, TA, orderA, tagsA, IB, NB, TB, orderB, tagsB, Pa, Pb, pose_tol,
-                  first_only, out_pairs, out_tags):
-    """One :func:`collide_boxes` call (packed box trees) straight from the two (4, 4)
-    poses, in one dispatch: checks the poses (returns ``bad`` 1 or 2 for the first
-    one that is not rigid, nothing traversed), forms the relative motion and writes
-    the face tags of the pairs found.  Returns ``(n_pairs, bv_tests, bad)``."""
-    if rigid_code(Pa, pose_tol)[0] != 0:
-        return 0, 0, 1
-    if rigid_code(Pb, pose_tol)[0] != 0:
-        return 0, 0, 2
-    Rr = np.empty((3, 3))
-    tr = np.empty(3)
-    _relative(Pa, Pb, Rr, tr)
-    seed = np.full(2, -1, dtype=np.int64)
-    n, tests = collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only,
-                             out_pairs, np.empty((STACK, 2), dtype=np.int64),
-                             np.empty((4, 3, 3)), np.empty((LEAF_BUF, 3, 3)), seed)
-    for k in range(min(n, out_pairs.shape[0])):
-        out_tags[k, 0] = tagsA[out_pairs[k, 0]]
-        out_tags[k, 1] = tagsB[out_pairs[k, 1]]
-    return n, tests, 0
-
-
-@jit
-def collide_many_boxes(i0, i1, IA, NA, TA, orderA, IB, NB, TB, orderB, PA, PB, first_only,
-                       colliding, npairs, tests):
-    """Serial worker (run by :func:`geomkit._kernels._numba.prun`): packed box trees
-    under the pose pairs ``k`` in ``[i0, i1)`` of ``PA``, ``PB`` ((n, 4, 4) or (1, 4,
-    4), broadcast; checked rigid by the caller): flags, pair counts, node tests.
-    The relative motion carries B into A's frame (no tree is touched per pose);
-    with ``first_only`` the previous pose's hit is tried first (temporal
-    coherence, :func:`collide_boxes`)."""
-    st = np.empty((STACK, 2), dtype=np.int64)
-    scr = np.empty((4, 3, 3))
-    tbs = np.empty((LEAF_BUF, 3, 3))
-    Rr = np.empty((3, 3))
-    tr = np.empty(3)
-    seed = np.full(2, -1, dtype=np.int64)
-    buf = np.empty((0, 2), dtype=np.int64)
-    ma = PA.shape[0] > 1
-    mb = PB.shape[0] > 1
-    for k in range(i0, i1):
-        _relative(PA[k if ma else 0], PB[k if mb else 0], Rr, tr)
-        c, t = collide_boxes(IA, NA, TA, orderA, IB, NB, TB, orderB, Rr, tr, first_only,
-                             buf, st, scr, tbs, seed)
-        colliding[k] = c > 0
-        npairs[k] = c
-        tests[k] = t
 
 
 @jit

@@ -229,21 +229,22 @@ def _sweep_poses(pair, n, seed):
 SWEEP_PAIRS = ("sphere-sphere", "sphere-torus")
 
 
-def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=0):
+def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=0, repeat=3):
     """Rows of the common schema (:mod:`geomkit.bench._common`): the sample sphere
     against a second sphere or the torus, both tessellated at each mesh tolerance
-    (the size sweep), ``poses`` random poses.  Per pair and tolerance two rows, times
-    per query (median over the poses, after warm-up), against coal (``BVHModelOBBRSS``,
-    same meshes and poses):
+    (the size sweep), ``poses`` random poses.  Per pair and tolerance three rows,
+    times per query, against coal (``BVHModelOBBRSS``, same meshes and poses):
 
-    * ``min_distance`` vs ``coal.distance``: error = largest |mesh distance - exact
-      distance of the surfaces| over the poses;
-    * ``collide`` (first hit, one Python call per pose) vs ``coal.collide``: error =
-      largest |exact contact margin| (:func:`_sweep_poses`) at a pose the answer got
-      wrong (0 when every pose is right), i.e. how far from the contact boundary a
-      wrong answer can be;
-    * ``collide_many`` (first hit, all poses in one call; time / poses) against the
-      same coal loop.
+    * ``collide`` (first hit, one Python call per pose) vs ``coal.collide``, the two
+      timed pose by pose in one loop (``repeat`` passes; medians over poses and
+      passes): error = largest |exact contact margin| (:func:`_sweep_poses`) at a
+      pose the answer got wrong (0 when every pose is right), i.e. how far from the
+      contact boundary a wrong answer can be;
+    * ``collide_many`` (first hit, all poses in one call) vs coal's Python loop over
+      the same poses: total time / poses for both (the same work; medians of
+      ``repeat``);
+    * ``min_distance`` vs ``coal.distance`` (medians over poses): error = largest
+      |mesh distance - exact distance of the surfaces| over the poses.
     """
     from ._common import MISSING_COAL, coal_or_none, make_row
 
@@ -263,26 +264,6 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
             collide(a, eye, b, PB[0], all_pairs=False)        # JIT warm-up
             min_distance(a, eye, b, PB[0])
             hit, dist = np.empty(poses, bool), np.empty(poses)
-
-            def gk_hit(k):
-                hit[k] = collide(a, eye, b, PB[k], all_pairs=False).colliding
-
-            def gk_dist(k):
-                dist[k] = min_distance(a, eye, b, PB[k]).distance
-            t_hit = _median_time(gk_hit, poses)
-            t_dist = _median_time(gk_dist, poses)
-            EYE = np.broadcast_to(eye, PB.shape)
-            collide_many(a, b, EYE[:2], PB[:2])
-            t_many = []
-            for _ in range(3):
-                t0 = time.perf_counter()
-                many = collide_many(a, b, EYE, PB).colliding
-                t_many.append((time.perf_counter() - t0) / poses)
-            size = f"{len(meshes[0][1])} + {len(meshes[1][1])} triangles"
-            out = {"collide": [t_hit, _wrong(hit, touching, margin)],
-                   "collide_many": [float(np.median(t_many)), _wrong(many, touching, margin)],
-                   "min_distance": [t_dist, float(np.max(np.abs(dist - exact)))]}
-            refs = {k: dict(note=f"{size}; {MISSING_COAL}") for k in out}
             if coal is not None:
                 ca = _coal(coal, *meshes[0], coal.BVHModelOBBRSS)
                 cb = _coal(coal, *meshes[1], coal.BVHModelOBBRSS)
@@ -290,26 +271,58 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
                 tb = [coal.Transform3s(P[:3, :3].copy(), P[:3, 3].copy()) for P in PB]
                 creq, dreq = coal.CollisionRequest(), coal.DistanceRequest()
                 chit, cdist = np.empty(poses, bool), np.empty(poses)
+            t_hit, c_hit = [], []
+            for _ in range(repeat):      # collide and coal's, interleaved pose by pose
+                for k in range(poses):
+                    t0 = time.perf_counter()
+                    hit[k] = collide(a, eye, b, PB[k], all_pairs=False).colliding
+                    t_hit.append(time.perf_counter() - t0)
+                    if coal is not None:
+                        r = coal.CollisionResult()
+                        t0 = time.perf_counter()
+                        coal.collide(ca, ta, cb, tb[k], creq, r)
+                        c_hit.append(time.perf_counter() - t0)
+                        chit[k] = r.isCollision()
 
-                def c_hit(k):
-                    r = coal.CollisionResult()
-                    coal.collide(ca, ta, cb, tb[k], creq, r)
-                    chit[k] = r.isCollision()
-
+            def gk_dist(k):
+                dist[k] = min_distance(a, eye, b, PB[k]).distance
+            t_dist = _median_time(gk_dist, poses)
+            EYE = np.broadcast_to(eye, PB.shape)
+            collide_many(a, b, EYE[:2], PB[:2])
+            t_many, c_loop = [], []
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                many = collide_many(a, b, EYE, PB).colliding
+                t_many.append((time.perf_counter() - t0) / poses)
+                if coal is not None:
+                    t0 = time.perf_counter()
+                    for k in range(poses):
+                        coal.collide(ca, ta, cb, tb[k], creq, coal.CollisionResult())
+                    c_loop.append((time.perf_counter() - t0) / poses)
+            size = f"{len(meshes[0][1])} + {len(meshes[1][1])} triangles"
+            out = {"collide": [float(np.median(t_hit)), _wrong(hit, touching, margin)],
+                   "collide_many": [float(np.median(t_many)), _wrong(many, touching, margin)],
+                   "min_distance": [t_dist, float(np.max(np.abs(dist - exact)))]}
+            refs = {k: dict(note=f"{size}; {MISSING_COAL}") for k in out}
+            if coal is not None:
                 def c_dist(k):
                     r = coal.DistanceResult()
                     coal.distance(ca, ta, cb, tb[k], dreq, r)
                     cdist[k] = max(0.0, r.min_distance)
-                c_hit(0)
                 c_dist(0)
+                wrong = _wrong(chit, touching, margin)
                 refs["collide"] = dict(reference_name="coal collide (OBBRSS)",
-                                       reference_seconds=_median_time(c_hit, poses),
-                                       reference_error=_wrong(chit, touching, margin),
+                                       reference_seconds=float(np.median(c_hit)),
+                                       reference_error=wrong,
                                        note=f"{size}; {int(touching.sum())}/{poses} poses "
                                             f"touch; wrong: geomkit {int((hit != touching).sum())}"
-                                            f", coal {int((chit != touching).sum())}")
-                refs["collide_many"] = dict(refs["collide"], note=f"{size}; all poses in "
-                                            "one call, time / poses; coal: one call per pose")
+                                            f", coal {int((chit != touching).sum())}; calls "
+                                            "interleaved pose by pose, medians")
+                refs["collide_many"] = dict(
+                    reference_name="coal collide loop (OBBRSS)",
+                    reference_seconds=float(np.median(c_loop)), reference_error=wrong,
+                    note=f"{size}; all poses in one call vs coal's Python loop over the "
+                         "same poses, total time / poses for both")
                 refs["min_distance"] = dict(
                     reference_name="coal distance (OBBRSS)",
                     reference_seconds=_median_time(c_dist, poses),
