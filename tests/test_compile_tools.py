@@ -36,3 +36,39 @@ def test_read_log_finds_kernels_compiled_in_two_processes(tmp_path, capsys):
     assert s["processes"] == 2 and s["duplicates"] == 1
     assert abs(s["duplicate_cpu"] - 1.0) < 1e-12 and abs(s["cpu"] - 3.0) < 1e-12
     assert "m.f" in capsys.readouterr().out
+
+
+def test_cache_is_invalidated_by_a_change_in_another_kernel_file(tmp_path):
+    """numba validates a cached kernel against its own file only, but the compiled code
+    contains its callees from other files.  geomkit's stamp covers every kernel file:
+    after a callee's file changes, the cached caller must run the new callee (it ran
+    the old one before the fix: a stale answer after an edit or a ``git pull``)."""
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import geomkit._kernels as K
+
+    pkg = tmp_path / "kcopy"
+    shutil.copytree(Path(K.__file__).parent, pkg,
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (pkg / "probe_callee.py").write_text(
+        "from ._numba import jit\n\n@jit\ndef value():\n    return 1\n")
+    (pkg / "probe_caller.py").write_text(
+        "from ._numba import jit\nfrom .probe_callee import value\n\n"
+        "@jit\ndef twice():\n    return 2 * value()\n")
+    env = {**__import__("os").environ, "PYTHONPATH": str(tmp_path),
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    run = [sys.executable, "-c", "from kcopy.probe_caller import twice; print(twice())"]
+
+    def out():
+        return subprocess.run(run, env=env, capture_output=True, text=True,
+                               check=True).stdout.strip()
+
+    assert out() == "2"
+    assert out() == "2"  # from the cache
+    assert any((tmp_path / "cache").rglob("*probe_caller*.nbi"))
+    (pkg / "probe_callee.py").write_text(
+        "from ._numba import jit\n\n@jit\ndef value():\n    return 5\n")
+    assert out() == "10"

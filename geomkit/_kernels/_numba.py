@@ -1,7 +1,9 @@
 """numba policy for every geomkit kernel, set in one place.
 
 * ``cache=True``: compiled code is stored on disk next to the sources, so only the
-  first import on a machine pays the compile time.
+  first import on a machine pays the compile time.  A cache entry is valid for the
+  exact sources of every kernel file (:class:`_PackageStamp`): numba's own check
+  looks only at the kernel's file, while its code includes callees from others.
 * ``nogil=True``: kernels release the GIL and can run in threads.
 * fastmath allows only contraction (fused multiply-add) and signed-zero freedom: no
   ``nnan``/``ninf`` (NaN checks must keep working) and no reassociation (results stay
@@ -18,12 +20,14 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numba
-from numba.core import errors, types
+from numba.core import caching, errors, types
 from numba.core.registry import CPUDispatcher
 
 # The OpenMP layer parks idle threads deeply: every parallel call then pays ~7 ms of
@@ -37,7 +41,62 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 FASTMATH = {"contract", "nsz"}
 
 
-class _Dispatcher(CPUDispatcher):
+def _kernels_stamp() -> bytes:
+    """SHA-256 of every kernel source file (this package), computed once per process."""
+    global _STAMP
+    if _STAMP is None:
+        h = hashlib.sha256()
+        here = Path(__file__).resolve().parent
+        for f in sorted(here.glob("*.py")):
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
+        _STAMP = h.digest()
+    return _STAMP
+
+
+_STAMP = None
+
+
+class _PackageStamp:
+    """Cache locator mixin: a kernel's cache entry is valid only for the exact sources
+    of *every* kernel file, not just its own.  numba checks only the file defining a
+    function, but a kernel's compiled code includes its callees from other files
+    (numba links them in): after an edit of ``bvh_query.py`` (or a ``git pull`` in an
+    editable install) a cached caller in ``motion.py`` would keep running the old
+    callee.  Any change in ``geomkit/_kernels`` therefore recompiles every kernel."""
+
+    def get_source_stamp(self):
+        return (super().get_source_stamp(), _kernels_stamp())
+
+
+class _UserProvidedLocator(_PackageStamp, caching.UserProvidedCacheLocator):
+    pass
+
+
+class _InTreeLocator(_PackageStamp, caching.InTreeCacheLocator):
+    pass
+
+
+class _UserWideLocator(_PackageStamp, caching.UserWideCacheLocator):
+    pass
+
+
+class _CacheImpl(caching.CompileResultCacheImpl):
+    _locator_classes = [_UserProvidedLocator, _InTreeLocator, _UserWideLocator]
+
+
+class _FunctionCache(caching.FunctionCache):
+    _impl_class = _CacheImpl
+
+
+class _CachedDispatcher(CPUDispatcher):
+    """numba's CPU dispatcher with the package-wide cache stamp (:class:`_PackageStamp`)."""
+
+    def enable_caching(self):
+        self._cache = _FunctionCache(self.py_func)
+
+
+class _Dispatcher(_CachedDispatcher):
     """numba's CPU dispatcher, except that a call from another kernel compiles the
     callee for the plain types of its arguments, not their literal types.
 
@@ -58,21 +117,22 @@ class _Dispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
 
-def _decorator(cache=True, **options):
+def _decorator(cache=True, dispatcher=None, **options):
     targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
                          **options)
+    cls = _Dispatcher if dispatcher is None else dispatcher
 
     def wrap(func):
         if numba.config.DISABLE_JIT:
             return func
-        disp = _Dispatcher(py_func=func, locals={}, targetoptions=targetoptions)
+        disp = cls(py_func=func, locals={}, targetoptions=targetoptions)
         if cache:
             disp.enable_caching()
         return disp
     return wrap
 
 
-jit = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+jit = _decorator(dispatcher=_CachedDispatcher)
 """Decorator for serial kernels."""
 
 jit_plain = _decorator()
@@ -83,8 +143,7 @@ the default: a literal derivative order or size lets LLVM unroll the small loops
 the evaluation kernels (tessellating freeform_1 at 1e-3 looked ~15 % slower with
 every kernel compiled for plain types, noisy runs on a loaded machine)."""
 
-jit_inline = numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
-                        inline="always")
+jit_inline = _decorator(dispatcher=_CachedDispatcher, inline="always")
 """Decorator for tiny helpers called in hot loops with array arguments: inlined at the
 numba IR level, which removes the per-call reference counting of array arguments
 (measured: a heap push/pop with array arguments cost ~50 ns as a call)."""
@@ -92,8 +151,7 @@ numba IR level, which removes the per-call reference counting of array arguments
 
 def pjit(func):
     """Decorator for batch kernels parallel over their outer ``prange`` loop."""
-    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, parallel=True,
-                      error_model="numpy")(func)
+    return _decorator(dispatcher=_CachedDispatcher, parallel=True)(func)
 
 
 prange = numba.prange
