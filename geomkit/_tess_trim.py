@@ -35,8 +35,9 @@ class TrimPolylines:
     segments) are built on first use.
     """
 
-    def __init__(self, surface: Surface, chord_tol: float):
+    def __init__(self, surface: Surface, chord_tol: float, affine: bool = False):
         self.surface = surface
+        self.affine = affine  # S maps UV chords to 3-D chords: sample the curve only
         (u0, u1), (v0, v1) = surface.domain
         self.loops = []
         self.domain_loop = False
@@ -60,8 +61,9 @@ class TrimPolylines:
             for pts in self.loops:
                 poly = shapely.make_valid(shapely.Polygon(pts))
                 region = poly if region is None else shapely.symmetric_difference(region, poly)
-            self._region = shapely.intersection(region, box)
-            shapely.prepare(self._region)
+            # the polylines are clipped to the domain: the region lies in the box
+            shapely.prepare(region)
+            self._region = region
         return self._region
 
     @property
@@ -99,7 +101,7 @@ class TrimPolylines:
             while True:
                 n = trim_polyline(c.homogeneous, c.degree, c.knots, t, u0, v0, u1, v1,
                                   s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                  chord_tol, buf)
+                                  chord_tol, not self.affine, buf)
                 if n >= 0:
                     break
                 buf = np.empty((4 * len(buf), 3))
@@ -169,78 +171,86 @@ def affine_map(s: Surface, size: float):
     return o, a, b
 
 
-def planar_trimmed(trim: TrimPolylines) -> np.ndarray:
-    """(M, 3, 2) UV triangles, counter-clockwise, covering the trimmed region of a
-    surface that is an affine map of its parameters (:func:`affine_map`), with every
-    edge of the region's boundary (the trim polylines clipped to the domain, with the
-    domain edges) as a triangle edge, and no point added.
+def planar_trimmed(trim: TrimPolylines):
+    """``(uv (n, 2), faces (m, 3))``: a triangulation of the trimmed region of a
+    surface that is an affine map of its parameters (:func:`affine_map`), faces
+    counter-clockwise in UV, with every edge of the region's boundary (the trim
+    polylines clipped to the domain, and the domain edges) as a triangle edge and no
+    point added.  ``m == 0`` for an empty region.
 
-    The Delaunay triangulation of the boundary vertices (Qhull, via scipy) is tried
+    The Delaunay triangulation of the boundary vertices (GEOS, via shapely) is tried
     first: when it already holds every boundary edge, no triangle crosses the boundary
-    and the triangles inside the region (centroid test) are the answer, a constrained
-    Delaunay triangulation.  It is checked (every boundary edge present, no triangle
-    of zero area kept, the kept area equal to the region's) and otherwise the region
-    is triangulated by GEOS's constrained Delaunay rule (shapely), which is exact but
-    grows quadratically with the vertex count (13 ms against 0.5 ms here at 500
-    vertices)."""
+    and the triangles inside the region (centroid test) are the constrained Delaunay
+    triangulation.  That is checked (every boundary edge present, the kept area equal
+    to the region's, no triangle of zero area); otherwise the region is triangulated
+    by GEOS's constrained Delaunay rule, which needs no check but grows quadratically
+    with the vertex count (measured 6-20x slower at 500 vertices)."""
     import shapely
 
     region = trim.region
-    tri = _delaunay_inside(region)
-    if tri is None:
-        parts = shapely.get_parts(shapely.constrained_delaunay_triangles(region))
-        if not len(parts):
-            return np.empty((0, 3, 2))
-        tri = shapely.get_coordinates(parts).reshape(-1, 4, 2)[:, :3, :]
-    a = tri[:, 1] - tri[:, 0]
-    b = tri[:, 2] - tri[:, 0]
+    if region.is_empty:
+        return np.empty((0, 2)), np.empty((0, 3), dtype=np.int64)
+    uv, F = _delaunay_inside(region)
+    if F is None:
+        xy = shapely.get_coordinates(shapely.constrained_delaunay_triangles(region))
+        tri = xy.reshape(-1, 4, 2)[:, :3, :]
+        uv, F = _indexed(tri)
+    if not len(F):
+        return uv, F
+    a = uv[F[:, 1]] - uv[F[:, 0]]
+    b = uv[F[:, 2]] - uv[F[:, 0]]
     area2 = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    keep = area2 != 0
-    tri = tri[keep]
-    flip = area2[keep] < 0
-    tri[flip] = tri[flip][:, ::-1]
-    return np.ascontiguousarray(tri)
+    F = F[area2 != 0]
+    flip = area2[area2 != 0] < 0
+    F[flip] = F[flip][:, ::-1]
+    return uv, F
+
+
+def _indexed(tri: np.ndarray):
+    """Unique corners (sorted by u, then v) and the faces indexing them."""
+    z = np.ascontiguousarray(tri).view(np.complex128).reshape(-1)
+    uz, inv = np.unique(z, return_inverse=True)
+    uv = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
+    return uv, inv.reshape(-1, 3).astype(np.int64)
 
 
 def _delaunay_inside(region):
-    """Triangles of the Delaunay triangulation of ``region``'s boundary vertices that
-    lie inside it, or None when that triangulation misses a boundary edge (or any
-    check fails)."""
+    """``(uv, faces)``: the triangles of the Delaunay triangulation of ``region``'s
+    boundary vertices that lie inside it; faces None when that triangulation misses a
+    boundary edge (or another check fails)."""
     import shapely
-    from scipy.spatial import Delaunay, QhullError
 
-    rings = shapely.get_rings(shapely.get_parts(region)) if not region.is_empty else []
-    if not len(rings):
-        return None
-    coords, ring_of = shapely.get_coordinates(rings, return_index=True)
-    last = np.r_[ring_of[1:] != ring_of[:-1], True]  # the closing repeat of each ring
-    z = coords.view(np.complex128).ravel()
-    uz, inv = np.unique(z, return_inverse=True)
-    if len(uz) < 3:
-        return None
-    pts = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
-    try:
-        dt = Delaunay(pts)
-    except QhullError:
-        return None
-    if dt.coplanar.size:  # a point left out of the triangulation
-        return None
-    T = dt.simplices
-    n = len(pts)
+    # the collection's coordinates directly: 4 per triangle (closed ring), no
+    # geometry object per triangle
+    xy = shapely.get_coordinates(shapely.delaunay_triangles(region))
+    if not len(xy) or len(xy) % 4:
+        return None, None
+    uv, T = _indexed(xy.reshape(-1, 4, 2)[:, :3, :])
+    n = len(uv)
     e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
-    have = np.unique(np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1]))
-    a, b = inv[:-1][~last[:-1]], inv[1:][~last[:-1]]  # consecutive vertices of a ring
+    have = np.sort(np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1]))
+    # the boundary edges: consecutive vertices of each ring
+    coords, ring_of = shapely.get_coordinates(shapely.get_rings(shapely.get_parts(region)),
+                                              return_index=True)
+    uz = uv.view(np.complex128).reshape(-1)
+    rz = np.ascontiguousarray(coords).view(np.complex128).reshape(-1)
+    ri = np.minimum(np.searchsorted(uz, rz), n - 1)
+    if not np.array_equal(uz[ri], rz):  # a boundary vertex not in the triangulation
+        return None, None
+    same = ring_of[1:] == ring_of[:-1]
+    a, b = ri[:-1][same], ri[1:][same]
     need = np.minimum(a, b) * n + np.maximum(a, b)
-    need = need[a != b]
-    if not np.all(np.isin(need, have, assume_unique=False)):
-        return None
-    tri = pts[T]
+    at = np.minimum(np.searchsorted(have, need), len(have) - 1)
+    if not np.array_equal(have[at], need):
+        return None, None
+    tri = uv[T]
     cen = tri.mean(axis=1)
-    tri = tri[shapely.contains_xy(region, cen[:, 0], cen[:, 1])]
+    inside = shapely.contains_xy(region, cen[:, 0], cen[:, 1])
+    tri = tri[inside]
     v1 = tri[:, 1] - tri[:, 0]
     v2 = tri[:, 2] - tri[:, 0]
     area = 0.5 * np.abs(v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0])
     if not len(tri) or not np.all(area > 0) \
             or abs(area.sum() - region.area) > 1e-9 * region.area:
-        return None
-    return tri
+        return None, None
+    return uv, T[inside]

@@ -37,7 +37,7 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
-from ._kernels.surface import surface_points
+from ._kernels.surface import _surface_points_range, surface_points
 from ._kernels.tess import chord_deviation, triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
 from ._tess_trim import TrimPolylines, affine_map, planar_trimmed
@@ -63,6 +63,10 @@ GRID_CELLS = 4096
 """Untrimmed surfaces whose first estimate asks for at most this many cells are tried
 as one uniform grid first (:func:`geomkit._quadtree.uniform_grid`): small meshes then
 cost a few kernel calls instead of the adaptive rounds' per-call overhead."""
+SERIAL_POINTS = 2048
+"""Surface points evaluated in the calling thread up to this count (a thread-pool
+dispatch costs ~0.1 ms on an idle machine, milliseconds on a busy one; 2,048 points
+cost ~0.2 ms)."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -88,7 +92,10 @@ def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
     make them; :func:`geomkit.evaluation.evaluate` checks user input)."""
     uv = np.ascontiguousarray(uv, dtype=np.float64)
     out = np.empty((uv.shape[0], 3))
-    if uv.shape[0]:
+    if uv.shape[0] <= SERIAL_POINTS:  # in this thread: a dispatch costs more
+        _surface_points_range(0, uv.shape[0], s.homogeneous, s.degree_u, s.degree_v,
+                              s.knots_u, s.knots_v, uv, out)
+    else:
         surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
     return out
 
@@ -264,15 +271,17 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float):
     the trimmed region is empty: the general path reports that)."""
     if affine_map(s, size) is None:
         return None
-    trim = TrimPolylines(s, TRIM_TARGET * tol)
-    tri_uv = planar_trimmed(trim)
-    if not len(tri_uv):
+    uv, F = planar_trimmed(TrimPolylines(s, TRIM_TARGET * tol, affine=True))
+    if not len(F):
         return None
-    V, F, UV, good = _weld(s, tri_uv, size, near_uv=False)
-    stats = {"cells": 0, "cut_cells": 0, "rounds": 0,
-             "collapsed_dropped": int(np.count_nonzero(~good)), "closed_u": False,
-             "closed_v": False, "planar_trimmed": True, "seconds": time.perf_counter() - t0}
-    return V, F[good], UV, np.zeros(int(good.sum())), tri_uv[good], stats
+    used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
+    used[F.ravel()] = True
+    index = np.cumsum(used) - 1
+    uv, F = uv[used], index[F]
+    stats = {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
+             "closed_u": False, "closed_v": False, "planar_trimmed": True,
+             "seconds": time.perf_counter() - t0}
+    return _points(s, uv), F, uv, np.zeros(len(F)), uv[F], stats
 
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
