@@ -18,8 +18,8 @@ from geomkit.tessellate import tessellate
 
 import naive
 from conftest import describe, random_surfaces
-from tesshelp import (REL, assert_manifold_oriented, boundary_loops, circle_dict, edge_report,
-                      mesh_of, plane, regular_surface, rotation)
+from tesshelp import (REL, assert_manifold_oriented, boundary_loops, case_of, circle_dict,
+                      edge_report, mesh_of, plane, regular_surface, rotation)
 
 
 # ======================================================================== 4. trims
@@ -169,3 +169,143 @@ def test_trim_loop_straying_outside_the_domain_within_tolerance():
     assert np.allclose(mesh.vertices.min(axis=0), 0) and np.allclose(mesh.vertices.max(axis=0),
                                                                      [1, 1, 0])
     assert abs(mesh.area - 1.0) < 1e-12
+
+
+# ======================================================================== trimmed planes
+def test_trim_polylines_chords_within_half_tol_of_the_exact_boundary():
+    """The kernel's trim polylines against a dense sampling of the exact boundary
+    curves S(C(t)) (``naive.trim_boundary_polylines``, 4000 points per span), both
+    ways: every dense point is within the chord target of the polyline's 3-D chords,
+    and every chord's midpoint within it (plus the dense polyline's sag) of the curve.
+    On a curved freeform with a circle trim, the non-uniformly parametrized plane
+    (where UV chords bow in 3-D) and a rotated plate with a hole."""
+    from geomkit._tess_trim import TrimPolylines
+    from geomkit.tessellate import TRIM_TARGET
+
+    rng = np.random.default_rng(11)
+    nu = nv = 5
+    gu, gv = np.meshgrid(np.linspace(0, 100, nu), np.linspace(0, 100, nv), indexing="ij")
+    net = np.stack([gu, gv, 8.0 * rng.standard_normal((nu, nv))], axis=-1)
+    knots = [0, 0, 0, 0, 0.5, 1, 1, 1, 1]
+    free = Surface(3, 3, knots, knots, net, trim=[circle_dict((0.45, 0.55), 0.3)])
+    nonuni = Surface(**NONUNIFORM_PLANE, trim=[circle_dict((0.5, 0.3), 0.25)])
+    outer = [[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]]
+    plate = plane(80.0, 30.0, [outer, circle_dict((0.4, 0.6), 0.2)], rotation(0.3, -1.1, 2.0))
+    for s in (free, nonuni, plate):
+        for tol in (1e-1, 1e-2):
+            target = TRIM_TARGET * tol
+            loops = TrimPolylines(s, target).loops
+            mine = [s.evaluate(L) for L in loops]
+            dense, sag = naive.trim_boundary_polylines(s)
+            dense = [d for d in dense if np.ptp(d, axis=0).max() > 0]
+            if len(mine) < len(dense):   # the domain rectangle is left out (exact)
+                dense = dense[len(dense) - len(mine):]
+            X = np.concatenate(dense)
+            d1 = naive.point_polyline_distance(X, mine).max()
+            mids = np.concatenate([0.5 * (m[1:] + m[:-1]) for m in mine])
+            d2 = naive.point_polyline_distance(mids, dense).max() - sag
+            assert max(d1, d2) <= target * REL, (s, tol, d1, d2, target)
+
+
+def test_trimmed_plane_direct_path_matches_the_cell_path(monkeypatch):
+    """The plate with a hole through the direct path (no cells) and, with it switched
+    off, through the cell path: both hold tol by the independent sampler, both have
+    the hole as a second boundary loop with its vertices on the circle, and their
+    areas agree with the analytic area within the chord bound."""
+    import importlib
+
+    T = importlib.import_module("geomkit.tessellate")
+    case = case_of("plate_with_hole")
+    tol = 1e-2
+    direct = tessellate(case.surfaces, tol)
+    monkeypatch.setattr(T, "affine_map", lambda s, size: None)
+    cells = tessellate(case.surfaces, tol)
+    assert direct.stats["surfaces"][0].get("planar_trimmed") is True
+    assert "planar_trimmed" not in cells.stats["surfaces"][0]
+    truth = case.truth["area"]
+    for mesh in (direct, cells):
+        assert mesh.max_deviation <= tol
+        r = naive.sample_mesh_deviation(mesh, case.surfaces, exact_above=tol)
+        assert r["to_surface"] <= tol * REL and r["to_mesh"] <= tol * REL, r
+        assert_manifold_oriented(mesh.faces)
+        assert boundary_loops(mesh.faces) == 2
+        assert abs(mesh.area - truth) <= tol * 2 * math.pi * 20.0
+        rep = edge_report(mesh.faces)
+        bv = np.unique(rep["edges"][rep["count"] == 1])
+        rho = np.hypot(mesh.vertices[bv, 0] - 50.0, mesh.vertices[bv, 1] - 50.0)
+        assert np.abs(rho[rho < 30] - 20.0).max() <= 1e-9
+
+
+def test_planar_triangulation_falls_back_when_delaunay_misses_a_boundary_edge():
+    """A comb-shaped trim (long thin teeth) whose vertices' Delaunay triangulation
+    crosses the boundary: the check sees it and the constrained triangulation is used;
+    either way the triangles cover exactly the polygon (area, shapely containment)
+    and every boundary edge is a triangle edge."""
+    import shapely
+
+    from geomkit._tess_trim import TrimPolylines, _delaunay_inside, planar_trimmed
+
+    teeth = []
+    for i in range(6):
+        x = 0.1 + 0.13 * i
+        teeth += [[x, 0.1], [x + 0.02, 0.9], [x + 0.07, 0.9], [x + 0.09, 0.1 + 0.05]]
+    comb = teeth + [[0.95, 0.1 + 0.05], [0.95, 0.05], [0.1, 0.05], teeth[0]]
+    s = plane(10.0, 10.0, [comb])
+    trim = TrimPolylines(s, 1e-3)
+    region = trim.region
+    assert _delaunay_inside(region)[1] is None, "the comb no longer needs the fallback"
+    uv, F = planar_trimmed(trim)
+    tri = uv[F]
+    a = tri[:, 1] - tri[:, 0]
+    b = tri[:, 2] - tri[:, 0]
+    area2 = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    assert np.all(area2 > 0)
+    assert abs(0.5 * area2.sum() - region.area) <= 1e-12
+    polys = shapely.polygons(tri)
+    assert shapely.covers(shapely.buffer(region, 1e-12), polys).all()
+    P = np.asarray(comb)
+    keys = {tuple(sorted((tuple(p), tuple(q)))) for t in tri for p, q in
+            ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    for p, q in zip(P[:-1], P[1:]):
+        assert tuple(sorted((tuple(p), tuple(q)))) in keys, (p, q)
+    mesh = tessellate(s, 1e-3)
+    assert mesh.stats["surfaces"][0].get("planar_trimmed") is True
+    assert_manifold_oriented(mesh.faces) and boundary_loops(mesh.faces) == 1
+    assert abs(mesh.area - 100.0 * region.area) <= 1e-9
+
+
+def test_affine_test_uses_greville_abscissae():
+    """A degree-2 B-spline over three spans whose net is the affine image of its
+    Greville abscissae is an affine map (two triangles, deviation 0, vertices on S),
+    trimmed too (direct path, area exact for a polygon hole); moving one interior
+    control point in the plane (still flat, no longer affine) sends it to the cell
+    path."""
+    from geomkit._tess_trim import affine_map
+
+    ku = [0, 0, 0, 0.2, 0.7, 1, 1, 1]
+    kv = [0, 0, 0.5, 1, 1]
+    gu = np.array([(ku[i + 1] + ku[i + 2]) / 2 for i in range(5)])
+    gv = np.array(kv[1:4])
+    o, a, b = np.array([1.0, 2, 3]), np.array([40.0, 5, 0]), np.array([-3.0, 20, 7])
+    net = o + gu[:, None, None] * a + gv[None, :, None] * b
+    s = Surface(2, 1, ku, kv, net)
+    assert affine_map(s, s.size) is not None
+    m = tessellate(s, 1e-3)
+    assert len(m.faces) == 2 and m.max_deviation == 0.0
+    assert np.allclose(s.evaluate(m.uv), m.vertices, atol=1e-12)
+    hole = [[0.3, 0.3], [0.6, 0.35], [0.5, 0.7], [0.3, 0.3]]
+    outer = [[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]]
+    st_ = Surface(2, 1, ku, kv, net, trim=[outer, hole])
+    mt = tessellate(st_, 1e-3)
+    assert mt.stats["surfaces"][0].get("planar_trimmed") is True
+    full = np.linalg.norm(np.cross(a, b))
+    hole_uv = 0.5 * abs((0.6 - 0.3) * (0.7 - 0.3) - (0.5 - 0.3) * (0.35 - 0.3))
+    assert abs(mt.area - full * (1 - hole_uv)) <= 1e-9 * full
+    r = naive.sample_mesh_deviation(mt, [st_], exact_above=1e-3)
+    assert r["to_surface"] <= 1e-9 and r["to_mesh"] <= 1e-9
+    bent = net.copy()
+    bent[2, 1] += 0.2 * a          # in the plane: flat, but S is no longer affine
+    s2 = Surface(2, 1, ku, kv, bent, trim=[outer, hole])
+    assert affine_map(s2, s2.size) is None
+    m2 = tessellate(s2, 1e-3)
+    assert "planar_trimmed" not in m2.stats["surfaces"][0] and m2.max_deviation <= 1e-3
