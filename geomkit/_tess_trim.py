@@ -165,8 +165,8 @@ def affine_map(s: Surface, size: float):
         if np.abs(G @ coef - X).max() > AFFINE_REL * size:
             return None
         o, a, b = coef
-    n = np.cross(a, b)
-    if not np.dot(n, n) > 1e-24 * np.dot(a, a) * np.dot(b, b):
+    n = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    if not n[0] ** 2 + n[1] ** 2 + n[2] ** 2 > 1e-24 * np.dot(a, a) * np.dot(b, b):
         return None  # degenerate (a line or a point)
     return o, a, b
 

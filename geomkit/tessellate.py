@@ -286,9 +286,6 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float):
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     t0 = time.perf_counter()
-    ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
-    vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
-    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     size = s.size
     if not s.trim and max_angle is None and max_edge is None:
         flat = _affine_plane(s, size)
@@ -296,6 +293,10 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
             return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
                             "closed_u": False, "closed_v": False, "affine_plane": True,
                             "seconds": time.perf_counter() - t0},)
+    ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
+    vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    if not s.trim and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
