@@ -11,7 +11,9 @@ Method (Paper 1 step 1, then beyond it):
    ``S(C(t_i))``–``S(C(t_i+1))`` deviate at most ``tol / 2`` from the exact boundary
    curve ``S(C(t))``, and from the image under ``S`` of the UV chord (the mesh
    boundary runs through UV-chord points where it crosses cell edges) — checked at
-   interior samples, split at parameter midpoints.
+   interior samples; a failing segment is split into as many equal parameter parts
+   as its measured error predicts (:mod:`geomkit._kernels.tess_trim`, one kernel
+   call per trim piece).
 3. **Triangles.**  A cell untouched by the trim becomes two triangles (the diagonal
    with the smaller deviation), or, when finer neighbours put hanging nodes on its
    edges, a fan around its centre — so there are no cracks between levels.  A cell
@@ -24,7 +26,13 @@ Method (Paper 1 step 1, then beyond it):
    reported ``face_deviation`` / ``max_deviation`` are these measurements: the
    parametric gap ``|S(uv) - T(uv)|``, an upper bound of the distance both ways at
    each sample.
-5. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
+5. **Planes.**  A surface that is an affine map of its parameters (the net is the
+   affine image of its Greville abscissae, equal weights) is exact on any UV
+   triangle: untrimmed it is its two corner triangles; trimmed, the region's
+   polygon (the trim polylines) is triangulated once, without cells, by the
+   constrained Delaunay rule (:mod:`geomkit._tess_trim`).  Deviation 0; the
+   boundary is the trim polylines of step 2.
+6. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
    closed seams) are merged and the triangles they collapse dropped, so a sphere is
    watertight and no triangle has zero area; faces are counter-clockwise in UV, i.e.
    oriented with ``S_u x S_v``.
@@ -38,7 +46,7 @@ import numpy as np
 
 from . import _quadtree as qt
 from ._kernels.surface import _surface_points_range, surface_points
-from ._kernels.tess import chord_deviation, triangle_deviation
+from ._kernels.tess import triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
 from ._tess_trim import TrimPolylines, affine_map, planar_trimmed
 from ._validate import as_int
