@@ -21,8 +21,8 @@ Method (Paper 1 step 1, then beyond it):
    edge crossings and the trim points inside it) and triangulated by the
    constrained Delaunay rule, keeping the trim edges (GEOS via shapely).
 4. **Measured guarantee.**  Every triangle is sampled against the exact surface at
-   ``(k+1)(k+2)/2`` barycentric points (``k = 8``); cells holding a triangle above
-   ``tol`` are split and the mesh rebuilt, until every triangle passes.  The
+   ``(k+1)(k+2)/2`` barycentric points (``k = 6`` by default); cells holding a
+   triangle above ``tol`` are split and the mesh rebuilt, until every triangle passes.  The
    reported ``face_deviation`` / ``max_deviation`` are these measurements: the
    parametric gap ``|S(uv) - T(uv)|``, an upper bound of the distance both ways at
    each sample.
