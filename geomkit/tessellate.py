@@ -11,7 +11,9 @@ Method (Paper 1 step 1, then beyond it):
    ``S(C(t_i))``–``S(C(t_i+1))`` deviate at most ``tol / 2`` from the exact boundary
    curve ``S(C(t))``, and from the image under ``S`` of the UV chord (the mesh
    boundary runs through UV-chord points where it crosses cell edges) — checked at
-   interior samples, split at parameter midpoints.
+   interior samples; a failing segment is split into as many equal parameter parts
+   as its measured error predicts (:mod:`geomkit._kernels.tess_trim`, one kernel
+   call per trim piece).
 3. **Triangles.**  A cell untouched by the trim becomes two triangles (the diagonal
    with the smaller deviation), or, when finer neighbours put hanging nodes on its
    edges, a fan around its centre — so there are no cracks between levels.  A cell
@@ -19,12 +21,18 @@ Method (Paper 1 step 1, then beyond it):
    edge crossings and the trim points inside it) and triangulated by the
    constrained Delaunay rule, keeping the trim edges (GEOS via shapely).
 4. **Measured guarantee.**  Every triangle is sampled against the exact surface at
-   ``(k+1)(k+2)/2`` barycentric points (``k = 8``); cells holding a triangle above
-   ``tol`` are split and the mesh rebuilt, until every triangle passes.  The
+   ``(k+1)(k+2)/2`` barycentric points (``k = 6`` by default); cells holding a
+   triangle above ``tol`` are split and the mesh rebuilt, until every triangle passes.  The
    reported ``face_deviation`` / ``max_deviation`` are these measurements: the
    parametric gap ``|S(uv) - T(uv)|``, an upper bound of the distance both ways at
    each sample.
-5. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
+5. **Planes.**  A surface that is an affine map of its parameters (the net is the
+   affine image of its Greville abscissae, equal weights) is exact on any UV
+   triangle: untrimmed it is its two corner triangles; trimmed, the region's
+   polygon (the trim polylines) is triangulated once, without cells, by the
+   constrained Delaunay rule (:mod:`geomkit._tess_trim`).  Deviation 0; the
+   boundary is the trim polylines of step 2.
+6. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
    closed seams) are merged and the triangles they collapse dropped, so a sphere is
    watertight and no triangle has zero area; faces are counter-clockwise in UV, i.e.
    oriented with ``S_u x S_v``.
@@ -37,12 +45,12 @@ import time
 import numpy as np
 
 from . import _quadtree as qt
-from ._kernels.surface import surface_points
-from ._kernels.tess import chord_deviation, triangle_deviation
+from ._kernels.surface import _surface_points_range, surface_points
+from ._kernels.tess import triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
+from ._tess_trim import TrimPolylines, affine_map, planar_trimmed
 from ._validate import as_int
 from .errors import InvalidInputError
-from .trimming import evaluate_trim_curve
 from .types import Mesh, Surface
 
 __all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET"]
@@ -63,110 +71,12 @@ GRID_CELLS = 4096
 """Untrimmed surfaces whose first estimate asks for at most this many cells are tried
 as one uniform grid first (:func:`geomkit._quadtree.uniform_grid`): small meshes then
 cost a few kernel calls instead of the adaptive rounds' per-call overhead."""
+SERIAL_POINTS = 2048
+"""Surface points evaluated in the calling thread up to this count (a thread-pool
+dispatch costs ~0.1 ms on an idle machine, milliseconds on a busy one; 2,048 points
+cost ~0.2 ms)."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
-
-
-# ----------------------------------------------------------------------- trims
-class _TrimPolylines:
-    """Trim loops as UV polylines whose 3-D chords are within ``TRIM_TARGET * tol``."""
-
-    def __init__(self, surface: Surface, tol: float):
-        import shapely
-
-        self.surface = surface
-        (u0, u1), (v0, v1) = surface.domain
-        self.loops = []
-        domain_loop = False
-        for loop in surface.trim:
-            pts = self._loop_polyline(loop, TRIM_TARGET * tol)
-            if self._is_domain_rectangle(pts, u0, u1, v0, v1):
-                domain_loop = True
-                continue
-            self.loops.append(pts)
-        box = shapely.box(u0, v0, u1, v1)
-        region = box if domain_loop or not self.loops else None
-        for pts in self.loops:
-            poly = shapely.make_valid(shapely.Polygon(pts))
-            region = poly if region is None else shapely.symmetric_difference(region, poly)
-        self.region = shapely.intersection(region, box)
-        shapely.prepare(self.region)
-        segs = [shapely.linestrings(np.stack([pts[:-1], pts[1:]], axis=1)) for pts in self.loops]
-        self.segments = np.concatenate(segs) if segs else np.empty(0, dtype=object)
-        self.tree = shapely.STRtree(self.segments)
-
-    @staticmethod
-    def _is_domain_rectangle(pts, u0, u1, v0, v1) -> bool:
-        eps = 1e-12 * max(u1 - u0, v1 - v0)
-        on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
-              | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
-        x, y = pts[:, 0], pts[:, 1]
-        area = 0.5 * abs(np.sum(x[:-1] * y[1:] - x[1:] * y[:-1]))
-        return bool(on.all()) and abs(area - (u1 - u0) * (v1 - v0)) <= eps * (u1 - u0 + v1 - v0)
-
-    def _loop_polyline(self, loop, chord_tol: float) -> np.ndarray:
-        s = self.surface
-        (u0, u1), (v0, v1) = s.domain
-        lo, hi = np.array([u0, v0]), np.array([u1, v1])
-        mids = np.array([0.25, 0.5, 0.75])
-        out = []
-        for c in loop.pieces:
-            p = c.degree
-            t = np.unique(c.knots[p: len(c.knots) - p])
-            if not c.is_polyline:  # a few samples per span to start
-                t = np.unique(np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])]))
-            # trim curves may stray outside the domain by the validation tolerance:
-            # the mesh boundary follows them clipped to it (S is not defined outside)
-            C = np.clip(evaluate_trim_curve(c, t)[:, 0, :], lo, hi)
-            P = _points(s, C)
-            todo = np.arange(len(t) - 1)  # segments not yet within chord_tol
-            for _ in range(60):
-                ta, tb = t[todo], t[todo + 1]
-                tm = ta[:, None] + (tb - ta)[:, None] * mids[None, :]
-                Ca, Cb = C[todo], C[todo + 1]
-                # samples of the exact curve, then of the UV chord: the mesh boundary
-                # also passes through points of the UV chord (where it crosses cell
-                # edges), mapped by S; their images must stay near the 3-D chord too,
-                # or a non-uniform parametrisation bows the boundary out
-                mid_uv = np.empty((len(todo), 2 * len(mids), 2))
-                mid_uv[:, :len(mids)] = np.clip(
-                    evaluate_trim_curve(c, tm.ravel())[:, 0, :], lo, hi).reshape(-1, len(mids), 2)
-                mid_uv[:, len(mids):] = Ca[:, None, :] + (Cb - Ca)[:, None, :] * mids[None, :, None]
-                dev = np.empty(len(todo))
-                chord_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                                Ca, Cb, P[todo], P[todo + 1], mid_uv, dev)
-                bad = todo[dev > chord_tol]
-                if not len(bad):
-                    break
-                # split the failing segments at their parameter midpoints; the halves
-                # are the next round's segments (only they are measured again)
-                tn = 0.5 * (t[bad] + t[bad + 1])
-                Cn = np.clip(evaluate_trim_curve(c, tn)[:, 0, :], lo, hi)
-                t = np.insert(t, bad + 1, tn)
-                C = np.insert(C, bad + 1, Cn, axis=0)
-                P = np.insert(P, bad + 1, _points(s, Cn), axis=0)
-                left = bad + np.arange(len(bad))
-                todo = np.sort(np.concatenate([left, left + 1]))
-            out.append(C if not out else C[1:])
-        pts = np.concatenate(out)
-        pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
-        return pts
-
-    def classify(self, lat: qt.Lattice, cells: np.ndarray) -> np.ndarray:
-        """(N,) int8: 0 outside the trimmed region, 1 inside, 2 cut by the trim."""
-        import shapely
-
-        uv = lat.cells_uv(cells)
-        state = np.zeros(cells.shape[0], dtype=np.int8)
-        if len(self.segments):
-            boxes = shapely.box(uv[:, 0], uv[:, 2], uv[:, 1], uv[:, 3])
-            hit = self.tree.query(boxes, predicate="intersects")[0]
-            state[hit] = 2
-        rest = state != 2
-        cu = 0.5 * (uv[rest, 0] + uv[rest, 1])
-        cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
-        state[rest] = shapely.contains_xy(self.region, cu, cv).astype(np.int8)
-        return state
 
 
 # ------------------------------------------------------------------ triangles
@@ -190,7 +100,10 @@ def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
     make them; :func:`geomkit.evaluation.evaluate` checks user input)."""
     uv = np.ascontiguousarray(uv, dtype=np.float64)
     out = np.empty((uv.shape[0], 3))
-    if uv.shape[0]:
+    if uv.shape[0] <= SERIAL_POINTS:  # in this thread: a dispatch costs more
+        _surface_points_range(0, uv.shape[0], s.homogeneous, s.degree_u, s.degree_v,
+                              s.knots_u, s.knots_v, uv, out)
+    else:
         surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
     return out
 
@@ -347,41 +260,51 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     return P[keep_ids], F, uniq[keep_ids], good
 
 
-def _affine_plane(s: Surface, ub, vb, size: float):
-    """Two triangles for a bilinear patch that is an affine map of its domain (a
-    parallelogram control net with equal weights): the flat triangles *are* the
-    surface, so their deviation is 0.  None for any other surface."""
-    if s.degree_u != 1 or s.degree_v != 1 or len(ub) != 2 or len(vb) != 2:
+def _affine_plane(s: Surface, size: float):
+    """Two triangles for a surface that is an affine map of its domain
+    (:func:`geomkit._tess_trim.affine_map`: e.g. a parallelogram control net with equal
+    weights): the flat triangles *are* the surface, so their deviation is 0.  None for
+    any other surface."""
+    if affine_map(s, size) is None:
         return None
-    if s.weights is not None and np.ptp(s.weights) != 0:
-        return None
-    P = s.control_points
-    if P.shape[:2] != (2, 2):
-        return None
-    eu, ev = P[1, 0] - P[0, 0], P[0, 1] - P[0, 0]
-    n = np.cross(eu, ev)
-    twist = np.abs(P[1, 1] - P[1, 0] - ev).max()
-    if twist > 1e-14 * size or not np.dot(n, n) > (1e-12 * np.dot(eu, eu) * np.dot(ev, ev)):
-        return None  # twisted (not planar-affine) or degenerate: the general paths
-    (u0, u1), (v0, v1) = (ub[0], ub[1]), (vb[0], vb[1])
+    (u0, u1), (v0, v1) = s.domain
     UV = np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
-    V = np.ascontiguousarray(P[[0, 1, 1, 0], [0, 0, 1, 1]], dtype=np.float64)
     F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
-    return V, F, UV, np.zeros(2), UV[F]
+    return _points(s, UV), F, UV, np.zeros(2), UV[F]
+
+
+def _planar_trimmed(s: Surface, tol: float, size: float, t0: float):
+    """A trimmed surface that is an affine map of its domain, meshed without cells
+    (:func:`geomkit._tess_trim.planar_trimmed`); None for any other surface (or when
+    the trimmed region is empty: the general path reports that)."""
+    if affine_map(s, size) is None:
+        return None
+    uv, F = planar_trimmed(TrimPolylines(s, TRIM_TARGET * tol, affine=True))
+    if not len(F):
+        return None
+    used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
+    used[F.ravel()] = True
+    index = np.cumsum(used) - 1
+    uv, F = uv[used], index[F]
+    stats = {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
+             "closed_u": False, "closed_v": False, "planar_trimmed": True,
+             "seconds": time.perf_counter() - t0}
+    return _points(s, uv), F, uv, np.zeros(len(F)), uv[F], stats
 
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
     t0 = time.perf_counter()
-    ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
-    vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
-    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     size = s.size
     if not s.trim and max_angle is None and max_edge is None:
-        flat = _affine_plane(s, ub, vb, size)
+        flat = _affine_plane(s, size)
         if flat is not None:
             return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
                             "closed_u": False, "closed_v": False, "affine_plane": True,
                             "seconds": time.perf_counter() - t0},)
+    ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
+    vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    if not s.trim and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
@@ -393,9 +316,13 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                      "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
                      "seconds": time.perf_counter() - t0}
             return V, F[good], UV, dev[good], tri_uv[good], stats
+    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
+        planar = _planar_trimmed(s, tol, size, t0)
+        if planar is not None:
+            return planar
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
-    trim = _TrimPolylines(s, tol) if s.trim else None
+    trim = TrimPolylines(s, TRIM_TARGET * tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = _closed_directions(s, size)
     force = None
