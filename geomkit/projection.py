@@ -40,7 +40,7 @@ from . import tolerances as tols
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
-from .tessellate import TRIM_TARGET, _closed_directions, tessellate
+from .tessellate import _closed_directions, tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
 from .types import Surface
 from .voxel import VoxelGrid
@@ -52,6 +52,11 @@ DEFAULT_MESH_TOL = 2e-3
 DEVIATION_SAFETY = 2.0
 """The triangles' measured deviations are multiplied by this in the candidate search
 (they are measured at samples, not proven)."""
+PROJ_TRIM_TARGET = 0.05
+"""The candidate mesh's trim polylines are refined to a 3-D chord error of this times
+the mesh tolerance (tessellate's own target is :data:`geomkit.tessellate.TRIM_TARGET`);
+triangles along a trim curve carry it in their bound, so a finer polyline means fewer
+near-tie candidates on parts whose triangles mostly border a trim curve."""
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
 MAX_STARTS = 16
@@ -122,7 +127,7 @@ def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
     """(m,) bool: triangles of trimmed faces with an edge on the mesh boundary.
 
     Their deviation bound must also carry the trim polyline's 3-D chord error
-    (:data:`geomkit.tessellate.TRIM_TARGET` times the mesh tolerance): along a trim
+    (:data:`PROJ_TRIM_TARGET` times the mesh tolerance): along a trim
     curve the face runs past the mesh (outer loops) or the mesh past the face (over a
     hole), so ``d(x, t) + e_t`` measured on the parametric gap alone is no upper bound
     of the distance to the trimmed face there — it pruned the nearest face of a real
@@ -272,12 +277,13 @@ class Projector:
         # coarser candidate meshes let near-tie basins slip past the candidate limit
         # (seen at 2.5x the default on freeform_1): the default is also the maximum
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
-        self.mesh = tessellate(self.surfaces, mesh_tol)
+        self.mesh = tessellate(self.surfaces, mesh_tol, _trim_target=PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
             self.mesh.face_deviation
-            + TRIM_TARGET * self.mesh.tol * _trim_boundary_triangles(self.mesh, self.trimmed)))
+            + PROJ_TRIM_TARGET * self.mesh.tol
+            * _trim_boundary_triangles(self.mesh, self.trimmed)))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
