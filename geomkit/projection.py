@@ -320,7 +320,11 @@ class Projector:
 
     # ------------------------------------------------------------------ one chunk
     def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float,
-               K: int | None = None) -> Projection:
+               K: int | None = None, prev=None) -> Projection:
+        """Project the points of one chunk.  ``K`` and ``prev`` are given to a rerun:
+        ``prev`` = (surface, uv, distance, Newton status, class, count, skip) of each
+        point's feet from the earlier pass and the candidate index it stopped at; the
+        rerun continues from there instead of repeating those Newton runs."""
         t0 = time.perf_counter()
         n = P.shape[0]
         first = K is None
@@ -332,26 +336,38 @@ class Projector:
         fst = np.zeros((n, K), dtype=np.int64)
         fcls = np.zeros((n, K), dtype=np.int8)
         nf = np.zeros(n, dtype=np.int64)
+        skip = np.zeros(n, dtype=np.int64)
+        if prev is not None:
+            k0 = prev[0].shape[1]
+            for a, b in zip((fs, fuv, fd, fst, fcls), prev[:5]):
+                a[:, :k0] = b
+            nf[:] = prev[5]
+            skip[:] = prev[6]
+        nf0 = nf.copy()
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 3), dtype=np.int64)
+        work = np.zeros((n, 4), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
         # (cache locality); the kernel's answers are per point, unpermuted below
         order = _morton_order(P, g.origin, g.voxel_size) if self.morton and n > 1 else None
+        if order is not None:
+            fs, fuv, fd, fst, fcls, nf, skip = (a[order] for a in
+                                                (fs, fuv, fd, fst, fcls, nf, skip))
         Pk = P if order is None else np.ascontiguousarray(P[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, step_tol, max_distance,
-                          K, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
+                          K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
             fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work = (
                 a[inv] for a in (fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work))
         t1 = time.perf_counter()
+        fd_raw = fd.copy()  # the kernel's feet, for a rerun that continues this pass
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
         # trimmed faces: feet outside the face (classified in the kernel) are replaced
@@ -462,7 +478,7 @@ class Projector:
                          stats={"candidate_overflow": int(np.count_nonzero(flags & 1)),
                                  "cells_opened": int(work[:, 0].sum()),
                                  "triangles_tested": int(work[:, 1].sum()),
-                                 "newton_runs": int(nf.sum()),
+                                 "newton_runs": int((nf - nf0).sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
                                  "approx_error": self.approx_error,
@@ -481,7 +497,9 @@ class Projector:
                 step = max(1, RERUN_BUDGET // K2)
                 batches = [rows[i:i + step] for i in range(0, rows.size, step)]
             for b in batches:
-                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2)
+                prev_b = (fs[b], fuv[b], fd_raw[b], fst[b], fcls[b], nf[b], work[b, 3])
+                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2,
+                                  prev_b)
                 for f in ("point", "uv", "surface", "distance", "signed_distance",
                           "normal", "status", "lower_bound", "residual", "feet_tried"):
                     getattr(out, f)[b] = getattr(sub, f)
