@@ -40,7 +40,7 @@ from . import tolerances as tols
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
-from .tessellate import TRIM_TARGET, _closed_directions, tessellate
+from .tessellate import _closed_directions, tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
 from .types import Surface
 from .voxel import VoxelGrid
@@ -52,6 +52,11 @@ DEFAULT_MESH_TOL = 2e-3
 DEVIATION_SAFETY = 2.0
 """The triangles' measured deviations are multiplied by this in the candidate search
 (they are measured at samples, not proven)."""
+PROJ_TRIM_TARGET = 0.05
+"""The candidate mesh's trim polylines are refined to a 3-D chord error of this times
+the mesh tolerance (tessellate's own target is :data:`geomkit.tessellate.TRIM_TARGET`);
+triangles along a trim curve carry it in their bound, so a finer polyline means fewer
+near-tie candidates on parts whose triangles mostly border a trim curve."""
 STEP_TOL = 1e-12
 """Newton stops when the 3-D step is below this times the model size."""
 MAX_STARTS = 16
@@ -122,7 +127,7 @@ def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
     """(m,) bool: triangles of trimmed faces with an edge on the mesh boundary.
 
     Their deviation bound must also carry the trim polyline's 3-D chord error
-    (:data:`geomkit.tessellate.TRIM_TARGET` times the mesh tolerance): along a trim
+    (:data:`PROJ_TRIM_TARGET` times the mesh tolerance): along a trim
     curve the face runs past the mesh (outer loops) or the mesh past the face (over a
     hole), so ``d(x, t) + e_t`` measured on the parametric gap alone is no upper bound
     of the distance to the trimmed face there — it pruned the nearest face of a real
@@ -272,12 +277,13 @@ class Projector:
         # coarser candidate meshes let near-tie basins slip past the candidate limit
         # (seen at 2.5x the default on freeform_1): the default is also the maximum
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
-        self.mesh = tessellate(self.surfaces, mesh_tol)
+        self.mesh = tessellate(self.surfaces, mesh_tol, _trim_target=PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
             self.mesh.face_deviation
-            + TRIM_TARGET * self.mesh.tol * _trim_boundary_triangles(self.mesh, self.trimmed)))
+            + PROJ_TRIM_TARGET * self.mesh.tol
+            * _trim_boundary_triangles(self.mesh, self.trimmed)))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
@@ -314,7 +320,11 @@ class Projector:
 
     # ------------------------------------------------------------------ one chunk
     def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float,
-               K: int | None = None) -> Projection:
+               K: int | None = None, prev=None) -> Projection:
+        """Project the points of one chunk.  ``K`` and ``prev`` are given to a rerun:
+        ``prev`` = (surface, uv, distance, Newton status, class, count, skip) of each
+        point's feet from the earlier pass and the candidate index it stopped at; the
+        rerun continues from there instead of repeating those Newton runs."""
         t0 = time.perf_counter()
         n = P.shape[0]
         first = K is None
@@ -326,26 +336,38 @@ class Projector:
         fst = np.zeros((n, K), dtype=np.int64)
         fcls = np.zeros((n, K), dtype=np.int8)
         nf = np.zeros(n, dtype=np.int64)
+        skip = np.zeros(n, dtype=np.int64)
+        if prev is not None:
+            k0 = prev[0].shape[1]
+            for a, b in zip((fs, fuv, fd, fst, fcls), prev[:5]):
+                a[:, :k0] = b
+            nf[:] = prev[5]
+            skip[:] = prev[6]
+        nf0 = nf.copy()
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 3), dtype=np.int64)
+        work = np.zeros((n, 4), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
         # (cache locality); the kernel's answers are per point, unpermuted below
         order = _morton_order(P, g.origin, g.voxel_size) if self.morton and n > 1 else None
+        if order is not None:
+            fs, fuv, fd, fst, fcls, nf, skip = (a[order] for a in
+                                                (fs, fuv, fd, fst, fcls, nf, skip))
         Pk = P if order is None else np.ascontiguousarray(P[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, step_tol, max_distance,
-                          K, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
+                          K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
             fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work = (
                 a[inv] for a in (fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work))
         t1 = time.perf_counter()
+        fd_raw = fd.copy()  # the kernel's feet, for a rerun that continues this pass
         cols = np.arange(K)[None, :]
         fd[cols >= nf[:, None]] = np.inf
         # trimmed faces: feet outside the face (classified in the kernel) are replaced
@@ -456,7 +478,7 @@ class Projector:
                          stats={"candidate_overflow": int(np.count_nonzero(flags & 1)),
                                  "cells_opened": int(work[:, 0].sum()),
                                  "triangles_tested": int(work[:, 1].sum()),
-                                 "newton_runs": int(nf.sum()),
+                                 "newton_runs": int((nf - nf0).sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
                                  "approx_error": self.approx_error,
@@ -475,7 +497,9 @@ class Projector:
                 step = max(1, RERUN_BUDGET // K2)
                 batches = [rows[i:i + step] for i in range(0, rows.size, step)]
             for b in batches:
-                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2)
+                prev_b = (fs[b], fuv[b], fd_raw[b], fst[b], fcls[b], nf[b], work[b, 3])
+                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2,
+                                  prev_b)
                 for f in ("point", "uv", "surface", "distance", "signed_distance",
                           "normal", "status", "lower_bound", "residual", "feet_tried"):
                     getattr(out, f)[b] = getattr(sub, f)

@@ -273,13 +273,14 @@ def _affine_plane(s: Surface, size: float):
     return _points(s, UV), F, UV, np.zeros(2), UV[F]
 
 
-def _planar_trimmed(s: Surface, tol: float, size: float, t0: float):
+def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
+                    trim_target: float = TRIM_TARGET):
     """A trimmed surface that is an affine map of its domain, meshed without cells
     (:func:`geomkit._tess_trim.planar_trimmed`); None for any other surface (or when
     the trimmed region is empty: the general path reports that)."""
     if affine_map(s, size) is None:
         return None
-    uv, F = planar_trimmed(TrimPolylines(s, TRIM_TARGET * tol, affine=True))
+    uv, F = planar_trimmed(TrimPolylines(s, trim_target * tol, affine=True))
     if not len(F):
         return None
     used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
@@ -292,7 +293,8 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float):
     return _points(s, uv), F, uv, np.zeros(len(F)), uv[F], stats
 
 
-def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
+def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
+                    trim_target: float = TRIM_TARGET):
     t0 = time.perf_counter()
     size = s.size
     if not s.trim and max_angle is None and max_edge is None:
@@ -317,12 +319,12 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
                      "seconds": time.perf_counter() - t0}
             return V, F[good], UV, dev[good], tri_uv[good], stats
     if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
-        planar = _planar_trimmed(s, tol, size, t0)
+        planar = _planar_trimmed(s, tol, size, t0, trim_target)
         if planar is not None:
             return planar
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
-    trim = TrimPolylines(s, TRIM_TARGET * tol) if s.trim else None
+    trim = TrimPolylines(s, trim_target * tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = _closed_directions(s, size)
     force = None
@@ -383,7 +385,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int):
 
 
 def tessellate(surfaces, tol: float, max_angle: float | None = None,
-               max_edge: float | None = None, samples_per_edge: int = SAMPLES_PER_EDGE) -> Mesh:
+               max_edge: float | None = None, samples_per_edge: int = SAMPLES_PER_EDGE,
+               _trim_target: float | None = None) -> Mesh:
     """Triangulate surfaces so that every triangle is within ``tol`` of its surface.
 
     Parameters
@@ -435,10 +438,13 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
     if max_angle is not None and max_angle >= np.pi:
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
+    # private: the trim polylines' chord error target (a fraction of ``tol``); the
+    # projector's candidate mesh asks for finer ones (its bounds carry this error)
+    trim_target = TRIM_TARGET if _trim_target is None else float(_trim_target)
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        V, F, UV, dev, tuv, st = _tessellate_one(s, tol, max_angle, max_edge, k)
+        V, F, UV, dev, tuv, st = _tessellate_one(s, tol, max_angle, max_edge, k, trim_target)
         fuv.append(tuv)
         Vs.append(V)
         Fs.append(F + offset)

@@ -118,3 +118,29 @@ def test_freeform_nearer_of_two_close_basins():
         assert pr.distance[i] <= oracle + 1e-9
         assert abs(pr.distance[i] - oracle) < 1e-6
     _check_projection(pr, [s], P)
+
+
+def test_rerun_continues_the_first_pass(impeller, monkeypatch):
+    """Points whose first pass hit the start cap are rerun from where it stopped (its
+    feet kept, its Newton runs not repeated): the same answers as one pass with no
+    cap, and every Newton run counted once (``newton_runs`` equals the feet kept)."""
+    import geomkit.projection as gp
+
+    rng = np.random.default_rng(3)
+    lo = np.min([s.bounds[0] for s in impeller], axis=0)
+    hi = np.max([s.bounds[1] for s in impeller], axis=0)
+    P = rng.uniform(lo, hi, (150, 3))  # box points: many candidates within reach
+    pr = geomkit.Projector(impeller)
+    P = P[pr.project(P).feet_tried < 127]  # where the int8 count of feet is exact
+    two = pr.project(P)
+    assert two.stats["start_cap_reruns"] > 10
+    assert two.stats["not_proven"] == 0
+    # before: the rerun repeated the first pass's 16 runs of each point
+    assert two.stats["newton_runs"] == int(two.feet_tried.astype(np.int64).sum())
+    monkeypatch.setattr(gp, "MAX_STARTS_TRIMMED", 1024)
+    one = pr.project(P)
+    assert one.stats["start_cap_reruns"] == 0
+    assert np.array_equal(one.surface, two.surface)
+    assert np.array_equal(one.status, two.status)
+    assert np.abs(one.distance - two.distance).max() <= 1e-12 * pr.size
+    _check_projection(two, impeller, P)

@@ -391,8 +391,8 @@ def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, dep
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
                    trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                   max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
-                   out_flags, out_work):
+                   max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
+                   out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -432,15 +432,21 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         out_work[i, 1] = tested
         out_work[i, 2] = k
         flags = 1 if ovf else 0
-        nf = 0
+        # feet of an earlier pass (its candidates before skip[i] were tried or pruned
+        # there): continued, not repeated
+        nf = out_nf[i]
         # the mesh upper bound holds for trimmed faces too (their triangles lie on
         # the face); a Newton foot on a trimmed surface may lie outside the face,
         # so only a foot classified inside its face is an upper bound (below)
         best = UB
+        for j in range(nf):
+            if out_cls[i, j] == INSIDE:
+                best = min(best, out_d[i, j])
         if k == 0:
             flags |= 2
         rest = np.inf
-        for c in range(k):
+        stop = k
+        for c in range(skip[i], k):
             t = ct[c]
             lbc = cd[c] - fdev[t]
             if lbc > best:
@@ -453,6 +459,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                 # over the start cap: this candidate is not tried, the answer is
                 # proven only if it is no farther than ``rest``
                 rest = min(rest, lbc)
+                stop = min(stop, c)
                 continue
             s = face_surf[t]
             sw = cs[c]
@@ -498,6 +505,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             if cl == INSIDE:
                 best = min(best, d)
         out_nf[i] = nf
+        out_work[i, 3] = stop
         out_rest[i] = rest
         out_flags[i] = flags
 
@@ -505,8 +513,8 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
                   brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                  max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
-                  out_flags, out_work):
+                  max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
+                  out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
@@ -520,14 +528,21 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
-    ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates).
+    ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
+    of the first candidate left untried by the cap (candidates when none)).
+
+    A later pass continues an earlier one: ``out_nf[i]`` (in/out) feet are already in
+    the ``out_*`` rows (they count towards ``max_starts`` and their inside distances
+    prune), and the candidates before ``skip[i]`` (the earlier pass's
+    ``out_work[i, 3]``: each was tried or pruned there, against a bound no lower than
+    the one here) are passed over; zeros for a first pass.
     Parallel over points (:func:`prun` of :func:`_project_chunk`).
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
          closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-         max_starts, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest, out_flags,
-         out_work)
+         max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+         out_flags, out_work)
 
 
 @jit
