@@ -40,7 +40,7 @@ from . import tolerances as tols
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
 from .results import Projection
-from .tessellate import _closed_directions, tessellate
+from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
 from .types import Surface
 from .voxel import VoxelGrid
@@ -277,7 +277,8 @@ class Projector:
         # coarser candidate meshes let near-tie basins slip past the candidate limit
         # (seen at 2.5x the default on freeform_1): the default is also the maximum
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
-        self.mesh = tessellate(self.surfaces, mesh_tol, _trim_target=PROJ_TRIM_TARGET)
+        self.mesh = _tessellate(self.surfaces, mesh_tol, None, None, SAMPLES_PER_EDGE,
+                                PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (

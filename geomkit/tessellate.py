@@ -385,8 +385,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
 
 
 def tessellate(surfaces, tol: float, max_angle: float | None = None,
-               max_edge: float | None = None, samples_per_edge: int = SAMPLES_PER_EDGE,
-               _trim_target: float | None = None) -> Mesh:
+               max_edge: float | None = None, samples_per_edge: int = SAMPLES_PER_EDGE) -> Mesh:
     """Triangulate surfaces so that every triangle is within ``tol`` of its surface.
 
     Parameters
@@ -410,6 +409,13 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
         Faces keep the trim edges and are oriented with ``S_u x S_v``; vertices are
         shared across seams and poles of one surface, not between surfaces.
     """
+    return _tessellate(surfaces, tol, max_angle, max_edge, samples_per_edge, TRIM_TARGET)
+
+
+def _tessellate(surfaces, tol, max_angle, max_edge, samples_per_edge, trim_target) -> Mesh:
+    """:func:`tessellate` with the trim polylines' chord error target (a fraction of
+    ``tol``) chosen: the projector's candidate mesh asks for finer ones (its bounds
+    carry this error)."""
     if isinstance(surfaces, Surface):
         surfaces = [surfaces]
     if not isinstance(surfaces, (list, tuple)) or not surfaces \
@@ -438,9 +444,7 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
     if max_angle is not None and max_angle >= np.pi:
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
-    # private: the trim polylines' chord error target (a fraction of ``tol``); the
-    # projector's candidate mesh asks for finer ones (its bounds carry this error)
-    trim_target = TRIM_TARGET if _trim_target is None else float(_trim_target)
+    trim_target = float(trim_target)
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
