@@ -1,4 +1,5 @@
-"""Reading and writing surfaces: ``geomkit-case/1`` JSON and geomdl JSON.
+"""Reading and writing surfaces: ``geomkit-case/1`` JSON and geomdl JSON (and reading
+IGES / STEP models by suffix).
 
 ``geomkit-case/1``::
 
@@ -14,7 +15,8 @@
 geomdl JSON is what ``geomdl.exchange.export_json`` writes (``{"shape": {"type":
 "surface", "data": [...]}}``, control points flattened with v varying fastest).
 
-Files are only read by :func:`load`; :func:`save` writes a temporary file beside the
+IGES and STEP files are read by :func:`load` / :func:`load_case` too (by suffix,
+through :mod:`geomkit.iges` / :mod:`geomkit.step`).  Files are only read by :func:`load`; :func:`save` writes a temporary file beside the
 target and renames it into place, and refuses to replace an existing file unless
 ``overwrite=True``.
 """
@@ -224,26 +226,71 @@ def _units_from_doc(doc: dict, where: str):
         raise FileFormatError(f"{where}: {exc}") from None
 
 
-def load_case(path) -> Case:
-    """Read a case file with its truth block (:class:`Case`)."""
-    case = case_from_doc(_read_json(path), str(path))
+CAD_SUFFIXES = (".igs", ".iges", ".stp", ".step")
+
+
+def load_case(path, *, skip_invalid: bool = False, skip_unsupported: bool = False) -> Case:
+    """Read a model file as a :class:`Case`: JSON (``geomkit-case/1`` with its truth
+    block, or geomdl JSON), IGES (``.igs`` / ``.iges``, :func:`geomkit.read_iges`) or
+    STEP (``.stp`` / ``.step``, :func:`geomkit.read_step`, needs Open CASCADE), told
+    apart by the file's suffix.
+
+    ``skip_invalid`` / ``skip_unsupported`` are the CAD readers' options: without them a
+    face that cannot be read stops the read (every such face named); with them the
+    faces left out are listed in ``case.skipped`` (never silent: an answer computed on
+    part of a model is not the model's).  A JSON case is read whole: they do not apply.
+    """
+    p = Path(path)
+    if p.suffix.lower() in CAD_SUFFIXES:
+        return _cad_case(p, skip_invalid, skip_unsupported)
+    case = case_from_doc(_read_json(p), str(path))
     if not case.name:
-        case.name = Path(path).stem
+        case.name = p.stem
     return case
 
 
-def load(path) -> list[Surface]:
-    """Read surfaces from a ``geomkit-case/1`` or geomdl JSON file.
+def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
+    if p.suffix.lower() in (".igs", ".iges"):
+        from .iges import read_iges as read
+    else:
+        from .step import read_step as read
+    res = read(p, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
+    return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
+                skipped=list(res.skipped))
+
+
+def _reader_units(units):
+    """A CAD reader's unit name in canonical form (``"MM"`` -> ``"mm"``); a name
+    geomkit does not know is kept as the file states it."""
+    from .units import canonical_units
+
+    if not units:
+        return None
+    try:
+        return canonical_units(units)
+    except InvalidInputError:
+        return str(units)
+
+
+def load(path, *, skip_invalid: bool = False, skip_unsupported: bool = False
+         ) -> list[Surface]:
+    """Read the surfaces of a model file: ``geomkit-case/1`` or geomdl JSON, IGES or
+    STEP (by suffix; see :func:`load_case`, whose ``skipped`` list says which faces a
+    ``skip_unsupported`` / ``skip_invalid`` read left out).
 
     Raises
     ------
     FileFormatError
         Missing file, invalid JSON, unknown format or missing fields (the message
-        names the file and the field).
+        names the file and the field); a CAD file with faces that cannot be read
+        (each named) unless skipped.
     InvalidSurfaceError
         A surface that fails validation (the field path names the surface).
+    MissingDependencyError
+        A STEP file without Open CASCADE installed.
     """
-    return load_case(path).surfaces
+    return load_case(path, skip_invalid=skip_invalid,
+                     skip_unsupported=skip_unsupported).surfaces
 
 
 # --------------------------------------------------------------------- write

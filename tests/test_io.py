@@ -430,3 +430,59 @@ def test_load_malformed_geomdl_shape(tmp_path, doc):
 
 def test_load_unusable_path_is_a_file_format_error(tmp_path):
     expect_load_error(tmp_path / ("x" * 300 + ".json"), FileFormatError)
+
+
+# ------------------------------------------------- geomkit.load on CAD files
+def test_load_reads_iges_by_suffix_and_lists_skipped_faces(tmp_path):
+    """``geomkit.load`` / ``load_case`` read an IGES file through ``read_iges`` (same
+    surfaces, same refusal), instead of failing on it as invalid JSON."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).parent))
+    from igeswrite import de, write_iges
+
+    from geomkit import load, load_case, read_iges
+
+    path = tmp_path / "Part.IGES"
+    ellipse = [(104, [1 / a ** 2, 0.0, 1 / b ** 2, 0.0, 0.0, -1.0, z, a * np.cos(0.3),
+                      b * np.sin(0.3), a * np.cos(2.0), b * np.sin(2.0)], 1)
+               for a, b, z in ((4, 2, 0.0), (2, 1.5, 5.0))]
+    write_iges(path, ellipse + [(118, [de(0), de(1), 0, 1], 0),  # arc-length rulings: refused
+                                (110, [0.0, 0.0, 9.0, 1.0, 0.0, 9.0]),
+                                (110, [0.0, 1.0, 9.0, 1.0, 1.0, 9.0]),
+                                (118, [de(3), de(4), 0, 1], 0)])
+    before = path.read_bytes()
+    with pytest.raises(FileFormatError, match="118@5"):
+        load(path)
+    case = load_case(path, skip_unsupported=True)
+    ref = read_iges(path, skip_unsupported=True)
+    assert case.name == "Part" and case.units == "mm"
+    assert [s.name for s in case.surfaces] == [s.name for s in ref.surfaces] == ["118@11"]
+    assert np.array_equal(case.surfaces[0].control_points, ref.surfaces[0].control_points)
+    assert [str(x) for x in case.skipped] == [str(x) for x in ref.skipped]
+    assert [s.name for s in load(path, skip_unsupported=True)] == ["118@11"]
+    assert path.read_bytes() == before                       # the input is untouched
+
+
+def test_load_reads_step_by_suffix(tmp_path):
+    pytest.importorskip("OCP")
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    from geomkit import load, load_case, read_step
+
+    w = STEPControl_Writer()
+    w.Transfer(BRepPrimAPI_MakeCylinder(3, 7).Shape(), STEPControl_AsIs)
+    path = tmp_path / "cyl.stp"
+    w.Write(str(path))
+    surfs = load(path)
+    ref = read_step(path)
+    assert [s.name for s in surfs] == [s.name for s in ref.surfaces] and len(surfs) == 3
+    for a, b in zip(surfs, ref.surfaces):
+        assert np.array_equal(a.control_points, b.control_points)
+    case = load_case(str(path))
+    assert case.units == "mm" and case.skipped == [] and case.name == "cyl"
+
+
+def test_load_names_a_missing_cad_file(tmp_path):
+    with pytest.raises(FileFormatError, match="nope.igs"):
+        load(tmp_path / "nope.igs")

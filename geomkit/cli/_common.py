@@ -32,43 +32,18 @@ def _load_input(name: str, skip_invalid: bool = False, units: str | None = None,
     ``units`` is None when neither says.  ``skip_unsupported`` reads a CAD file on
     without the faces it cannot convert; they are listed in ``case.skipped``."""
     from .. import load_case, samples
-    from ..io import Case
-
     try:
         exists = Path(name).exists()
     except OSError:  # e.g. a name too long for the file system: load_case reports it
         exists = False
-    ext = Path(name).suffix.lower()
     if not exists and name in samples.names():
         case = samples.load_case(name)
-    elif ext in (".igs", ".iges", ".stp", ".step"):
-        if ext in (".igs", ".iges"):
-            from ..iges import read_iges as read
-        else:
-            from ..step import read_step as read
-        res = read(name, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
-        _warn_skipped(res.skipped)
-        case = Case(Path(name).stem, res.surfaces,
-                    units=_reader_units(getattr(res, "units", None)),
-                    skipped=list(res.skipped))
     else:
-        case = load_case(name)
+        case = load_case(name, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
+        _warn_skipped(case.skipped)
     if units is not None:
         case.units = units
     return case
-
-
-def _reader_units(units):
-    """A reader's unit name in canonical form (``"MM"`` -> ``"mm"``); a name geomkit
-    does not know is kept as the file states it."""
-    from ..units import canonical_units
-
-    if not units:
-        return None
-    try:
-        return canonical_units(units)
-    except InvalidInputError:
-        return str(units)
 
 
 def _warn_skipped(skipped):
