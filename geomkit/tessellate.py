@@ -346,8 +346,9 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
         return None
     used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
     used[F.ravel()] = True
-    index = np.cumsum(used) - 1
-    uv, F = uv[used], index[F]
+    if not used.all():
+        index = np.cumsum(used) - 1
+        uv, F = uv[used], index[F]
     stats = {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
              "closed_u": False, "closed_v": False, "planar_trimmed": True,
              "seconds": time.perf_counter() - t0}
