@@ -228,18 +228,11 @@ def planar_trimmed(trim: TrimPolylines):
 
 
 def _indexed(tri: np.ndarray):
-    """Unique corners (sorted by u, then v) and the faces indexing them: what
-    ``np.unique`` of the corners as complex numbers gives, by a two-key lexsort (a
-    complex sort compares slowly)."""
-    xy = np.ascontiguousarray(tri, dtype=np.float64).reshape(-1, 2)
-    order = np.lexsort((xy[:, 1], xy[:, 0]))
-    s = xy[order]
-    new = np.empty(len(s), dtype=bool)
-    new[:1] = True
-    np.logical_or(s[1:, 0] != s[:-1, 0], s[1:, 1] != s[:-1, 1], out=new[1:])
-    inv = np.empty(len(s), dtype=np.int64)
-    inv[order] = np.cumsum(new) - 1
-    return s[new], inv.reshape(-1, 3)
+    """Unique corners (sorted by u, then v) and the faces indexing them."""
+    z = np.ascontiguousarray(tri).view(np.complex128).reshape(-1)
+    uz, inv = np.unique(z, return_inverse=True)
+    uv = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
+    return uv, inv.reshape(-1, 3).astype(np.int64)
 
 
 def _delaunay_inside(region):
