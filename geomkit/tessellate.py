@@ -318,7 +318,10 @@ def _weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size:
     base = (np.arange(nu1 - 1)[:, None] * nv1 + np.arange(nv1 - 1)).ravel()
     off = np.array([[0, nv1, nv1 + 1, 0, nv1 + 1, 1], [0, nv1, 1, nv1, nv1 + 1, 1]])
     inv = (base[:, None] + off[diag]).ravel()
-    return _merge(P, UV, inv, _boundary_pairs(P, np.nonzero(on.ravel())[0], size))
+    pairs = _boundary_pairs(P, np.nonzero(on.ravel())[0], size)
+    if not len(pairs):  # distinct grid corners: every face kept
+        return P, inv.reshape(-1, 3), UV, np.ones(len(inv) // 3, dtype=bool)
+    return _merge(P, UV, inv, pairs)
 
 
 def _affine_plane(s: Surface, size: float):
