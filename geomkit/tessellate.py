@@ -368,6 +368,10 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
                             "closed_u": False, "closed_v": False, "affine_plane": True,
                             "seconds": time.perf_counter() - t0},)
+    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
+        planar = _planar_trimmed(s, tol, size, t0, trim_target)
+        if planar is not None:
+            return planar
     ub = _breakpoints(s.knots_u, s.degree_u)
     vb = _breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
@@ -388,10 +392,6 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             if not dropped:  # every face kept: no copies
                 return V, F, UV, dev, tri_uv, stats
             return V, F[good], UV, dev[good], tri_uv[good], stats
-    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
-        planar = _planar_trimmed(s, tol, size, t0, trim_target)
-        if planar is not None:
-            return planar
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
     trim = TrimPolylines(s, trim_target * tol) if s.trim else None
