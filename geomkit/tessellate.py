@@ -289,10 +289,11 @@ def _boundary_pairs(P, bnd, size):
     r = WELD_REL * size
     Q = P[bnd]
     # no pair when the points' projections on a unit-or-shorter direction, sorted, are
-    # all more than 2 r apart (a pair within r projects within r; the factor 2 covers
-    # the projections' rounding): an open surface skips the tree
+    # all further apart than r plus the projections' rounding (a pair within r projects
+    # within r; a dot product of 3 terms errs by at most ~5 ulp of max |Q| each, so
+    # 1e-14 max |Q| and a factor 2 on r are ample): an open surface skips the tree
     gaps = np.diff(np.sort(Q @ _WELD_DIRECTION))
-    if (gaps > 2.0 * r).all():
+    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
         return np.empty((0, 2), np.int64)
     from scipy.spatial import cKDTree
 

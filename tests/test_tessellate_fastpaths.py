@@ -115,3 +115,16 @@ def test_breakpoints_and_span_samples_match_numpy():
         t = np.unique(np.cumsum(rng.random(n) * rng.choice([1e-7, 1.0, 1e4], n)) - 3.0)
         want = np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])])
         assert np.array_equal(_span_samples(t, 5).ravel(), want)
+
+
+def test_boundary_pairs_far_from_the_origin():
+    """Coordinates of 1e6 with pairs at 0.5 r: the projections' rounding (~1e-10)
+    is the order of r itself; the pre-test must still leave them to the tree."""
+    rng = np.random.default_rng(11)
+    P = 1e6 + rng.random((30, 3))
+    r = T.WELD_REL * 1.0
+    P[20:] = P[:10] + rng.normal(size=(10, 3)) * (0.5 * r / np.sqrt(3) / 3)
+    got = {tuple(sorted(p)) for p in T._boundary_pairs(P, np.arange(30), 1.0).tolist()}
+    d = np.linalg.norm(P[:, None] - P[None], axis=2)
+    want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
+    assert got == want and len(want) >= 5
