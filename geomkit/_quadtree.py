@@ -112,8 +112,9 @@ def split_counts(e, eu, ev, target, max_parts=8):
     ft = np.sqrt(e / T)
     fu = np.where(twist, np.maximum(fu, ft), fu)
     fv = np.where(twist, np.maximum(fv, ft), fv)
-    nu = np.clip(np.ceil(fu), 1, max_parts).astype(np.int64)
-    nv = np.clip(np.ceil(fv), 1, max_parts).astype(np.int64)
+    # np.clip(np.ceil(f), 1, max_parts), without clip's per-call overhead
+    nu = np.minimum(np.maximum(np.ceil(fu), 1), max_parts).astype(np.int64)
+    nv = np.minimum(np.maximum(np.ceil(fv), 1), max_parts).astype(np.int64)
     return nu, nv
 
 
@@ -305,6 +306,23 @@ class EdgeIndex:
         return starts, out
 
 
+def _tensor_cells(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(len(u)-1) * (len(v)-1) cells ``u0, u1, v0, v1`` of the tensor grid of lines
+    ``u`` x ``v``, row-major (cell ``i * (len(v)-1) + j`` spans ``u[i:i+2] x v[j:j+2]``)."""
+    c = np.empty((len(u) - 1, len(v) - 1, 4))
+    c[..., 0] = u[:-1, None]
+    c[..., 1] = u[1:, None]
+    c[..., 2] = v[:-1]
+    c[..., 3] = v[1:]
+    return c.reshape(-1, 4)
+
+
+# corners of a cell's two triangles as columns of ``u0, u1, v0, v1``: A=(u0,v0)
+# B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 (AC): ABC, ACD; diagonal 1 (BD): ABD, BCD
+_CORNER_U = np.array([[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]])
+_CORNER_V = np.array([2, 2, 3, 2, 3, 3])
+
+
 def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
                  target: float, exact_above: float, max_cells: int):
     """One tensor grid of cells for a surface whose first estimate asks for few cells.
@@ -313,20 +331,22 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     estimate for ``target`` (the largest count of its row / column, so the grid has
     no hanging nodes); every cell's two-triangle split is measured (``cell_deviation``,
     as in :func:`measure`) and its better diagonal kept; if a cell fails ``tol``, one
-    more grid is tried with ``target`` scaled down by the excess.  Returns ``(tri_uv (M, 3, 2), dev (M,), cells)``, triangles
-    counter-clockwise in UV, or None when the grid would exceed ``max_cells`` or a
-    cell fails ``tol`` (the adaptive path then takes over).  The measurement is the
-    one adaptive refinement accepts cells with, so the stated bound is the same.
+    more grid is tried with ``target`` scaled down by the excess.  Returns ``(tri_uv
+    (M, 3, 2), dev (M,), cells, (u, v, diag))``: triangles counter-clockwise in UV, two
+    per cell (row-major, see :func:`_tensor_cells`), the grid lines and each cell's
+    diagonal (0: (u0,v0)-(u1,v1), 1: (u1,v0)-(u0,v1)); or None when the grid would
+    exceed ``max_cells`` or a cell fails ``tol`` (the adaptive path then takes over).
+    The measurement is the one adaptive refinement accepts cells with, so the stated
+    bound is the same.
     """
     nsu, nsv = len(ub) - 1, len(vb) - 1
     if nsu * nsv > max_cells:
         return None
-    ru = np.repeat(np.arange(nsu), nsv)
-    rv = np.tile(np.arange(nsv), nsu)
-    roots = np.stack([ub[ru], ub[ru + 1], vb[rv], vb[rv + 1]], axis=1)
+    roots = _tensor_cells(ub, vb)
+    Pw, p, q, U, V = (surface.homogeneous, surface.degree_u, surface.degree_v,
+                      surface.knots_u, surface.knots_v)
     E = np.empty((len(roots), 5))
-    cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v, surface.knots_u,
-                surface.knots_v, roots, m, E)
+    cell_errors(Pw, p, q, U, V, roots, m, E)
     (u0, u1), (v0, v1) = surface.domain
     for _ in range(2):  # a second try with the target scaled by the first's excess
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
@@ -336,24 +356,19 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         if int(cu.sum()) * int(cv.sum()) > max_cells:
             return None
         if cu.max() == 1 and cv.max() == 1:  # the root spans themselves
-            cells, Ec = roots, E
+            u, v, cells, Ec = ub, vb, roots, E
         else:
             u = _lines(ub, cu)
             v = _lines(vb, cv)
-            iu, iv = len(u) - 1, len(v) - 1
-            gi = np.repeat(np.arange(iu), iv)
-            gj = np.tile(np.arange(iv), iu)
-            cells = np.stack([u[gi], u[gi + 1], v[gj], v[gj + 1]], axis=1)
+            cells = _tensor_cells(u, v)
             Ec = np.empty((len(cells), 5))
-            cell_errors(surface.homogeneous, surface.degree_u, surface.degree_v,
-                        surface.knots_u, surface.knots_v, cells, m, Ec)
+            cell_errors(Pw, p, q, U, V, cells, m, Ec)
         first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
         M = np.empty((len(cells), 2))
-        cell_deviation(surface.homogeneous, surface.degree_u, surface.degree_v,
-                       surface.knots_u, surface.knots_v, cells, first, k, u0, u1, v0, v1,
-                       exact_above, tol, M)
+        cell_deviation(Pw, p, q, U, V, cells, first, k, u0, u1, v0, v1, exact_above, tol, M)
         diag = np.argmin(M, axis=1)
-        dev = M[np.arange(len(cells)), diag]
+        rows = np.arange(len(cells))
+        dev = M[rows, diag]
         worst = float(dev.max())
         if worst <= tol:
             break
@@ -361,16 +376,10 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
     else:
         return None
-    # corners A=(u0,v0) B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 is AC, 1 is BD
-    A = cells[:, [0, 2]]
-    B = cells[:, [1, 2]]
-    C = cells[:, [1, 3]]
-    D = cells[:, [0, 3]]
-    d1 = (diag == 1)[:, None]
-    t0 = np.stack([A, B, np.where(d1, D, C)], axis=1)
-    t1 = np.stack([np.where(d1, B, A), C, D], axis=1)
-    tri_uv = np.stack([t0, t1], axis=1).reshape(-1, 3, 2)
-    return tri_uv, np.repeat(dev, 2), cells
+    tri = np.empty((len(cells), 6, 2))
+    tri[:, :, 0] = cells[rows[:, None], _CORNER_U[diag]]
+    tri[:, :, 1] = cells[:, _CORNER_V]
+    return tri.reshape(-1, 3, 2), np.repeat(dev, 2), cells, (u, v, diag)
 
 
 def _lines(b: np.ndarray, counts: np.ndarray) -> np.ndarray:

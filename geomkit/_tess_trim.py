@@ -81,9 +81,11 @@ class TrimPolylines:
         eps = 1e-12 * max(u1 - u0, v1 - v0)
         on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
               | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
+        if not on.all():
+            return False
         x, y = pts[:, 0], pts[:, 1]
         area = 0.5 * abs(np.sum(x[:-1] * y[1:] - x[1:] * y[:-1]))
-        return bool(on.all()) and abs(area - (u1 - u0) * (v1 - v0)) <= eps * (u1 - u0 + v1 - v0)
+        return bool(abs(area - (u1 - u0) * (v1 - v0)) <= eps * (u1 - u0 + v1 - v0))
 
     def _loop_polyline(self, loop, chord_tol: float) -> np.ndarray:
         """(k, 2) closed UV polyline of one loop (:func:`geomkit._kernels.tess_trim.
@@ -94,9 +96,13 @@ class TrimPolylines:
         out = []
         for c in loop.pieces:
             p = c.degree
-            t = np.unique(c.knots[p: len(c.knots) - p])
+            t = c.knots[p: len(c.knots) - p]  # non-decreasing: its distinct values
+            keep = np.empty(len(t), dtype=bool)
+            keep[:1] = True
+            np.not_equal(t[1:], t[:-1], out=keep[1:])
+            t = t[keep]
             if not c.is_polyline:  # a few samples per span to start
-                t = np.unique(np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])]))
+                t = np.unique(_span_samples(t, 5))
             buf = np.empty((8 * len(t) + 64, 3))
             while True:
                 n = trim_polyline(c.homogeneous, c.degree, c.knots, t, u0, v0, u1, v1,
@@ -128,6 +134,20 @@ class TrimPolylines:
         cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
         state[rest] = shapely.contains_xy(region, cu, cv).astype(np.int8)
         return state
+
+
+def _span_samples(t: np.ndarray, num: int) -> np.ndarray:
+    """(len(t)-1, num) ``np.linspace(a, b, num)`` of each span ``[a, b]`` of the
+    increasing ``t`` (its arithmetic: ``k * ((b - a) / (num - 1)) + a``, the last
+    sample ``b`` exactly), without ``linspace``'s per-call overhead."""
+    a, b = t[:-1], t[1:]
+    step = (b - a) / (num - 1)
+    if not np.all(step != 0):  # linspace's other branch: leave it to linspace
+        return np.linspace(a, b, num, axis=1)
+    y = np.arange(num, dtype=np.float64) * step[:, None]
+    y += a[:, None]
+    y[:, -1] = b
+    return y
 
 
 # ------------------------------------------------------------------ planes
@@ -245,7 +265,7 @@ def _delaunay_inside(region):
     if not np.array_equal(have[at], need):
         return None, None
     tri = uv[T]
-    cen = tri.mean(axis=1)
+    cen = (tri[:, 0] + tri[:, 1] + tri[:, 2]) / 3.0  # tri.mean(axis=1), the same sums
     inside = shapely.contains_xy(region, cen[:, 0], cen[:, 1])
     tri = tri[inside]
     v1 = tri[:, 1] - tri[:, 0]

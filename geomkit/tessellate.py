@@ -80,19 +80,31 @@ WELD_REL = 1e-10
 
 
 # ------------------------------------------------------------------ triangles
+_EDGE_T = np.linspace(0.0, 1.0, 17)  # samples along each domain edge
+
+
 def _closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     (u0, u1), (v0, v1) = s.domain
     eps = 1e-10 * size
-    t = np.linspace(0.0, 1.0, 17)
-    v = v0 + (v1 - v0) * t
-    u = u0 + (u1 - u0) * t
+    v = v0 + (v1 - v0) * _EDGE_T
+    u = u0 + (u1 - u0) * _EDGE_T
     uv = np.empty((4, 17, 2))  # the u0, u1, v0, v1 edges, in one evaluation
     uv[0, :, 0], uv[1, :, 0], uv[:2, :, 1] = u0, u1, v
     uv[2, :, 1], uv[3, :, 1], uv[2:, :, 0] = v0, v1, u
     P = _points(s, uv.reshape(-1, 2)).reshape(4, 17, 3)
-    cu = np.max(np.abs(P[0] - P[1]))
-    cv = np.max(np.abs(P[2] - P[3]))
+    cu = np.abs(P[0] - P[1]).max()
+    cv = np.abs(P[2] - P[3]).max()
     return bool(cu <= eps), bool(cv <= eps)
+
+
+def _breakpoints(knots: np.ndarray, p: int) -> np.ndarray:
+    """The distinct knots of the domain ``knots[p : -p]`` (knot vectors are
+    non-decreasing: ``np.unique`` without its sort)."""
+    k = knots[p: len(knots) - p]
+    keep = np.empty(len(k), dtype=bool)
+    keep[0] = True
+    np.not_equal(k[1:], k[:-1], out=keep[1:])
+    return k[keep]
 
 
 def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
@@ -223,8 +235,6 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     UVs within rounding of each other: trim crossings computed in two cells), then
     coincident boundary vertices in 3-D (poles, seams); drops the triangles that
     collapse."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
     flat = tri_uv.reshape(-1, 2)
@@ -241,23 +251,78 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
                      | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
     if len(bnd):
-        pairs.append(bnd[cKDTree(P[bnd]).query_pairs(WELD_REL * size, output_type="ndarray")])
+        pairs.append(_boundary_pairs(P, bnd, size))
     pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
+    return _merge(P, uniq, inv, pairs)
+
+
+def _merge(P, uniq, inv, pairs):
+    """Vertices ``P`` / ``uniq`` merged along ``pairs`` (k, 2) (each component keeps
+    its first member), faces ``inv`` (3m,) renumbered and the mask of faces with three
+    distinct corners."""
     n = len(uniq)
     if not len(pairs):  # nothing to merge
         F = inv.reshape(-1, 3)
         good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
         return P, F, uniq, good
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     # representative of each component: its first member
     first = np.full(label.max() + 1, n, dtype=np.int64)
     np.minimum.at(first, label, np.arange(n))
-    keep_ids = first
-    new_index = label
-    F = new_index.ravel()[inv].reshape(-1, 3)
+    F = label.ravel()[inv].reshape(-1, 3)
     good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
-    return P[keep_ids], F, uniq[keep_ids], good
+    return P[first], F, uniq[first], good
+
+
+_WELD_DIRECTION = np.array([0.35, 0.48, 0.8])  # |w| < 1, oblique to the axes and planes
+
+
+def _boundary_pairs(P, bnd, size):
+    """Pairs of the vertices ``bnd`` (domain-boundary indices) closer than
+    ``WELD_REL * size`` in 3-D."""
+    if len(bnd) < 2:
+        return np.empty((0, 2), np.int64)
+    r = WELD_REL * size
+    Q = P[bnd]
+    # no pair when the points' projections on a unit-or-shorter direction, sorted, are
+    # all further apart than r plus the projections' rounding (a pair within r projects
+    # within r; a dot product of 3 terms errs by at most ~5 ulp of max |Q| each, so
+    # 1e-14 max |Q| and a factor 2 on r are ample): an open surface skips the tree
+    gaps = np.diff(np.sort(Q @ _WELD_DIRECTION))
+    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+        return np.empty((0, 2), np.int64)
+    from scipy.spatial import cKDTree
+
+    return bnd[cKDTree(Q).query_pairs(r, output_type="ndarray")]
+
+
+def _weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: float):
+    """:func:`_weld` (``near_uv=False``) of the triangles of a tensor grid
+    (:func:`geomkit._quadtree.uniform_grid`: lines ``u`` x ``v``, two triangles per cell
+    by ``diag``), from the grid's indices: its vertices, sorted by u then v, are the
+    sorted unique corners.  None when the lines are not strictly increasing."""
+    if not (np.all(u[1:] > u[:-1]) and np.all(v[1:] > v[:-1])):
+        return None
+    nu1, nv1 = len(u), len(v)
+    UV = np.empty((nu1, nv1, 2))
+    UV[..., 0] = u[:, None]
+    UV[..., 1] = v
+    UV = UV.reshape(-1, 2)
+    P = _points(s, UV)
+    (u0, u1), (v0, v1) = s.domain
+    eps = 1e-12 * max(u1 - u0, v1 - v0)
+    on = ((u <= u0 + eps) | (u >= u1 - eps))[:, None] | ((v <= v0 + eps) | (v >= v1 - eps))
+    base = (np.arange(nu1 - 1)[:, None] * nv1 + np.arange(nv1 - 1)).ravel()
+    off = np.array([[0, nv1, nv1 + 1, 0, nv1 + 1, 1], [0, nv1, 1, nv1, nv1 + 1, 1]])
+    inv = (base[:, None] + off[diag]).ravel()
+    pairs = _boundary_pairs(P, np.nonzero(on.ravel())[0], size)
+    if not len(pairs):  # distinct grid corners: every face kept
+        return P, inv.reshape(-1, 3), UV, np.ones(len(inv) // 3, dtype=bool)
+    return _merge(P, UV, inv, pairs)
 
 
 def _affine_plane(s: Surface, size: float):
@@ -285,8 +350,9 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
         return None
     used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
     used[F.ravel()] = True
-    index = np.cumsum(used) - 1
-    uv, F = uv[used], index[F]
+    if not used.all():
+        index = np.cumsum(used) - 1
+        uv, F = uv[used], index[F]
     stats = {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
              "closed_u": False, "closed_v": False, "planar_trimmed": True,
              "seconds": time.perf_counter() - t0}
@@ -303,25 +369,30 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
                             "closed_u": False, "closed_v": False, "affine_plane": True,
                             "seconds": time.perf_counter() - t0},)
-    ub = np.unique(s.knots_u[s.degree_u: len(s.knots_u) - s.degree_u])
-    vb = np.unique(s.knots_v[s.degree_v: len(s.knots_v) - s.degree_v])
+    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
+        planar = _planar_trimmed(s, tol, size, t0, trim_target)
+        if planar is not None:
+            return planar
+    ub = _breakpoints(s.knots_u, s.degree_u)
+    vb = _breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     if not s.trim and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
-            tri_uv, dev, cells = grid
-            V, F, UV, good = _weld(s, tri_uv, size, near_uv=False)
+            tri_uv, dev, cells, (u, v, diag) = grid
+            welded = _weld_grid(s, u, v, diag, size)
+            V, F, UV, good = welded if welded is not None else \
+                _weld(s, tri_uv, size, near_uv=False)
             closed = _closed_directions(s, size)
+            dropped = len(good) - int(np.count_nonzero(good))
             stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
-                     "collapsed_dropped": int(np.count_nonzero(~good)),
+                     "collapsed_dropped": dropped,
                      "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
                      "seconds": time.perf_counter() - t0}
+            if not dropped:  # every face kept: no copies
+                return V, F, UV, dev, tri_uv, stats
             return V, F[good], UV, dev[good], tri_uv[good], stats
-    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
-        planar = _planar_trimmed(s, tol, size, t0, trim_target)
-        if planar is not None:
-            return planar
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
     trim = TrimPolylines(s, trim_target * tol) if s.trim else None
@@ -445,6 +516,12 @@ def _tessellate(surfaces, tol, max_angle, max_edge, samples_per_edge, trim_targe
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
     trim_target = float(trim_target)
+    if len(surfaces) == 1:  # one surface: its arrays as they are, no concatenation
+        V, F, UV, dev, tuv, st = _tessellate_one(surfaces[0], tol, max_angle, max_edge, k,
+                                                 trim_target)
+        return Mesh(V, F.astype(np.int64, copy=False), UV, np.zeros(len(V), dtype=np.int32),
+                    np.zeros(len(F), dtype=np.int32), dev, tol, {"surfaces": [st]},
+                    np.ascontiguousarray(tuv))
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
