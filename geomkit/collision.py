@@ -247,13 +247,19 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
                 W, w = _scratch.w
             except AttributeError:     # per-thread scratch, reused (results copied out)
                 W, w = _scratch.w = _posed_scratch(_FAST_CAP)
-            # what the compiled entry point unboxes safely: an ndarray (numba checks
-            # that) of float64 and 2 dimensions; any layout; the kernel checks the shape
-            if not (type(pose_a) is _ND and type(pose_b) is _ND and pose_a.dtype is _F64
-                    and pose_b.dtype is _F64 and pose_a.ndim == 2 and pose_b.ndim == 2):
+            r = -3
+            try:    # what the compiled entry point unboxes safely: float64 and 2
+                # dimensions checked here, any layout, an ndarray (numba checks that:
+                # TypeError otherwise); the kernel checks the shape and rigidity
+                if pose_a.dtype is _F64 and pose_b.dtype is _F64 and pose_a.ndim == 2 \
+                        and pose_b.ndim == 2:
+                    r = (_posed or _posed_load())(ka, kb, pose_a, pose_b, not all_pairs, w)
+            except (AttributeError, TypeError):
+                pass
+            if r == -3:     # another type: checked, converted
                 pose_a = np.array(validate_pose(pose_a, "pose_a"), dtype=np.float64)
                 pose_b = np.array(validate_pose(pose_b, "pose_b"), dtype=np.float64)
-            r = (_posed or _posed_load())(ka, kb, pose_a, pose_b, not all_pairs, w)
+                r = (_posed or _posed_load())(ka, kb, pose_a, pose_b, not all_pairs, w)
             if r == 2:                  # root boxes disjoint
                 return _MISS1
             if r >= 0:
