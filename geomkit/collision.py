@@ -241,8 +241,8 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
     if type(a) is Body and type(b) is Body:
         # box trees: one kernel call (pose checks, relative motion, root test,
         # traversal, tags) with the bodies' buffers and the scratch by address
-        ka, kb = a._addr, b._addr
-        if ka is not None and kb is not None:
+        ha, hb = a._addr, b._addr
+        if ha is not None and hb is not None:
             try:
                 W, w = _scratch.w
             except AttributeError:     # per-thread scratch, reused (results copied out)
@@ -253,13 +253,13 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
                 # TypeError otherwise); the kernel checks the shape and rigidity
                 if pose_a.dtype is _F64 and pose_b.dtype is _F64 and pose_a.ndim == 2 \
                         and pose_b.ndim == 2:
-                    r = (_posed or _posed_load())(ka, kb, pose_a, pose_b, not all_pairs, w)
+                    r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
             except (AttributeError, TypeError):
                 pass
             if r == -3:     # another type: checked, converted
                 pose_a = np.array(validate_pose(pose_a, "pose_a"), dtype=np.float64)
                 pose_b = np.array(validate_pose(pose_b, "pose_b"), dtype=np.float64)
-                r = (_posed or _posed_load())(ka, kb, pose_a, pose_b, not all_pairs, w)
+                r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
             if r == 2:                  # root boxes disjoint
                 return _MISS1
             if r >= 0:
