@@ -16,8 +16,11 @@ moved on the fly, A's by ``(MA, mA)`` and B's by ``(MB, mB)`` into the common fr
 of the node test (A's frame for boxes, the world for 14-DOPs).
 
 Lower bounds for distance: for boxes, the largest separation over the 15 SAT axes
-(normalised; axes from nearly parallel edges skipped), for 14-DOPs the largest
-interval gap over the 7 unit directions; both shrunk by ``LB_SHRINK``.
+(normalised; axes from nearly parallel edges skipped), the circumscribed spheres'
+gap or the distance of one box to the other's bounding box in its axes, whichever
+is largest; for 14-DOPs the largest interval gap over the 7 unit directions; both
+shrunk by ``LB_SHRINK``.  Triangle pairs of a leaf pair: their bounding spheres'
+gap and the height of one triangle over the other's plane (when on one side).
 """
 
 from __future__ import annotations
@@ -33,6 +36,11 @@ LB_SHRINK = 1.0 - 1e-9
 STACK = 1024
 LEAF_BUF = 16
 INV_SQRT3 = 1.0 / np.sqrt(3.0)
+PLANE_SLACK = 1e-9
+"""Triangle plane bounds are lowered by ``PLANE_SLACK`` times the distance between
+the two triangles' bounding-sphere centres plus their radii (a bound of every
+corner-to-plane lever arm): the unit normal's rounding error is below ~1e-11 (see
+``_unit_normal``), so each height's is below ~1e-11 of that arm."""
 
 
 @jit_inline
@@ -54,7 +62,12 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
 @jit_inline
 def box_separation(Rab, T, a, b, early, Ab):
     """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3),
-    or (without ``early``) the gap of their circumscribed spheres when larger.
+    or (without ``early``) when larger the gap of their circumscribed spheres or
+    the distance from one box to the other's bounding box in its axes (the
+    positive face-axis separations ``g`` of A, resp. B: every point pair differs by
+    at least ``g_k`` along each axis ``k``, so their distance is at least
+    ``sqrt(sum g_k^2)``; up to sqrt(3) tighter than the largest ``g_k`` when the
+    boxes are apart diagonally and, unlike the spheres, tight for flat boxes).
 
     ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
@@ -66,12 +79,16 @@ def box_separation(Rab, T, a, b, early, Ab):
         for c in range(3):
             Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
     best = -np.inf
+    ga = 0.0
+    gb = 0.0
     for i in range(3):   # A's face normals
         s = abs(T[i]) - a[i] - (b[0] * Ab[i, 0] + b[1] * Ab[i, 1] + b[2] * Ab[i, 2])
         if s > best:
             best = s
             if early and s > 0.0:
                 return s
+        if s > 0.0:
+            ga += s * s
     for j in range(3):   # B's face normals
         s = abs(T[0] * Rab[0, j] + T[1] * Rab[1, j] + T[2] * Rab[2, j]) - b[j] - \
             (a[0] * Ab[0, j] + a[1] * Ab[1, j] + a[2] * Ab[2, j])
@@ -79,6 +96,8 @@ def box_separation(Rab, T, a, b, early, Ab):
             best = s
             if early and s > 0.0:
                 return s
+        if s > 0.0:
+            gb += s * s
     for i in range(3):   # A_i x B_j
         i1 = (i + 1) % 3
         i2 = (i + 2) % 3
@@ -103,6 +122,9 @@ def box_separation(Rab, T, a, b, early, Ab):
     rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
         np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
     s = dc - rs - 1e-12 * (dc + rs)
+    if s > best:
+        best = s
+    s = np.sqrt(max(ga, gb))    # the bounding box in the other's axes
     if s > best:
         best = s
     return best
@@ -146,6 +168,46 @@ def _move(T, r, M, m, out):
         x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
         for k in range(3):
             out[v, k] = M[k, 0] * x + M[k, 1] * y + M[k, 2] * z + m[k]
+
+
+@jit_inline
+def _unit_normal(t, out):
+    """Unit normal of triangle ``t`` (3, 3), or 0 when its corners are nearly
+    collinear (``|e x f| <= 1e-4 |e| |f|`` for its edges ``e``, ``f`` from corner 0:
+    the normal's rounding error then stays below ~1e-11, see :data:`PLANE_SLACK`)."""
+    e0, e1, e2 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+    f0, f1, f2 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+    n0 = e1 * f2 - e2 * f1
+    n1 = e2 * f0 - e0 * f2
+    n2 = e0 * f1 - e1 * f0
+    nn = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if nn > 1e-4 * np.sqrt((e0 * e0 + e1 * e1 + e2 * e2) * (f0 * f0 + f1 * f1 + f2 * f2)):
+        out[0] = n0 / nn
+        out[1] = n1 / nn
+        out[2] = n2 / nn
+    else:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+
+
+@jit_inline
+def _plane_gap(n, t, u):
+    """Smallest height of triangle ``u``'s corners over the plane of triangle ``t``
+    (unit normal ``n``) when they all lie strictly on one side, else 0: a lower
+    bound of the two triangles' distance (up to the normal's rounding)."""
+    lo = np.inf
+    hi = -np.inf
+    for v in range(3):
+        h = n[0] * (u[v, 0] - t[0, 0]) + n[1] * (u[v, 1] - t[0, 1]) + \
+            n[2] * (u[v, 2] - t[0, 2])
+        lo = min(lo, h)
+        hi = max(hi, h)
+    if lo > 0.0:
+        return lo
+    if hi < 0.0:
+        return -hi
+    return 0.0
 
 
 @jit_inline
@@ -254,6 +316,8 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     ta = np.empty((3, 3))
     tbs = np.empty((LEAF_BUF, 3, 3))
     sph = np.empty((LEAF_BUF, 4))
+    nb = np.empty((LEAF_BUF, 3))
+    na = np.empty(3)
     p = np.empty(3)
     q = np.empty(3)
     best = margin if margin > 0.0 else np.inf
@@ -280,9 +344,11 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
             for rb in range(rngB[j, 1] - rb0):
                 _move(TB, rb0 + rb, MB, mB, tbs[rb])
                 _sphere(tbs[rb], sph[rb])
+                _unit_normal(tbs[rb], nb[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 _move(TA, ra, MA, mA, ta)
                 _sphere(ta, sa)
+                _unit_normal(ta, na)
                 for rb in range(rngB[j, 1] - rb0):
                     # the two triangles' spheres: skip the exact distance when their
                     # gap (made smaller than any rounding of it) reaches the best
@@ -290,6 +356,12 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                                  (sa[2] - sph[rb, 2]) ** 2)
                     rs = sa[3] + sph[rb, 3]
                     if dc - rs - 1e-12 * (dc + rs) >= best:
+                        continue
+                    # a triangle on one side of the other's plane: its nearest
+                    # corner's height bounds the distance (tight for the facing,
+                    # nearly parallel pairs of a near-continuum of minima)
+                    if max(_plane_gap(na, ta, tbs[rb]), _plane_gap(nb[rb], tbs[rb], ta)) - \
+                            PLANE_SLACK * (dc + rs) >= best:
                         continue
                     d = triangle_triangle_distance(ta, tbs[rb], p, q)
                     if d < best:
