@@ -20,7 +20,8 @@ Lower bounds for distance: for boxes, the largest separation over the 15 SAT axe
 gap or the distance of one box to the other's bounding box in its axes, whichever
 is largest; for 14-DOPs the largest interval gap over the 7 unit directions; both
 shrunk by ``LB_SHRINK``.  Triangle pairs of a leaf pair: their bounding spheres'
-gap and the height of one triangle over the other's plane (when on one side).
+gap and the prism bound of each over the other (height over its plane and
+distance beyond one of its edges, :func:`_prism_gap`).
 """
 
 from __future__ import annotations
@@ -75,6 +76,27 @@ def box_separation(Rab, T, a, b, early, Ab):
     > 0 proves the boxes disjoint and bounds their distance from below.  ``Ab``
     (3, 3) is scratch.
     """
+    return box_bound(Rab, T, a, b, early, Ab, np.inf)
+
+
+@jit_inline
+def _sphere_gap(T, a, b):
+    """The boxes' circumscribed spheres: centre distance minus the half diagonals,
+    made smaller than any rounding of it."""
+    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
+    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
+        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    return dc - rs - 1e-12 * (dc + rs)
+
+
+@jit_inline
+def box_bound(Rab, T, a, b, early, Ab, cut):
+    """:func:`box_separation`, except that (without ``early``) a bound reaching
+    ``cut`` is returned at once: the face axes, the bounding boxes and the spheres
+    come first, the 9 edge axes (a division and a square root each) only when
+    those stay below ``cut`` (a branch and bound prunes at ``cut`` = the best
+    distance so far: most node pairs it bounds are pruned without their edge
+    axes)."""
     for r in range(3):
         for c in range(3):
             Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
@@ -98,6 +120,15 @@ def box_separation(Rab, T, a, b, early, Ab):
                 return s
         if s > 0.0:
             gb += s * s
+    if not early:
+        s = np.sqrt(max(ga, gb))    # the bounding box in the other's axes
+        if s > best:
+            best = s
+        s = _sphere_gap(T, a, b)
+        if s > best:
+            best = s
+        if best >= cut:
+            return best
     for i in range(3):   # A_i x B_j
         i1 = (i + 1) % 3
         i2 = (i + 2) % 3
@@ -115,18 +146,10 @@ def box_separation(Rab, T, a, b, early, Ab):
                     s /= np.sqrt(ln2)
                     if s > best:
                         best = s
-    # the boxes' circumscribed spheres: centre distance minus the half diagonals
-    # (tighter than every single axis when the boxes are apart diagonally), made
-    # smaller than any rounding of it
-    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
-    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
-        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
-    s = dc - rs - 1e-12 * (dc + rs)
-    if s > best:
-        best = s
-    s = np.sqrt(max(ga, gb))    # the bounding box in the other's axes
-    if s > best:
-        best = s
+    if early:   # no axis separates; the spheres still may (SAT_EPS inflation)
+        s = _sphere_gap(T, a, b)
+        if s > best:
+            best = s
     return best
 
 
@@ -149,10 +172,19 @@ def kdop_separation(KA, KB, i, j, order, early):
 @jit_inline
 def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
               scr):
+    return _node_bound(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early,
+                       Rab, T, scr, np.inf)
+
+
+@jit_inline
+def _node_bound(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
+                scr, cut):
+    """:func:`_node_sep` that may stop once the bound reaches ``cut``
+    (:func:`box_bound`)."""
     if kind == 2:
         return kdop_separation(KA, KB, i, j, order, early)
     _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, scr[0])
-    return box_separation(Rab, T, EA[i], EB[j], early, scr[1])
+    return box_bound(Rab, T, EA[i], EB[j], early, scr[1], cut)
 
 
 @jit_inline
@@ -172,42 +204,63 @@ def _move(T, r, M, m, out):
 
 @jit_inline
 def _unit_normal(t, out):
-    """Unit normal of triangle ``t`` (3, 3), or 0 when its corners are nearly
-    collinear (``|e x f| <= 1e-4 |e| |f|`` for its edges ``e``, ``f`` from corner 0:
-    the normal's rounding error then stays below ~1e-11, see :data:`PLANE_SLACK`)."""
+    """Unit normal ``out[0]`` of triangle ``t`` (3, 3) and the outward unit normals
+    ``out[1 + e]`` in its plane of its edges ``t[e] -> t[e + 1]``; all 0 when its
+    corners are nearly collinear (``|e x f| <= 1e-4 |e| |f|`` for its edges ``e``,
+    ``f`` from corner 0: the normals' rounding errors then stay below ~1e-11, see
+    :data:`PLANE_SLACK`)."""
     e0, e1, e2 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
     f0, f1, f2 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
     n0 = e1 * f2 - e2 * f1
     n1 = e2 * f0 - e0 * f2
     n2 = e0 * f1 - e1 * f0
     nn = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-    if nn > 1e-4 * np.sqrt((e0 * e0 + e1 * e1 + e2 * e2) * (f0 * f0 + f1 * f1 + f2 * f2)):
-        out[0] = n0 / nn
-        out[1] = n1 / nn
-        out[2] = n2 / nn
-    else:
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = 0.0
+    if not nn > 1e-4 * np.sqrt((e0 * e0 + e1 * e1 + e2 * e2) * (f0 * f0 + f1 * f1 + f2 * f2)):
+        out[:] = 0.0
+        return
+    n0 /= nn
+    n1 /= nn
+    n2 /= nn
+    out[0, 0] = n0
+    out[0, 1] = n1
+    out[0, 2] = n2
+    for e in range(3):      # edge x normal points out of a counter-clockwise triangle
+        g = (e + 1) % 3
+        d0, d1, d2 = t[g, 0] - t[e, 0], t[g, 1] - t[e, 1], t[g, 2] - t[e, 2]
+        m0 = d1 * n2 - d2 * n1
+        m1 = d2 * n0 - d0 * n2
+        m2 = d0 * n1 - d1 * n0
+        mm = np.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+        out[1 + e, 0] = m0 / mm
+        out[1 + e, 1] = m1 / mm
+        out[1 + e, 2] = m2 / mm
 
 
 @jit_inline
-def _plane_gap(n, t, u):
-    """Smallest height of triangle ``u``'s corners over the plane of triangle ``t``
-    (unit normal ``n``) when they all lie strictly on one side, else 0: a lower
-    bound of the two triangles' distance (up to the normal's rounding)."""
+def _prism_gap(n, t, u):
+    """A lower bound of the distance of triangles ``t`` and ``u`` (3, 3) from ``t``'s
+    normals ``n`` (4, 3) (:func:`_unit_normal`): with ``h`` the smallest height of
+    ``u``'s corners over ``t``'s plane when all lie strictly on one side (else 0) and
+    ``l`` the largest, over ``t``'s edges, smallest distance of ``u``'s corners
+    beyond the edge's line in the outward in-plane direction (else 0), every point
+    pair differs by at least ``h`` along the normal and ``l`` along that
+    orthogonal direction: ``sqrt(h^2 + l^2)`` (up to the normals' rounding)."""
     lo = np.inf
     hi = -np.inf
     for v in range(3):
-        h = n[0] * (u[v, 0] - t[0, 0]) + n[1] * (u[v, 1] - t[0, 1]) + \
-            n[2] * (u[v, 2] - t[0, 2])
-        lo = min(lo, h)
-        hi = max(hi, h)
-    if lo > 0.0:
-        return lo
-    if hi < 0.0:
-        return -hi
-    return 0.0
+        x = n[0, 0] * (u[v, 0] - t[0, 0]) + n[0, 1] * (u[v, 1] - t[0, 1]) + \
+            n[0, 2] * (u[v, 2] - t[0, 2])
+        lo = min(lo, x)
+        hi = max(hi, x)
+    h = lo if lo > 0.0 else (-hi if hi < 0.0 else 0.0)
+    lat = 0.0
+    for e in range(3):
+        m = np.inf
+        for v in range(3):
+            m = min(m, n[1 + e, 0] * (u[v, 0] - t[e, 0]) + n[1 + e, 1] * (u[v, 1] - t[e, 1]) +
+                    n[1 + e, 2] * (u[v, 2] - t[e, 2]))
+        lat = max(lat, m)
+    return np.sqrt(h * h + lat * lat)
 
 
 @jit_inline
@@ -316,8 +369,8 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     ta = np.empty((3, 3))
     tbs = np.empty((LEAF_BUF, 3, 3))
     sph = np.empty((LEAF_BUF, 4))
-    nb = np.empty((LEAF_BUF, 3))
-    na = np.empty(3)
+    nb = np.empty((LEAF_BUF, 4, 3))
+    na = np.empty((4, 3))
     p = np.empty(3)
     q = np.empty(3)
     best = margin if margin > 0.0 else np.inf
@@ -357,11 +410,10 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                     rs = sa[3] + sph[rb, 3]
                     if dc - rs - 1e-12 * (dc + rs) >= best:
                         continue
-                    # a triangle on one side of the other's plane: its nearest
-                    # corner's height bounds the distance (tight for the facing,
-                    # nearly parallel pairs of a near-continuum of minima)
-                    if max(_plane_gap(na, ta, tbs[rb]), _plane_gap(nb[rb], tbs[rb], ta)) - \
-                            PLANE_SLACK * (dc + rs) >= best:
+                    # the prism bounds (_prism_gap): tight for the facing, nearly
+                    # parallel pairs of a near-continuum of minima
+                    cut = best + PLANE_SLACK * (dc + rs)
+                    if _prism_gap(na, ta, tbs[rb]) >= cut or _prism_gap(nb[rb], tbs[rb], ta) >= cut:
                         continue
                     d = triangle_triangle_distance(ta, tbs[rb], p, q)
                     if d < best:
@@ -377,10 +429,12 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
-        b0 = _node_sep(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T, scr) * LB_SHRINK
-        b1 = _node_sep(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T, scr) * LB_SHRINK
+        # (a bound may stop at best / LB_SHRINK: it then prunes its pair all the same)
+        cut = best / LB_SHRINK
+        b0 = _node_bound(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                         Rab, T, scr, cut) * LB_SHRINK
+        b1 = _node_bound(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                         Rab, T, scr, cut) * LB_SHRINK
         tests += 2
         if b0 > b1:   # nearer pair on top of the stack
             i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
