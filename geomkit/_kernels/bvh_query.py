@@ -121,9 +121,10 @@ def box_bound(Rab, T, a, b, early, Ab, cut):
         if s > 0.0:
             gb += s * s
     if not early:
-        s = np.sqrt(max(ga, gb))    # the bounding box in the other's axes
-        if s > best:
-            best = s
+        if best > 0.0:  # the bounding box in the other's axes (only when apart along
+            # a face axis: overlapping boxes keep their negative value, which orders
+            # the descent towards the deepest overlap)
+            best = max(best, np.sqrt(max(ga, gb)))
         s = _sphere_gap(T, a, b)
         if s > best:
             best = s
