@@ -353,7 +353,10 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
 def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                    childB, rngB, CB, RB, EB, KB, TB, orderB,
                    Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q):
-    """Minimum distance of two trees by branch and bound (node lower bounds).
+    """Minimum distance of two trees by branch and bound (node lower bounds), best
+    first: node pairs on a binary heap keyed by their bound (overlapping pairs,
+    which no distance can prune, first and depth first), so that once the smallest
+    bound left reaches the best distance the search ends.
 
     ``margin > 0``: stop at the first triangle pair closer than ``margin`` and
     prune every node pair whose bound reaches ``margin``.  Returns ``(d, fa, fb,
@@ -361,8 +364,9 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     original face indices (-1 if none) and the number of node bounds computed;
     the closest points go to ``out_p``, ``out_q`` in the common frame.
     """
-    st = np.empty((STACK, 2), dtype=np.int64)
-    stlb = np.empty(STACK)
+    hij = np.empty((STACK, 2), dtype=np.int64)   # the heap of node pairs (grows)
+    hkey = np.empty(STACK)
+    hlb = np.empty(STACK)
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
@@ -378,17 +382,19 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     fa = -1
     fb = -1
     tests = 1
-    st[0, 0] = 0
-    st[0, 1] = 0
-    stlb[0] = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                        Rab, T, scr) * LB_SHRINK
-    top = 1
-    while top > 0:
-        top -= 1
-        if stlb[top] >= best:
+    b = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                  Rab, T, scr) * LB_SHRINK
+    n = _heap_push(hkey, hlb, hij, 0, b if b > 0.0 else -1.0, b, 0, 0)
+    while n > 0:
+        key = hkey[0]
+        i = hij[0, 0]
+        j = hij[0, 1]
+        bound = hlb[0]
+        n = _heap_pop(hkey, hlb, hij, n)
+        if bound >= best:
+            if key >= 0.0:  # best first: every pair left is bounded by best or more
+                break
             continue
-        i = st[top, 0]
-        j = st[top, 1]
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
@@ -437,21 +443,82 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         b1 = _node_bound(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
                          Rab, T, scr, cut) * LB_SHRINK
         tests += 2
-        if b0 > b1:   # nearer pair on top of the stack
+        if b0 > b1:   # nearer pair first
             i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
+        if n + 2 > hkey.shape[0]:
+            hkey, hlb, hij = _heap_grow(hkey, hlb, hij, n)
+        # heap keys: a separated pair's bound (best first), overlapping pairs before
+        # every separated one and depth first (children keyed below every pending
+        # pair: node indices grow with depth), the nearer child first
+        base = -4.0 * (i + j + 1)
         if b1 < best:
-            st[top, 0] = i1
-            st[top, 1] = j1
-            stlb[top] = b1
-            top += 1
+            n = _heap_push(hkey, hlb, hij, n, b1 if b1 > 0.0 else base - 1.0, b1, i1, j1)
         if b0 < best:
-            st[top, 0] = i0
-            st[top, 1] = j0
-            stlb[top] = b0
-            top += 1
+            n = _heap_push(hkey, hlb, hij, n, b0 if b0 > 0.0 else base - 2.0, b0, i0, j0)
     if best == margin and margin > 0.0:
         best = np.inf
     return best, fa, fb, tests
+
+
+@jit_inline
+def _heap_push(hkey, hlb, hij, n, key, lb, i, j):
+    """Push ``(key, lb, i, j)`` on the binary min-heap of its first ``n`` entries
+    (room checked by the caller); returns its new size."""
+    k = n
+    while k > 0:
+        up = (k - 1) >> 1
+        if hkey[up] <= key:
+            break
+        hkey[k] = hkey[up]
+        hlb[k] = hlb[up]
+        hij[k, 0] = hij[up, 0]
+        hij[k, 1] = hij[up, 1]
+        k = up
+    hkey[k] = key
+    hlb[k] = lb
+    hij[k, 0] = i
+    hij[k, 1] = j
+    return n + 1
+
+
+@jit_inline
+def _heap_pop(hkey, hlb, hij, n):
+    """Remove the top entry (index 0) of the heap of ``n`` entries; returns its new
+    size."""
+    n -= 1
+    key = hkey[n]
+    k = 0
+    while True:
+        c = 2 * k + 1
+        if c >= n:
+            break
+        if c + 1 < n and hkey[c + 1] < hkey[c]:
+            c += 1
+        if hkey[c] >= key:
+            break
+        hkey[k] = hkey[c]
+        hlb[k] = hlb[c]
+        hij[k, 0] = hij[c, 0]
+        hij[k, 1] = hij[c, 1]
+        k = c
+    hkey[k] = key
+    hlb[k] = hlb[n]
+    hij[k, 0] = hij[n, 0]
+    hij[k, 1] = hij[n, 1]
+    return n
+
+
+@jit_inline
+def _heap_grow(hkey, hlb, hij, n):
+    """The heap's arrays with twice the room, first ``n`` entries copied."""
+    m = 2 * hkey.shape[0]
+    k2 = np.empty(m)
+    l2 = np.empty(m)
+    ij2 = np.empty((m, 2), dtype=np.int64)
+    k2[:n] = hkey[:n]
+    l2[:n] = hlb[:n]
+    ij2[:n] = hij[:n]
+    return k2, l2, ij2
 
 
 @jit
