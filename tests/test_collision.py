@@ -422,6 +422,7 @@ def test_batch_kernels_are_serial():
                 assert not f.targetoptions.get("parallel"), (mod.__name__, name)
 
 
+@pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")   # np.matrix
 def test_collide_other_pose_types_and_copied_bodies():
     """float64 2-D poses of any layout go to the single-call kernel as they are;
     other dtypes, byte orders and ndarray subclasses are converted; a copied body
