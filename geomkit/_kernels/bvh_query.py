@@ -31,6 +31,7 @@ import numpy as np
 from ._numba import jit, jit_inline
 from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
+from .voxel import _heap_pop, _heap_push
 
 SAT_EPS = 1e-10
 LB_SHRINK = 1.0 - 1e-9
@@ -364,9 +365,8 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     original face indices (-1 if none) and the number of node bounds computed;
     the closest points go to ``out_p``, ``out_q`` in the common frame.
     """
-    hij = np.empty((STACK, 2), dtype=np.int64)   # the heap of node pairs (grows)
-    hkey = np.empty(STACK)
-    hlb = np.empty(STACK)
+    hkey = np.empty(STACK)      # the heap of node pairs (i << 32 | j; it grows)
+    hval = np.empty(STACK, dtype=np.int64)
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
@@ -384,17 +384,14 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     tests = 1
     b = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
                   Rab, T, scr) * LB_SHRINK
-    n = _heap_push(hkey, hlb, hij, 0, b if b > 0.0 else -1.0, b, 0, 0)
+    hkey, hval, n = _heap_push(hkey, hval, 0, b if b > 0.0 else -1.0, 0)
     while n > 0:
         key = hkey[0]
-        i = hij[0, 0]
-        j = hij[0, 1]
-        bound = hlb[0]
-        n = _heap_pop(hkey, hlb, hij, n)
-        if bound >= best:
-            if key >= 0.0:  # best first: every pair left is bounded by best or more
-                break
-            continue
+        i = hval[0] >> 32
+        j = hval[0] & 0xFFFFFFFF
+        n = _heap_pop(hkey, hval, n)
+        if key >= best:  # best first: every pair left is bounded by best or more
+            break       # (a negative key: overlapping boxes, bound <= 0 < best)
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
@@ -445,80 +442,19 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
         tests += 2
         if b0 > b1:   # nearer pair first
             i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
-        if n + 2 > hkey.shape[0]:
-            hkey, hlb, hij = _heap_grow(hkey, hlb, hij, n)
         # heap keys: a separated pair's bound (best first), overlapping pairs before
         # every separated one and depth first (children keyed below every pending
         # pair: node indices grow with depth), the nearer child first
         base = -4.0 * (i + j + 1)
         if b1 < best:
-            n = _heap_push(hkey, hlb, hij, n, b1 if b1 > 0.0 else base - 1.0, b1, i1, j1)
+            hkey, hval, n = _heap_push(hkey, hval, n, b1 if b1 > 0.0 else base - 1.0,
+                                       (i1 << 32) | j1)
         if b0 < best:
-            n = _heap_push(hkey, hlb, hij, n, b0 if b0 > 0.0 else base - 2.0, b0, i0, j0)
+            hkey, hval, n = _heap_push(hkey, hval, n, b0 if b0 > 0.0 else base - 2.0,
+                                       (i0 << 32) | j0)
     if best == margin and margin > 0.0:
         best = np.inf
     return best, fa, fb, tests
-
-
-@jit_inline
-def _heap_push(hkey, hlb, hij, n, key, lb, i, j):
-    """Push ``(key, lb, i, j)`` on the binary min-heap of its first ``n`` entries
-    (room checked by the caller); returns its new size."""
-    k = n
-    while k > 0:
-        up = (k - 1) >> 1
-        if hkey[up] <= key:
-            break
-        hkey[k] = hkey[up]
-        hlb[k] = hlb[up]
-        hij[k, 0] = hij[up, 0]
-        hij[k, 1] = hij[up, 1]
-        k = up
-    hkey[k] = key
-    hlb[k] = lb
-    hij[k, 0] = i
-    hij[k, 1] = j
-    return n + 1
-
-
-@jit_inline
-def _heap_pop(hkey, hlb, hij, n):
-    """Remove the top entry (index 0) of the heap of ``n`` entries; returns its new
-    size."""
-    n -= 1
-    key = hkey[n]
-    k = 0
-    while True:
-        c = 2 * k + 1
-        if c >= n:
-            break
-        if c + 1 < n and hkey[c + 1] < hkey[c]:
-            c += 1
-        if hkey[c] >= key:
-            break
-        hkey[k] = hkey[c]
-        hlb[k] = hlb[c]
-        hij[k, 0] = hij[c, 0]
-        hij[k, 1] = hij[c, 1]
-        k = c
-    hkey[k] = key
-    hlb[k] = hlb[n]
-    hij[k, 0] = hij[n, 0]
-    hij[k, 1] = hij[n, 1]
-    return n
-
-
-@jit_inline
-def _heap_grow(hkey, hlb, hij, n):
-    """The heap's arrays with twice the room, first ``n`` entries copied."""
-    m = 2 * hkey.shape[0]
-    k2 = np.empty(m)
-    l2 = np.empty(m)
-    ij2 = np.empty((m, 2), dtype=np.int64)
-    k2[:n] = hkey[:n]
-    l2[:n] = hlb[:n]
-    ij2[:n] = hij[:n]
-    return k2, l2, ij2
 
 
 @jit
