@@ -75,7 +75,9 @@ def box_separation(Rab, T, a, b, early, Ab):
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
     value is returned at once (a collision test needs only the sign).  A value
     > 0 proves the boxes disjoint and bounds their distance from below.  ``Ab``
-    (3, 3) is scratch.
+    (3, 3) is scratch.  With ``early``, boxes no axis separates are reported
+    overlapping (a value <= 0) even when their spheres are apart (possible only
+    within the ``SAT_EPS`` inflation): conservative for a culling test.
     """
     return box_bound(Rab, T, a, b, early, Ab, np.inf)
 
@@ -148,10 +150,6 @@ def box_bound(Rab, T, a, b, early, Ab, cut):
                     s /= np.sqrt(ln2)
                     if s > best:
                         best = s
-    if early:   # no axis separates; the spheres still may (SAT_EPS inflation)
-        s = _sphere_gap(T, a, b)
-        if s > best:
-            best = s
     return best
 
 
@@ -367,6 +365,7 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     """
     hkey = np.empty(STACK)      # the heap of node pairs (i << 32 | j; it grows)
     hval = np.empty(STACK, dtype=np.int64)
+    cb = np.empty(2)
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
@@ -433,25 +432,25 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
-        # (a bound may stop at best / LB_SHRINK: it then prunes its pair all the same)
+        # (a bound may stop at best / LB_SHRINK: it then prunes its pair all the same;
+        # one call site for the two children: the bound is inlined, compile time)
         cut = best / LB_SHRINK
-        b0 = _node_bound(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                         Rab, T, scr, cut) * LB_SHRINK
-        b1 = _node_bound(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                         Rab, T, scr, cut) * LB_SHRINK
+        for c in range(2):
+            cb[c] = _node_bound(kind, i0 if c == 0 else i1, j0 if c == 0 else j1, CA, RA, EA,
+                                KA, CB, RB, EB, KB, Rr, tr, order, False, Rab, T, scr,
+                                cut) * LB_SHRINK
         tests += 2
-        if b0 > b1:   # nearer pair first
-            i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
         # heap keys: a separated pair's bound (best first), overlapping pairs before
         # every separated one and depth first (children keyed below every pending
-        # pair: node indices grow with depth), the nearer child first
+        # pair: node indices grow with depth), the nearer child first (lower key)
         base = -4.0 * (i + j + 1)
-        if b1 < best:
-            hkey, hval, n = _heap_push(hkey, hval, n, b1 if b1 > 0.0 else base - 1.0,
-                                       (i1 << 32) | j1)
-        if b0 < best:
-            hkey, hval, n = _heap_push(hkey, hval, n, b0 if b0 > 0.0 else base - 2.0,
-                                       (i0 << 32) | j0)
+        near = 0 if cb[0] <= cb[1] else 1
+        for c in range(2):
+            k = near if c == 1 else 1 - near
+            if cb[k] < best:
+                hkey, hval, n = _heap_push(
+                    hkey, hval, n, cb[k] if cb[k] > 0.0 else base - 1.0 - c,
+                    ((i0 if k == 0 else i1) << 32) | (j0 if k == 0 else j1))
     if best == margin and margin > 0.0:
         best = np.inf
     return best, fa, fb, tests
