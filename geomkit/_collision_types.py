@@ -49,6 +49,13 @@ class Body:
         from .collision import build_body
         build_body(self, mesh, bv, face_tags, leaf_size, obb_center)
 
+    def __setstate__(self, state):
+        # a copy (pickle, copy.deepcopy) holds its packed buffer at another address:
+        # the single-call kernel's handle on it must follow
+        self.__dict__.update(state)
+        if state.get("_pf") is not None:
+            self._addr = self._pf.ctypes.data
+
     def __repr__(self) -> str:
         return (f"<Body {self.faces.shape[0]} faces, bv={self.bv!r}, "
                 f"{self.n_nodes} nodes, depth {self.depth}>")

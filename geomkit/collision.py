@@ -47,11 +47,6 @@ import threading
 import numba
 import numpy as np
 
-try:    # numba's own type fingerprint of a value (C, ~0.1 µs): what its dispatcher matches
-    from numba._dispatcher import compute_fingerprint
-except ImportError:     # pragma: no cover - a numba without it
-    compute_fingerprint = None
-
 from ._collision_types import Body, Contact, Contacts, Distance, _contact
 from ._kernels import bvh as kb
 from ._kernels._numba import prun
@@ -110,7 +105,7 @@ def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="co
     body.C, body.R, body.E = C, R, E
     body.K = K if kind == 2 else _EK
     body.T = kb.leaf_triangles(V, F, order)
-    body._pf = None
+    body._pf = body._addr = None
     if kind == 2:
         body.N = _EN
     else:   # one record per node for the traversal (kp.pack_boxes), in one buffer
@@ -125,17 +120,19 @@ def _pack(body, N):
     :mod:`geomkit._kernels.bvh_boxes`); the body's ``N``, ``T``, ``order`` and
     ``face_tags`` become views into it (nothing stored twice)."""
     n, m = N.shape[0], body.T.shape[0]
-    nf = 16 * n + 9 * m
-    buf = np.empty(nf + 2 * m + 2)
+    h = kp.HEADER
+    nf = h + 16 * n + 9 * m
+    buf = np.zeros(kp.packed_size(n, m))
     bi = buf.view(np.int64)
-    buf[:16 * n] = N.ravel()
-    buf[16 * n:nf] = body.T.ravel()
+    bi[:2] = n, m
+    buf[h:h + 16 * n] = N.ravel()
+    buf[h + 16 * n:nf] = body.T.ravel()
     bi[nf:nf + m] = body.order
     bi[nf + m:nf + 2 * m] = body.face_tags
-    bi[-2:] = n, m
     body._pf = buf
-    body.N = buf[:16 * n].reshape(n, 16)
-    body.T = buf[16 * n:nf].reshape(m, 3, 3)
+    body._addr = buf.ctypes.data     # the kernel's handle on it (the body keeps buf)
+    body.N = buf[h:h + 16 * n].reshape(n, 16)
+    body.T = buf[h + 16 * n:nf].reshape(m, 3, 3)
     body.order = bi[nf:nf + m]
     body.face_tags = bi[nf + m:nf + 2 * m]
 
@@ -241,29 +238,39 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
         ``colliding`` is exact up to the orientation predicates of the triangle
         test (closed triangles: touching counts); ``pairs`` (k, 2) sorted.
     """
-    if type(a) is Body and type(b) is Body and a._pf is not None and b._pf is not None:
-        # box trees: one kernel call (pose checks, relative motion, traversal, tags)
-        try:
-            W = _scratch.w
-        except AttributeError:     # per-thread scratch, reused (results are copied out)
-            W = _scratch.w = _posed_scratch(_FAST_CAP)
-        try:
-            fast = _fp(pose_a) == _FP44 and _fp(pose_b) == _FP44
-        except NotImplementedError:     # a type numba does not know
-            fast = False
-        if not fast:    # not float64 C-contiguous writable 2-D arrays: checked, converted
-            pose_a = np.array(validate_pose(pose_a, "pose_a"))
-            pose_b = np.array(validate_pose(pose_b, "pose_b"))
-        r = (_posed or _posed_first)(a._pf, b._pf, pose_a, pose_b, not all_pairs, W)
-        if r >= 0:
-            if not r & 1:
-                c = _MISSES.get(r)
-                if c is None:
-                    c = _contact(False, _NO_PAIRS, _NO_PAIRS, r >> 1)
-                    if r < 8192:
-                        _MISSES[r] = c
-                return c
-            return _hits(a, pose_a, b, pose_b, not all_pairs, W)
+    if type(a) is Body and type(b) is Body:
+        # box trees: one kernel call (pose checks, relative motion, root test,
+        # traversal, tags) with the bodies' buffers and the scratch by address
+        ha, hb = a._addr, b._addr
+        if ha is not None and hb is not None:
+            try:
+                W, w = _scratch.w
+            except AttributeError:     # per-thread scratch, reused (results copied out)
+                W, w = _scratch.w = _posed_scratch(_FAST_CAP)
+            r = -3
+            try:    # what the compiled entry point unboxes safely: float64 and 2
+                # dimensions checked here, any layout, an ndarray (numba checks that:
+                # TypeError otherwise); the kernel checks the shape and rigidity
+                if pose_a.dtype is _F64 and pose_b.dtype is _F64 and pose_a.ndim == 2 \
+                        and pose_b.ndim == 2:
+                    r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
+            except (AttributeError, TypeError):
+                pass
+            if r == -3:     # another type: checked, converted
+                pose_a = np.array(validate_pose(pose_a, "pose_a"), dtype=np.float64)
+                pose_b = np.array(validate_pose(pose_b, "pose_b"), dtype=np.float64)
+                r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
+            if r == 2:                  # root boxes disjoint
+                return _MISS1
+            if r >= 0:
+                if not r & 1:
+                    c = _MISSES.get(r)
+                    if c is None:
+                        c = _contact(False, _NO_PAIRS, _NO_PAIRS, r >> 1)
+                        if r < 8192:
+                            _MISSES[r] = c
+                    return c
+                return _hits(a, pose_a, b, pose_b, not all_pairs, W)
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
     Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")
@@ -288,8 +295,8 @@ def _hits(a, Pa, b, Pb, first_only, W):
     n, tests = W[kp.POSED_ANSWER:kp.POSED_ANSWER + 2].tolist()
     cap = (W.shape[0] - kp.POSED_FIXED) // 4
     if n > cap:                 # more pairs than the buffer: once more, larger
-        W = _posed_scratch(n)
-        kp.collide_packed(a._pf, b._pf, Pa, Pb, first_only, W)
+        W, w = _posed_scratch(n)
+        _posed(a._addr, b._addr, Pa, Pb, first_only, w)
         cap = n
     o = kp.POSED_FIXED
     pairs = W[o:o + 2 * n].reshape(n, 2).copy()
@@ -301,39 +308,28 @@ def _hits(a, Pa, b, Pb, first_only, W):
 
 
 def _posed_scratch(cap):
+    """A scratch ``W`` of the single-call kernel for ``cap`` pairs, and its address."""
     W = np.zeros(kp.posed_scratch_size(cap), dtype=np.int64)
+    W[kp.POSED_LENGTH] = W.shape[0]
     W[kp.POSED_FIXED - 1:kp.POSED_FIXED].view(np.float64)[0] = POSE_TOL
-    return W
+    return W, W.ctypes.data
 
 
-def _posed_first(*args):
-    """First call of the single-call kernel, through numba's dispatcher (compiles it
-    or loads it from the cache); then keep the compiled entry point of its one
-    signature (float64 / int64 C-contiguous writable arrays, a bool) so that later
-    calls skip the dispatcher's type matching (~0.15 µs per argument).  The caller
-    passes only those types: the bodies' buffers and scratch are built so, and a
-    pose goes in only when its numba fingerprint (dtype, ndim, layout,
-    writability: what the dispatcher itself matches) is that of a float64
-    C-contiguous writable 2-D array; the kernel checks the shape."""
+def _posed_load():
+    """The compiled entry point of the single-call kernel for its one signature
+    (addresses, two float64 2-D poses of any layout, a bool), compiled or loaded
+    from the cache once; calling it directly skips the dispatcher's type matching
+    (~0.15 µs per argument).  The caller passes only those types (see
+    :func:`collide`)."""
     global _posed
-    r = kp.collide_packed(*args)
-    sig = tuple(numba.typeof(x) for x in args)
-    if sig in kp.collide_packed.overloads:
-        _posed = kp.collide_packed.overloads[sig].entry_point
-    return r
-
-
-def _fp_python(x):
-    """What numba's fingerprint tells apart, for a numba without that private helper."""
-    if type(x) is not np.ndarray:
-        return None
-    f = x.flags
-    return x.dtype.str, x.ndim, f.c_contiguous, f.writeable
+    pose = numba.types.Array(numba.float64, 2, "A")
+    _posed = kp.collide_packed.compile((numba.int64, numba.int64, pose, pose,
+                                        numba.boolean, numba.int64))
+    return _posed
 
 
 _posed = None
-_fp = compute_fingerprint or _fp_python
-_FP44 = _fp(np.eye(4))
+_ND = np.ndarray
 _MISSES = {}
 """Non-colliding :class:`Contact` results by ``2 * bv_tests`` (immutable: shared)."""
 
@@ -350,6 +346,7 @@ calling thread."""
 _scratch = threading.local()
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
 _NO_PAIRS.flags.writeable = False
+_MISS1 = _MISSES[2] = _contact(False, _NO_PAIRS, _NO_PAIRS, 1)
 
 
 def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:

@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 
 import geomkit
 from geomkit._kernels._numba import jit
+from geomkit._kernels.bvh_query import PLANE_SLACK, _prism_gap, _unit_normal
 from geomkit._kernels.triangles import triangle_triangle_distance, triangles_intersect
 from geomkit.collision import Body, collide, collide_many, min_distance
 from geomkit.errors import InvalidInputError
@@ -419,3 +420,86 @@ def test_batch_kernels_are_serial():
             f = getattr(mod, name)
             if hasattr(f, "targetoptions"):
                 assert not f.targetoptions.get("parallel"), (mod.__name__, name)
+
+
+@pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")   # np.matrix
+def test_collide_other_pose_types_and_copied_bodies():
+    """float64 2-D poses of any layout go to the single-call kernel as they are;
+    other dtypes, byte orders and ndarray subclasses are converted; a copied body
+    (pickle, deepcopy) holds its own buffer, and the kernel's handle follows it."""
+    import copy
+    import pickle
+    a, b = body("freeform", "obb"), body("icosphere", "obb")
+    poses = random_poses(20, 23, spread=6.0).reshape(10, 2, 4, 4)
+    for Pa, Pb in poses:
+        c = collide(a, Pa, b, Pb)
+        for other in (Pb.astype(">f8"), np.asmatrix(Pb), np.asfortranarray(Pb),
+                      Pb.astype(np.longdouble), Pb.repeat(2, 0).repeat(2, 1)[::2, ::2]):
+            d = collide(a, Pa, b, other)
+            assert np.array_equal(c.pairs, d.pairs) and c.bv_tests == d.bv_tests
+    for other in (copy.deepcopy(b), pickle.loads(pickle.dumps(b))):
+        assert other._addr == other._pf.ctypes.data != b._addr
+        for Pa, Pb in poses:
+            c, d = collide(a, Pa, b, Pb), collide(a, Pa, other, Pb)
+            assert np.array_equal(c.pairs, d.pairs) and c.bv_tests == d.bv_tests
+    with pytest.raises(InvalidInputError, match="pose_b: expected numbers"):
+        collide(a, np.eye(4), b, "pose")
+
+
+def test_distance_near_continuum_of_minima_vs_brute_force():
+    """A ball centred on the torus's axis, in its hole: every point of a circle is
+    (up to the tessellation) a closest point, so thousands of triangle pairs are
+    within a hair of the minimum: the node bounds (bounding box in the other's
+    axes, cut at the best distance) and the triangle prism bounds must prune none
+    of the closest pair's ancestors.  Distances equal brute force's."""
+    (VA, FA) = mesh("torus")
+    t = trimesh.creation.icosphere(2, 3.0)
+    VB, FB = np.ascontiguousarray(t.vertices, float), np.ascontiguousarray(t.faces, np.int64)
+    for bv in ("obb", "aabb"):
+        a, b = body("torus", bv), Body((VB, FB), bv=bv)
+        for k, z in enumerate((0.0, 0.7, 2.5)):
+            Pb = np.eye(4)
+            Pb[:3, :3] = Rotation.random(random_state=k).as_matrix()
+            Pb[:3, 3] = (0.0, 0.0, z)
+            d = min_distance(a, np.eye(4), b, Pb)
+            dref = brute_distance(VA, FA, moved(VB, Pb), FB)
+            assert dref > 0.5 and abs(d.distance - dref) <= 1e-12 * dref
+
+
+@jit
+def _prism_vs_exact(T1, T2, out):
+    n1 = np.empty((4, 3))
+    n2 = np.empty((4, 3))
+    p = np.empty(3)
+    q = np.empty(3)
+    for k in range(T1.shape[0]):
+        _unit_normal(T1[k], n1)
+        _unit_normal(T2[k], n2)
+        out[k, 0] = max(_prism_gap(n1, T1[k], T2[k]), _prism_gap(n2, T2[k], T1[k]))
+        out[k, 1] = triangle_triangle_distance(T1[k], T2[k], p, q)
+
+
+def test_triangle_prism_bound_is_a_lower_bound():
+    """The leaf pairs' prism bound (height over the other triangle's plane and
+    distance beyond one of its edges) minus its rounding slack never exceeds the
+    exact triangle distance: random, nearly parallel, nearly touching and sliver
+    triangles; and it is tight for facing parallel triangles."""
+    rng = np.random.default_rng(7)
+    n = 4000
+    T1 = rng.normal(size=(n, 3, 3))
+    T2 = rng.normal(size=(n, 3, 3)) + rng.normal(size=(n, 1, 3)) * 2.0
+    T2[:1000] = T1[:1000] + rng.normal(size=(1000, 1, 3)) * 0.5 + \
+        rng.normal(size=(1000, 3, 3)) * 1e-3           # nearly parallel copies
+    T1[1000:1500, 2] = T1[1000:1500, 0] + 1e-7 * rng.normal(size=(500, 3))  # slivers
+    T2[1500:2000] = T1[1500:2000] * 1e6 + 1e3           # large coordinates
+    T1[1500:2000] *= 1e6
+    out = np.empty((n, 2))
+    _prism_vs_exact(T1, T2, out)
+    lever = np.linalg.norm(T1.mean(1) - T2.mean(1), axis=1) + \
+        np.abs(T1 - T1.mean(1, keepdims=True)).max((1, 2)) * 3 + \
+        np.abs(T2 - T2.mean(1, keepdims=True)).max((1, 2)) * 3
+    assert np.all(out[:, 0] - PLANE_SLACK * lever <= out[:, 1])
+    assert np.mean(out[:, 0] > 0.5 * out[:, 1]) > 0.5      # not a vacuous bound
+    flat = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
+    _prism_vs_exact(flat, flat + [0.1, 0.1, 0.25], out[:1])
+    assert abs(out[0, 0] - 0.25) < 1e-12 and abs(out[0, 1] - 0.25) < 1e-12

@@ -11,24 +11,34 @@ tests of a query jump across trees of several MB, so memory latency, not
 arithmetic, is most of their cost.  Built by :func:`pack_boxes`.
 
 Single call (:func:`collide_packed`): numba unboxes every array argument (~0.1 µs
-each) and a query whose root boxes are disjoint is a few µs in all, so each body is
-one buffer (``B`` float64 with ``Bi = B.view(int64)``: ``N`` at ``B[0:16 n]``, ``T``
-(m, 3, 3) triangle corners in tree order at ``B[16 n:16 n + 9 m]``, then as int64
-``order`` (m,), ``face_tags`` (m,), and ``Bi[-2] = n``, ``Bi[-1] = m``; the body's
-``N``, ``T``, ``order``, ``face_tags`` are views into it, and ``N`` starts the buffer
-so its records keep their cache-line alignment), the kernel takes 6 arguments,
-allocates nothing, answers a pose whose root boxes are disjoint without the
-traversal's call, and returns one integer.  Its scratch ``W`` int64 (one per
-thread, :func:`posed_scratch_size`): the node stack (``2 STACK``), the answer
-``(n_pairs, bv_tests)``, the seed pair, the float scratch (``POSED_FLOAT`` (3, 3)
-slabs viewed as float64; the last holds the relative translation in row 0 and the
-pose tolerance at ``[2, 2]``, set by the caller), then ``cap`` pairs and ``cap``
-tag pairs.
+each: it allocates a meminfo per array) and a query whose root boxes are disjoint
+is ~1 µs of kernel work, so each body is one buffer (``B`` float64 with ``Bi =
+B.view(int64)``: a 16-slot header record with ``Bi[0] = n``, ``Bi[1] = m``, then
+``N`` at ``B[16:16 + 16 n]``, ``T`` (m, 3, 3) triangle corners in tree order, then as
+int64 ``order`` (m,) and ``face_tags`` (m,); the body's ``N``, ``T``, ``order``,
+``face_tags`` are views into it; the header is one record long so that the node
+records keep their offsets modulo 128 bytes, and it sits next to the root record:
+a root-only query reads the start of each buffer and nothing else).  The kernel
+takes the two buffers and its scratch by **address** (int64, the owner keeps them
+alive and unchanged during the call: :class:`geomkit.Body` holds its buffer, the
+caller's thread holds the scratch), the two poses as float64 2-D arrays of any
+layout (the caller checks dtype and ndim, the kernel the shape), allocates
+nothing, answers a pose whose root boxes are disjoint without the traversal's
+call, and returns one integer.  Its scratch ``W`` int64 (one per thread,
+:func:`posed_scratch_size`): the node stack (``2 STACK``), the answer ``(n_pairs,
+bv_tests)``, the seed pair, ``W``'s own length, the float scratch
+(``POSED_FLOAT`` (3, 3) slabs viewed as float64; the last holds the relative
+translation in row 0 and the pose tolerance at ``[2, 2]``, set by the caller),
+then ``cap`` pairs and ``cap`` tag pairs.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from numba import carray
+from numba.core import types
+from numba.extending import intrinsic
 
 from ._numba import jit, jit_inline
 from .bvh import rigid_code
@@ -42,11 +52,23 @@ POSED_FLOAT = 4 + LEAF_BUF + 2
 """(3, 3) slabs of float scratch: 4 of SAT scratch, ``LEAF_BUF`` moved leaf
 triangles, the relative rotation, the relative translation and tolerance."""
 POSED_ANSWER = 2 * STACK
-"""Index in ``W`` of ``n_pairs`` (``bv_tests`` follows, then the seed pair)."""
-POSED_FLOATS = 2 * STACK + 4
+"""Index in ``W`` of ``n_pairs`` (``bv_tests`` follows, then the seed pair and the
+length of ``W``)."""
+POSED_LENGTH = POSED_ANSWER + 4
+POSED_FLOATS = 2 * STACK + 6
 """Index in ``W`` of the float scratch."""
 POSED_FIXED = POSED_FLOATS + 9 * POSED_FLOAT
 """Index in ``W`` of the pairs (``cap`` rows of 2, then ``cap`` tag rows of 2)."""
+
+
+HEADER = 16
+"""Slots (float64) of a packed body buffer before its node records."""
+
+
+def packed_size(n, m):
+    """Length (float64) of the packed buffer of a box tree of ``n`` nodes and ``m``
+    triangles."""
+    return HEADER + 16 * n + 11 * m
 
 
 def posed_scratch_size(cap):
@@ -277,11 +299,32 @@ def collide_many_boxes(i0, i1, NA, TA, orderA, NB, TB, orderB, PA, PB, first_onl
         tests[k] = t
 
 
+@intrinsic
+def _f64_at(typingctx, addr):
+    """The float64 pointer at the int64 address ``addr``."""
+    sig = types.CPointer(types.float64)(types.int64)
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return sig, codegen
+
+
+@intrinsic
+def _i64_at(typingctx, addr):
+    """The int64 pointer at the int64 address ``addr``."""
+    sig = types.CPointer(types.int64)(types.int64)
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return sig, codegen
+
+
 @jit
-def collide_packed(BA, BB, Pa, Pb, first_only, W):
-    """:func:`collide_boxes` for two packed bodies (see the module docstring) under
-    the poses ``Pa``, ``Pb``, first checked to be rigid (4, 4) transforms within the
-    tolerance in ``W`` (the caller sets it).
+def collide_packed(ba, bb, Pa, Pb, first_only, w):
+    """:func:`collide_boxes` for two packed bodies (buffers at the addresses ``ba``,
+    ``bb``, scratch ``W`` at ``w``; see the module docstring) under the poses
+    ``Pa``, ``Pb`` (float64 2-D, any layout), first checked to be rigid (4, 4)
+    transforms within the tolerance in ``W`` (the caller sets it).
 
     Returns ``2 * bv_tests + (n_pairs > 0)``, or -1 / -2 for the first pose that is
     not a rigid (4, 4) transform (nothing traversed).  The pairs (original face
@@ -289,20 +332,21 @@ def collide_packed(BA, BB, Pa, Pb, first_only, W):
     cap``) and ``(n_pairs, bv_tests)`` (``W[POSED_ANSWER]``) are written to ``W``;
     ``n_pairs > cap`` means the buffer was too small (call again with a larger
     one)."""
-    S = W[POSED_FLOATS:POSED_FIXED].view(np.float64).reshape((POSED_FLOAT, 3, 3))
+    W = carray(_i64_at(w), POSED_FIXED)
+    S = carray(_f64_at(w + 8 * POSED_FLOATS), (POSED_FLOAT, 3, 3))
     tol = S[POSED_FLOAT - 1, 2, 2]
     if Pa.shape[0] != 4 or Pa.shape[1] != 4 or rigid_code(Pa, tol)[0] != 0:
         return -1
     if Pb.shape[0] != 4 or Pb.shape[1] != 4 or rigid_code(Pb, tol)[0] != 0:
         return -2
-    JA = BA.view(np.int64)
-    JB = BB.view(np.int64)
-    na = JA[JA.shape[0] - 2]
-    ma = JA[JA.shape[0] - 1]
-    nb = JB[JB.shape[0] - 2]
-    mb = JB[JB.shape[0] - 1]
-    NA = BA[:na * 16].reshape((na, 16))
-    NB = BB[:nb * 16].reshape((nb, 16))
+    hA = carray(_i64_at(ba), 2)
+    hB = carray(_i64_at(bb), 2)
+    na = hA[0]
+    ma = hA[1]
+    nb = hB[0]
+    mb = hB[1]
+    NA = carray(_f64_at(ba + 8 * HEADER), (na, 16))
+    NB = carray(_f64_at(bb + 8 * HEADER), (nb, 16))
     Rr = S[POSED_FLOAT - 2]
     tr = S[POSED_FLOAT - 1, 0]
     _relative(Pa, Pb, Rr, tr)
@@ -310,14 +354,17 @@ def collide_packed(BA, BB, Pa, Pb, first_only, W):
         W[POSED_ANSWER] = 0     # root boxes disjoint (most poses of a sparse scene):
         W[POSED_ANSWER + 1] = 1     # answered without the traversal's call
         return 2
-    fa = na * 16 + ma * 9
-    fb = nb * 16 + mb * 9
-    TA = BA[na * 16:fa].reshape((ma, 3, 3))
-    TB = BB[nb * 16:fb].reshape((mb, 3, 3))
-    orderA = JA[fa:fa + ma]
-    orderB = JB[fb:fb + mb]
-    tagsA = JA[fa + ma:fa + 2 * ma]
-    tagsB = JB[fb + mb:fb + 2 * mb]
+    fa = HEADER + na * 16
+    fb = HEADER + nb * 16
+    TA = carray(_f64_at(ba + 8 * fa), (ma, 3, 3))
+    TB = carray(_f64_at(bb + 8 * fb), (mb, 3, 3))
+    fa += 9 * ma
+    fb += 9 * mb
+    orderA = carray(_i64_at(ba + 8 * fa), ma)
+    orderB = carray(_i64_at(bb + 8 * fb), mb)
+    tagsA = carray(_i64_at(ba + 8 * (fa + ma)), ma)
+    tagsB = carray(_i64_at(bb + 8 * (fb + mb)), mb)
+    W = carray(_i64_at(w), W[POSED_LENGTH])
     cap = (W.shape[0] - POSED_FIXED) // 4
     pairs = W[POSED_FIXED:POSED_FIXED + 2 * cap].reshape((cap, 2))
     tags = W[POSED_FIXED + 2 * cap:POSED_FIXED + 4 * cap].reshape((cap, 2))

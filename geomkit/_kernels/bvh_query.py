@@ -16,8 +16,12 @@ moved on the fly, A's by ``(MA, mA)`` and B's by ``(MB, mB)`` into the common fr
 of the node test (A's frame for boxes, the world for 14-DOPs).
 
 Lower bounds for distance: for boxes, the largest separation over the 15 SAT axes
-(normalised; axes from nearly parallel edges skipped), for 14-DOPs the largest
-interval gap over the 7 unit directions; both shrunk by ``LB_SHRINK``.
+(normalised; axes from nearly parallel edges skipped), the circumscribed spheres'
+gap or the distance of one box to the other's bounding box in its axes, whichever
+is largest; for 14-DOPs the largest interval gap over the 7 unit directions; both
+shrunk by ``LB_SHRINK``.  Triangle pairs of a leaf pair: their bounding spheres'
+gap and the prism bound of each over the other (height over its plane and
+distance beyond one of its edges, :func:`_prism_gap`).
 """
 
 from __future__ import annotations
@@ -27,12 +31,18 @@ import numpy as np
 from ._numba import jit, jit_inline
 from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
+from .voxel import _heap_pop, _heap_push
 
 SAT_EPS = 1e-10
 LB_SHRINK = 1.0 - 1e-9
 STACK = 1024
 LEAF_BUF = 16
 INV_SQRT3 = 1.0 / np.sqrt(3.0)
+PLANE_SLACK = 1e-9
+"""Triangle plane bounds are lowered by ``PLANE_SLACK`` times the distance between
+the two triangles' bounding-sphere centres plus their radii (a bound of every
+corner-to-plane lever arm): the unit normal's rounding error is below ~1e-11 (see
+``_unit_normal``), so each height's is below ~1e-11 of that arm."""
 
 
 @jit_inline
@@ -54,24 +64,56 @@ def _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, M):
 @jit_inline
 def box_separation(Rab, T, a, b, early, Ab):
     """Largest normalised separation of two boxes over the 15 SAT axes (Paper 3),
-    or (without ``early``) the gap of their circumscribed spheres when larger.
+    or (without ``early``) when larger the gap of their circumscribed spheres or
+    the distance from one box to the other's bounding box in its axes (the
+    positive face-axis separations ``g`` of A, resp. B: every point pair differs by
+    at least ``g_k`` along each axis ``k``, so their distance is at least
+    ``sqrt(sum g_k^2)``; up to sqrt(3) tighter than the largest ``g_k`` when the
+    boxes are apart diagonally and, unlike the spheres, tight for flat boxes).
 
     ``a``, ``b`` (3,) half extents; B's axes are the columns of ``Rab`` and its
     centre ``T``, in A's box axes.  With ``early`` the first separating axis's
     value is returned at once (a collision test needs only the sign).  A value
     > 0 proves the boxes disjoint and bounds their distance from below.  ``Ab``
-    (3, 3) is scratch.
+    (3, 3) is scratch.  With ``early``, boxes no axis separates are reported
+    overlapping (a value <= 0) even when their spheres are apart (possible only
+    within the ``SAT_EPS`` inflation): conservative for a culling test.
     """
+    return box_bound(Rab, T, a, b, early, Ab, np.inf)
+
+
+@jit_inline
+def _sphere_gap(T, a, b):
+    """The boxes' circumscribed spheres: centre distance minus the half diagonals,
+    made smaller than any rounding of it."""
+    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
+    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
+        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    return dc - rs - 1e-12 * (dc + rs)
+
+
+@jit_inline
+def box_bound(Rab, T, a, b, early, Ab, cut):
+    """:func:`box_separation`, except that (without ``early``) a bound reaching
+    ``cut`` is returned at once: the face axes, the bounding boxes and the spheres
+    come first, the 9 edge axes (a division and a square root each) only when
+    those stay below ``cut`` (a branch and bound prunes at ``cut`` = the best
+    distance so far: most node pairs it bounds are pruned without their edge
+    axes)."""
     for r in range(3):
         for c in range(3):
             Ab[r, c] = abs(Rab[r, c]) + SAT_EPS
     best = -np.inf
+    ga = 0.0
+    gb = 0.0
     for i in range(3):   # A's face normals
         s = abs(T[i]) - a[i] - (b[0] * Ab[i, 0] + b[1] * Ab[i, 1] + b[2] * Ab[i, 2])
         if s > best:
             best = s
             if early and s > 0.0:
                 return s
+        if s > 0.0:
+            ga += s * s
     for j in range(3):   # B's face normals
         s = abs(T[0] * Rab[0, j] + T[1] * Rab[1, j] + T[2] * Rab[2, j]) - b[j] - \
             (a[0] * Ab[0, j] + a[1] * Ab[1, j] + a[2] * Ab[2, j])
@@ -79,6 +121,18 @@ def box_separation(Rab, T, a, b, early, Ab):
             best = s
             if early and s > 0.0:
                 return s
+        if s > 0.0:
+            gb += s * s
+    if not early:
+        if best > 0.0:  # the bounding box in the other's axes (only when apart along
+            # a face axis: overlapping boxes keep their negative value, which orders
+            # the descent towards the deepest overlap)
+            best = max(best, np.sqrt(max(ga, gb)))
+        s = _sphere_gap(T, a, b)
+        if s > best:
+            best = s
+        if best >= cut:
+            return best
     for i in range(3):   # A_i x B_j
         i1 = (i + 1) % 3
         i2 = (i + 2) % 3
@@ -96,15 +150,6 @@ def box_separation(Rab, T, a, b, early, Ab):
                     s /= np.sqrt(ln2)
                     if s > best:
                         best = s
-    # the boxes' circumscribed spheres: centre distance minus the half diagonals
-    # (tighter than every single axis when the boxes are apart diagonally), made
-    # smaller than any rounding of it
-    dc = np.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
-    rs = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + \
-        np.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
-    s = dc - rs - 1e-12 * (dc + rs)
-    if s > best:
-        best = s
     return best
 
 
@@ -127,10 +172,19 @@ def kdop_separation(KA, KB, i, j, order, early):
 @jit_inline
 def _node_sep(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
               scr):
+    return _node_bound(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early,
+                       Rab, T, scr, np.inf)
+
+
+@jit_inline
+def _node_bound(kind, i, j, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, early, Rab, T,
+                scr, cut):
+    """:func:`_node_sep` that may stop once the bound reaches ``cut``
+    (:func:`box_bound`)."""
     if kind == 2:
         return kdop_separation(KA, KB, i, j, order, early)
     _rel_box(CA, RA, CB, RB, i, j, Rr, tr, Rab, T, scr[0])
-    return box_separation(Rab, T, EA[i], EB[j], early, scr[1])
+    return box_bound(Rab, T, EA[i], EB[j], early, scr[1], cut)
 
 
 @jit_inline
@@ -146,6 +200,67 @@ def _move(T, r, M, m, out):
         x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
         for k in range(3):
             out[v, k] = M[k, 0] * x + M[k, 1] * y + M[k, 2] * z + m[k]
+
+
+@jit_inline
+def _unit_normal(t, out):
+    """Unit normal ``out[0]`` of triangle ``t`` (3, 3) and the outward unit normals
+    ``out[1 + e]`` in its plane of its edges ``t[e] -> t[e + 1]``; all 0 when its
+    corners are nearly collinear (``|e x f| <= 1e-4 |e| |f|`` for its edges ``e``,
+    ``f`` from corner 0: the normals' rounding errors then stay below ~1e-11, see
+    :data:`PLANE_SLACK`)."""
+    e0, e1, e2 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+    f0, f1, f2 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+    n0 = e1 * f2 - e2 * f1
+    n1 = e2 * f0 - e0 * f2
+    n2 = e0 * f1 - e1 * f0
+    nn = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if not nn > 1e-4 * np.sqrt((e0 * e0 + e1 * e1 + e2 * e2) * (f0 * f0 + f1 * f1 + f2 * f2)):
+        out[:] = 0.0
+        return
+    n0 /= nn
+    n1 /= nn
+    n2 /= nn
+    out[0, 0] = n0
+    out[0, 1] = n1
+    out[0, 2] = n2
+    for e in range(3):      # edge x normal points out of a counter-clockwise triangle
+        g = (e + 1) % 3
+        d0, d1, d2 = t[g, 0] - t[e, 0], t[g, 1] - t[e, 1], t[g, 2] - t[e, 2]
+        m0 = d1 * n2 - d2 * n1
+        m1 = d2 * n0 - d0 * n2
+        m2 = d0 * n1 - d1 * n0
+        mm = np.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+        out[1 + e, 0] = m0 / mm
+        out[1 + e, 1] = m1 / mm
+        out[1 + e, 2] = m2 / mm
+
+
+@jit_inline
+def _prism_gap(n, t, u):
+    """A lower bound of the distance of triangles ``t`` and ``u`` (3, 3) from ``t``'s
+    normals ``n`` (4, 3) (:func:`_unit_normal`): with ``h`` the smallest height of
+    ``u``'s corners over ``t``'s plane when all lie strictly on one side (else 0) and
+    ``l`` the largest, over ``t``'s edges, smallest distance of ``u``'s corners
+    beyond the edge's line in the outward in-plane direction (else 0), every point
+    pair differs by at least ``h`` along the normal and ``l`` along that
+    orthogonal direction: ``sqrt(h^2 + l^2)`` (up to the normals' rounding)."""
+    lo = np.inf
+    hi = -np.inf
+    for v in range(3):
+        x = n[0, 0] * (u[v, 0] - t[0, 0]) + n[0, 1] * (u[v, 1] - t[0, 1]) + \
+            n[0, 2] * (u[v, 2] - t[0, 2])
+        lo = min(lo, x)
+        hi = max(hi, x)
+    h = lo if lo > 0.0 else (-hi if hi < 0.0 else 0.0)
+    lat = 0.0
+    for e in range(3):
+        m = np.inf
+        for v in range(3):
+            m = min(m, n[1 + e, 0] * (u[v, 0] - t[e, 0]) + n[1 + e, 1] * (u[v, 1] - t[e, 1]) +
+                    n[1 + e, 2] * (u[v, 2] - t[e, 2]))
+        lat = max(lat, m)
+    return np.sqrt(h * h + lat * lat)
 
 
 @jit_inline
@@ -237,7 +352,10 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
 def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                    childB, rngB, CB, RB, EB, KB, TB, orderB,
                    Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q):
-    """Minimum distance of two trees by branch and bound (node lower bounds).
+    """Minimum distance of two trees by branch and bound (node lower bounds), best
+    first: node pairs on a binary heap keyed by their bound (overlapping pairs,
+    which no distance can prune, first and depth first), so that once the smallest
+    bound left reaches the best distance the search ends.
 
     ``margin > 0``: stop at the first triangle pair closer than ``margin`` and
     prune every node pair whose bound reaches ``margin``.  Returns ``(d, fa, fb,
@@ -245,8 +363,9 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     original face indices (-1 if none) and the number of node bounds computed;
     the closest points go to ``out_p``, ``out_q`` in the common frame.
     """
-    st = np.empty((STACK, 2), dtype=np.int64)
-    stlb = np.empty(STACK)
+    hkey = np.empty(STACK)      # the heap of node pairs (i << 32 | j; it grows)
+    hval = np.empty(STACK, dtype=np.int64)
+    cb = np.empty(2)
     Rab = np.empty((3, 3))
     T = np.empty(3)
     scr = np.empty((2, 3, 3))
@@ -254,23 +373,24 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     ta = np.empty((3, 3))
     tbs = np.empty((LEAF_BUF, 3, 3))
     sph = np.empty((LEAF_BUF, 4))
+    nb = np.empty((LEAF_BUF, 4, 3))
+    na = np.empty((4, 3))
     p = np.empty(3)
     q = np.empty(3)
     best = margin if margin > 0.0 else np.inf
     fa = -1
     fb = -1
     tests = 1
-    st[0, 0] = 0
-    st[0, 1] = 0
-    stlb[0] = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                        Rab, T, scr) * LB_SHRINK
-    top = 1
-    while top > 0:
-        top -= 1
-        if stlb[top] >= best:
-            continue
-        i = st[top, 0]
-        j = st[top, 1]
+    b = _node_sep(kind, 0, 0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
+                  Rab, T, scr) * LB_SHRINK
+    hkey, hval, n = _heap_push(hkey, hval, 0, b if b > 0.0 else -1.0, 0)
+    while n > 0:
+        key = hkey[0]
+        i = hval[0] >> 32
+        j = hval[0] & 0xFFFFFFFF
+        n = _heap_pop(hkey, hval, n)
+        if key >= best:  # best first: every pair left is bounded by best or more
+            break       # (a negative key: overlapping boxes, bound <= 0 < best)
         la = childA[i, 0] < 0
         lb = childB[j, 0] < 0
         if la and lb:
@@ -280,9 +400,11 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
             for rb in range(rngB[j, 1] - rb0):
                 _move(TB, rb0 + rb, MB, mB, tbs[rb])
                 _sphere(tbs[rb], sph[rb])
+                _unit_normal(tbs[rb], nb[rb])
             for ra in range(rngA[i, 0], rngA[i, 1]):
                 _move(TA, ra, MA, mA, ta)
                 _sphere(ta, sa)
+                _unit_normal(ta, na)
                 for rb in range(rngB[j, 1] - rb0):
                     # the two triangles' spheres: skip the exact distance when their
                     # gap (made smaller than any rounding of it) reaches the best
@@ -290,6 +412,11 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                                  (sa[2] - sph[rb, 2]) ** 2)
                     rs = sa[3] + sph[rb, 3]
                     if dc - rs - 1e-12 * (dc + rs) >= best:
+                        continue
+                    # the prism bounds (_prism_gap): tight for the facing, nearly
+                    # parallel pairs of a near-continuum of minima
+                    cut = best + PLANE_SLACK * (dc + rs)
+                    if _prism_gap(na, ta, tbs[rb]) >= cut or _prism_gap(nb[rb], tbs[rb], ta) >= cut:
                         continue
                     d = triangle_triangle_distance(ta, tbs[rb], p, q)
                     if d < best:
@@ -305,23 +432,25 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
-        b0 = _node_sep(kind, i0, j0, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T, scr) * LB_SHRINK
-        b1 = _node_sep(kind, i1, j1, CA, RA, EA, KA, CB, RB, EB, KB, Rr, tr, order, False,
-                       Rab, T, scr) * LB_SHRINK
+        # (a bound may stop at best / LB_SHRINK: it then prunes its pair all the same;
+        # one call site for the two children: the bound is inlined, compile time)
+        cut = best / LB_SHRINK
+        for c in range(2):
+            cb[c] = _node_bound(kind, i0 if c == 0 else i1, j0 if c == 0 else j1, CA, RA, EA,
+                                KA, CB, RB, EB, KB, Rr, tr, order, False, Rab, T, scr,
+                                cut) * LB_SHRINK
         tests += 2
-        if b0 > b1:   # nearer pair on top of the stack
-            i0, j0, b0, i1, j1, b1 = i1, j1, b1, i0, j0, b0
-        if b1 < best:
-            st[top, 0] = i1
-            st[top, 1] = j1
-            stlb[top] = b1
-            top += 1
-        if b0 < best:
-            st[top, 0] = i0
-            st[top, 1] = j0
-            stlb[top] = b0
-            top += 1
+        # heap keys: a separated pair's bound (best first), overlapping pairs before
+        # every separated one and depth first (children keyed below every pending
+        # pair: node indices grow with depth), the nearer child first (lower key)
+        base = -4.0 * (i + j + 1)
+        near = 0 if cb[0] <= cb[1] else 1
+        for c in range(2):
+            k = near if c == 1 else 1 - near
+            if cb[k] < best:
+                hkey, hval, n = _heap_push(
+                    hkey, hval, n, cb[k] if cb[k] > 0.0 else base - 1.0 - c,
+                    ((i0 if k == 0 else i1) << 32) | (j0 if k == 0 else j1))
     if best == margin and margin > 0.0:
         best = np.inf
     return best, fa, fb, tests
