@@ -39,6 +39,7 @@ from ._kernels import trim_feet as _tf
 from . import tolerances as tols
 from .errors import InvalidInputError
 from .evaluation import evaluate, normals
+from .projection_cert import pack_span_bounds
 from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
@@ -281,11 +282,15 @@ class Projector:
                                 PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
+        tb = _trim_boundary_triangles(self.mesh, self.trimmed)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
-            self.mesh.face_deviation
-            + PROJ_TRIM_TARGET * self.mesh.tol
-            * _trim_boundary_triangles(self.mesh, self.trimmed)))
+            self.mesh.face_deviation + PROJ_TRIM_TARGET * self.mesh.tol * tb))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
+        # second-order certificate: triangles on a trim boundary (never settled) and
+        # per-span derivative bounds (geomkit.projection_cert)
+        self.cert_pack = (tb.astype(np.int8), *pack_span_bounds(
+            self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
+        self.certify = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
         self.packed = _pack(self.surfaces)
@@ -348,7 +353,7 @@ class Projector:
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 4), dtype=np.int64)
+        work = np.zeros((n, 5), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
@@ -360,8 +365,8 @@ class Projector:
         Pk = P if order is None else np.ascontiguousarray(P[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
-                          self.trimmed, *self.breaks, *self.trim_pack, step_tol, max_distance,
-                          K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
+                          self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
+                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
@@ -480,6 +485,7 @@ class Projector:
                                  "cells_opened": int(work[:, 0].sum()),
                                  "triangles_tested": int(work[:, 1].sum()),
                                  "newton_runs": int((nf - nf0).sum()),
+                                 "certified_skips": int(work[:, 4].sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
                                  "approx_error": self.approx_error,
@@ -504,7 +510,8 @@ class Projector:
                 for f in ("point", "uv", "surface", "distance", "signed_distance",
                           "normal", "status", "lower_bound", "residual", "feet_tried"):
                     getattr(out, f)[b] = getattr(sub, f)
-                for k_ in ("newton_runs", "not_proven", "start_cap_reruns"):
+                for k_ in ("newton_runs", "not_proven", "start_cap_reruns",
+                           "certified_skips"):
                     out.stats[k_] += sub.stats[k_]
         return out
 

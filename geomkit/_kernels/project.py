@@ -26,6 +26,7 @@ import numpy as np
 from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
+from .project_cert import cert_settle
 from .voxel import point_candidates
 
 MAX_ITER = 100
@@ -390,9 +391,9 @@ def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, dep
 @jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                   max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
-                   out_rest, out_flags, out_work):
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+                   bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
+                   out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -405,6 +406,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
     cd = np.empty(cap)
     cs = np.empty(cap)
     cw = np.empty(cap)
+    settled = np.zeros(cap, dtype=np.int8)
     SKL = np.empty((3, 3, 3))
     pmax = np.int64(1)  # not a literal 1: one compile of derivs_scratch
     qmax = np.int64(1)
@@ -431,6 +433,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         out_work[i, 0] = pops
         out_work[i, 1] = tested
         out_work[i, 2] = k
+        if settled.shape[0] < ct.shape[0]:
+            settled = np.zeros(ct.shape[0], dtype=np.int8)
+        settled[:k] = 0
+        nset = 0
         flags = 1 if ovf else 0
         # feet of an earlier pass (its candidates before skip[i] were tried or pruned
         # there): continued, not repeated
@@ -447,6 +453,9 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         rest = np.inf
         stop = k
         for c in range(skip[i], k):
+            if settled[c] != 0:
+                # proven no nearer than a foot found (second-order certificate)
+                continue
             t = ct[c]
             lbc = cd[c] - fdev[t]
             if lbc > best:
@@ -504,6 +513,13 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             # or within the trim band of a trimmed face prunes nothing
             if cl == INSIDE:
                 best = min(best, d)
+                if certify != 0 and st == FOOT_OK and d <= best:
+                    # the candidates of this face around the foot, settled at once
+                    # when f is provably convex over their parameter box
+                    nset += cert_settle(cbrk, bnd, bnd_off[s], bu, bv, dom[s], u, v, d, SKL,
+                                        x, step_tol, s, c + 1, k, best, ct, cd, fdev,
+                                        face_surf, face_uv, tb, settled)
+        out_work[i, 4] = nset
         out_nf[i] = nf
         out_work[i, 3] = stop
         out_rest[i] = rest
@@ -512,9 +528,9 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                  max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
-                  out_rest, out_flags, out_work):
+                  brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd, bnd_off,
+                  certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st, out_cls,
+                  out_nf, out_lb, out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
@@ -529,7 +545,15 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
-    of the first candidate left untried by the cap (candidates when none)).
+    of the first candidate left untried by the cap (candidates when none), candidates
+    settled by the second-order certificate).
+
+    Certificate (``certify`` != 0; :func:`geomkit._kernels.project_cert.cert_settle`):
+    after each new nearest foot inside its face, the untried candidates of that face
+    around it (not on a trim boundary: ``tb[t]`` == 0) are settled without a Newton
+    run when a second-order bound proves the distance no lower than the foot's over
+    their parameter box (sub-span derivative bounds ``bnd`` over the borders ``cbrk``,
+    surface s's from ``bnd_off[s]``).
 
     A later pass continues an earlier one: ``out_nf[i]`` (in/out) feet are already in
     the ``out_*`` rows (they count towards ``max_starts`` and their inside distances
@@ -540,9 +564,9 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-         max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
-         out_flags, out_work)
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+         bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
+         out_cls, out_nf, out_lb, out_rest, out_flags, out_work)
 
 
 @jit
