@@ -35,10 +35,11 @@ from scipy.spatial import cKDTree
 
 from . import results as R
 from ._kernels import project as _pk
+from ._kernels import project_finish as _pf
 from ._kernels import trim_feet as _tf
 from . import tolerances as tols
 from .errors import InvalidInputError
-from .evaluation import evaluate, normals
+from .evaluation import DEGENERATE_REL, evaluate
 from .projection_cert import pack_span_bounds
 from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
@@ -336,11 +337,13 @@ class Projector:
         first = K is None
         if first:
             K = MAX_STARTS_TRIMMED if self.trims else MAX_STARTS
-        fs = np.full((n, K), -1, dtype=np.int64)
-        fuv = np.zeros((n, K, 2))
-        fd = np.full((n, K), np.inf)
-        fst = np.zeros((n, K), dtype=np.int64)
-        fcls = np.zeros((n, K), dtype=np.int8)
+        # the kernel writes feet 0 .. nf-1 of each row before reading them; the columns
+        # beyond are masked below (distance inf) and never read
+        fs = np.empty((n, K), dtype=np.int64)
+        fuv = np.empty((n, K, 2))
+        fd = np.empty((n, K))
+        fst = np.empty((n, K), dtype=np.int64)
+        fcls = np.empty((n, K), dtype=np.int8)
         nf = np.zeros(n, dtype=np.int64)
         skip = np.zeros(n, dtype=np.int64)
         if prev is not None:
@@ -429,15 +432,25 @@ class Projector:
         foot = np.full((n, 3), np.nan)
         nrm = np.full((n, 3), np.nan)
         resid = np.full(n, np.nan)
-        for si, sel in _groups(surf, (status != R.BEYOND) & (status != R.FAILED)):
+        live = (status != R.BEYOND) & (status != R.FAILED)
+        idx = np.flatnonzero(live)
+        if idx.size:
+            # clamped to the domain; point and normal of every answer in one kernel pass
+            ds = dom[surf[idx]]
+            q = np.ascontiguousarray(uv[idx])
+            q[:, 0] = np.clip(q[:, 0], ds[:, 0], ds[:, 1])
+            q[:, 1] = np.clip(q[:, 1], ds[:, 2], ds[:, 3])
+            uv[idx] = q
+            fp = np.empty((idx.size, 3))
+            fnr = np.empty((idx.size, 3))
+            _pf.foot_frames(q, np.ascontiguousarray(surf[idx], dtype=np.int64), Pw, U, V,
+                            meta, dom, DEGENERATE_REL, fp, fnr)
+            foot[idx] = fp
+            nrm[idx] = fnr
+        for si, sel in _groups(surf, live):
             s = self.surfaces[si]
             (u0, u1), (v0, v1) = s.domain
             q = uv[sel]
-            q[:, 0] = np.clip(q[:, 0], u0, u1)
-            q[:, 1] = np.clip(q[:, 1], v0, v1)
-            uv[sel] = q
-            foot[sel] = evaluate(s, q)
-            nrm[sel] = normals(s, q)
             st = status[sel]
             eps_u = 1e-12 * (u1 - u0)
             eps_v = 1e-12 * (v1 - v0)
