@@ -79,6 +79,27 @@ def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
     surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
 
 
+@jit_inline
+def _save(SKL):
+    """The order <= 2 derivatives of ``SKL`` (what :func:`foot_newton` leaves there)."""
+    return (SKL[0, 0, 0], SKL[0, 0, 1], SKL[0, 0, 2], SKL[1, 0, 0], SKL[1, 0, 1],
+            SKL[1, 0, 2], SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2], SKL[2, 0, 0],
+            SKL[2, 0, 1], SKL[2, 0, 2], SKL[1, 1, 0], SKL[1, 1, 1], SKL[1, 1, 2],
+            SKL[0, 2, 0], SKL[0, 2, 1], SKL[0, 2, 2])
+
+
+@jit_inline
+def _restore(SKL, t):
+    """Put back what :func:`_save` took: the same values a new evaluation at the same
+    parameters would give (evaluation is deterministic), without its cost."""
+    SKL[0, 0, 0], SKL[0, 0, 1], SKL[0, 0, 2] = t[0], t[1], t[2]
+    SKL[1, 0, 0], SKL[1, 0, 1], SKL[1, 0, 2] = t[3], t[4], t[5]
+    SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2] = t[6], t[7], t[8]
+    SKL[2, 0, 0], SKL[2, 0, 1], SKL[2, 0, 2] = t[9], t[10], t[11]
+    SKL[1, 1, 0], SKL[1, 1, 1], SKL[1, 1, 2] = t[12], t[13], t[14]
+    SKL[0, 2, 0], SKL[0, 2, 1], SKL[0, 2, 2] = t[15], t[16], t[17]
+
+
 @jit
 def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u, v,
                 step_tol, bin_, scr, SKL, left_u=0.0, left_v=0.0):
@@ -206,6 +227,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             # up to 7.6e-12 instead of rounding level on a cone of radius 4)
             un = _wrap(u + du, umin, umax, closed_u)
             vn = _wrap(v + dv, vmin, vmax, closed_v)
+            here = _save(SKL)
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
             fn = _f(SKL, x)
             if fn <= f:
@@ -213,7 +235,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                 v = vn
                 f = fn
             else:
-                _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
+                _restore(SKL, here)
             status = FOOT_OK
             break
         alpha = 1.0
@@ -223,6 +245,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         # near convergence a failing decrease is rounding: give up after 2 halvings
         tries = 30 if full_step > 1e4 * step_tol else 2
         full_newton = False
+        here = _save(SKL)
         for _ in range(tries):
             un = _wrap(u + alpha * du, umin, umax, closed_u)
             vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
@@ -262,8 +285,9 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                     beta *= 0.5
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
         if not accepted:
-            # no decrease along a descent direction: stationary within rounding
-            _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
+            # no decrease along a descent direction: stationary within rounding (the
+            # derivatives at (u, v) saved before the trials, not evaluated again)
+            _restore(SKL, here)
             status = FOOT_OK
             break
         moved = un != u or vn != v
