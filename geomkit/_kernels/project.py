@@ -27,7 +27,7 @@ from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 from .project_cert import cert_settle
-from .voxel import point_candidates
+from .voxel import candidates_batch, point_candidates  # noqa: F401 (the search alone)
 
 MAX_ITER = 100
 FOOT_OK = 0
@@ -598,31 +598,3 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
          closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
          bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
          out_cls, out_nf, out_lb, out_rest, out_flags, out_work)
-
-
-@jit
-def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
-                      start, tris, max_dist, out_k, out_lb):
-    """The candidate search of :func:`_project_chunk` alone (for profiling)."""
-    stamp = np.full(F.shape[0], -1, dtype=np.int64)
-    hk = np.empty(256)
-    hv = np.empty(256, dtype=np.int64)
-    cap = 64
-    ct = np.empty(cap, dtype=np.int64)
-    cd = np.empty(cap)
-    cs = np.empty(cap)
-    cw = np.empty(cap)
-    for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
-            P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
-            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
-        out_k[i] = k
-        out_lb[i] = LB
-
-
-def candidates_batch(P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
-                     max_dist, out_k, out_lb):
-    """Number of candidate triangles and the lower bound of each point: the first
-    stage of :func:`project_batch` on its own (the benchmark's stage profile)."""
-    prun(_candidates_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, dmax, origin, h,
-         lvl_dims, lvl_off, occ, start, tris, max_dist, out_k, out_lb)
