@@ -31,14 +31,17 @@ import math
 import time
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from . import results as R
 from ._kernels import project as _pk
+from ._kernels import project_finish as _pf
 from ._kernels import trim_feet as _tf
 from . import tolerances as tols
 from .errors import InvalidInputError
-from .evaluation import evaluate, normals
+from .evaluation import DEGENERATE_REL
+from .projection_cert import pack_span_bounds
+from .projection_trim import (TRIM_SAMPLES, TRIM_STARTS,  # noqa: F401 (public here)
+                              _TrimData, _trim_boundary_triangles)
 from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
@@ -77,10 +80,6 @@ candidate (in batches of :data:`RERUN_BUDGET` point-starts); a point left open a
 trying every candidate is counted in ``stats["not_proven"]``."""
 RERUN_BUDGET = 1 << 20
 """Points x starts per batch of the last pass (bounds its working memory)."""
-TRIM_SAMPLES = 32
-"""Samples per trim segment that seed the trim-boundary Newton."""
-TRIM_STARTS = 3
-"""Trim-boundary Newton starts per point: from its nearest boundary samples."""
 CHUNK_SIZE = 1 << 16
 TIE_TOL = 1e-12
 """Feet whose distances differ by less than this times max(model size, distance) are
@@ -121,29 +120,6 @@ def _as_surfaces(surfaces) -> list[Surface]:
         return list(surfaces)
     raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
                             f"{type(surfaces).__name__}", "surfaces")
-
-
-def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
-    """(m,) bool: triangles of trimmed faces with an edge on the mesh boundary.
-
-    Their deviation bound must also carry the trim polyline's 3-D chord error
-    (:data:`PROJ_TRIM_TARGET` times the mesh tolerance): along a trim
-    curve the face runs past the mesh (outer loops) or the mesh past the face (over a
-    hole), so ``d(x, t) + e_t`` measured on the parametric gap alone is no upper bound
-    of the distance to the trimmed face there — it pruned the nearest face of a real
-    part (a disk above a plate's hole)."""
-    F = mesh.faces
-    on = trimmed[mesh.face_surface] != 0
-    out = np.zeros(F.shape[0], bool)
-    if not on.any():
-        return out
-    idx = np.flatnonzero(on)
-    E = np.sort(np.stack([F[idx][:, [0, 1]], F[idx][:, [1, 2]], F[idx][:, [2, 0]]],
-                         axis=1), axis=2).reshape(-1, 2)  # (3k, 2), vertex ids
-    _, inv, cnt = np.unique(E, axis=0, return_inverse=True, return_counts=True)
-    single = (cnt[inv.ravel()] == 1).reshape(-1, 3)
-    out[idx] = single.any(axis=1)
-    return out
 
 
 def _pack(surfaces):
@@ -219,34 +195,6 @@ def _pack_trims(surfaces):
             np.ascontiguousarray(np.concatenate(lp), dtype=np.int64), toff, ttol)
 
 
-class _TrimData:
-    """Trim segments of one surface and dense samples on their images."""
-
-    def __init__(self, s: Surface):
-        seg, deg, _, _ = _segments(s)
-        self.seg = np.ascontiguousarray(seg)
-        self.deg = deg
-        M = seg.shape[0] * TRIM_SAMPLES
-        uv = np.empty((M, 2))
-        self.samp_seg = np.empty(M, dtype=np.int64)
-        self.samp_t = np.empty(M)
-        _tf.trim_samples(self.seg, deg, TRIM_SAMPLES, uv, self.samp_seg, self.samp_t)
-        (u0, u1), (v0, v1) = s.domain
-        uv[:, 0] = np.clip(uv[:, 0], u0, u1)
-        uv[:, 1] = np.clip(uv[:, 1], v0, v1)
-        self.samp_xyz = np.ascontiguousarray(evaluate(s, uv))
-        self.tree = cKDTree(self.samp_xyz)
-
-    def nearest_samples(self, P):
-        """Indices (n, 3) of the :data:`TRIM_STARTS` boundary samples nearest to each
-        point (-1 where there are fewer samples)."""
-        k = min(TRIM_STARTS, self.samp_xyz.shape[0])
-        _, idx = self.tree.query(P, k=k)
-        near = np.full((P.shape[0], TRIM_STARTS), -1, dtype=np.int64)
-        near[:, :k] = np.asarray(idx, dtype=np.int64).reshape(P.shape[0], k)
-        return near
-
-
 class Projector:
     """Reusable projection onto fixed surfaces: the candidate mesh and voxel grid are
     built once (:func:`project_points` caches one per surface list).
@@ -281,11 +229,15 @@ class Projector:
                                 PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size)
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
+        tb = _trim_boundary_triangles(self.mesh, self.trimmed)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
-            self.mesh.face_deviation
-            + PROJ_TRIM_TARGET * self.mesh.tol
-            * _trim_boundary_triangles(self.mesh, self.trimmed)))
+            self.mesh.face_deviation + PROJ_TRIM_TARGET * self.mesh.tol * tb))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
+        # second-order certificate: triangles on a trim boundary (never settled) and
+        # per-span derivative bounds (geomkit.projection_cert)
+        self.cert_pack = (tb.astype(np.int8), *pack_span_bounds(
+            self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
+        self.certify = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
         self.packed = _pack(self.surfaces)
@@ -331,11 +283,13 @@ class Projector:
         first = K is None
         if first:
             K = MAX_STARTS_TRIMMED if self.trims else MAX_STARTS
-        fs = np.full((n, K), -1, dtype=np.int64)
-        fuv = np.zeros((n, K, 2))
-        fd = np.full((n, K), np.inf)
-        fst = np.zeros((n, K), dtype=np.int64)
-        fcls = np.zeros((n, K), dtype=np.int8)
+        # the kernel writes feet 0 .. nf-1 of each row before reading them; the columns
+        # beyond are masked below (distance inf) and never read
+        fs = np.empty((n, K), dtype=np.int64)
+        fuv = np.empty((n, K, 2))
+        fd = np.empty((n, K))
+        fst = np.empty((n, K), dtype=np.int64)
+        fcls = np.empty((n, K), dtype=np.int8)
         nf = np.zeros(n, dtype=np.int64)
         skip = np.zeros(n, dtype=np.int64)
         if prev is not None:
@@ -348,7 +302,7 @@ class Projector:
         lb = np.zeros(n)
         rest = np.full(n, np.inf)
         flags = np.zeros(n, dtype=np.int64)
-        work = np.zeros((n, 4), dtype=np.int64)
+        work = np.zeros((n, 5), dtype=np.int64)
         g = self.grid
         Pw, U, V, meta, dom = self.packed
         # points in Morton order of their voxel: neighbours share cells and triangles
@@ -360,8 +314,8 @@ class Projector:
         Pk = P if order is None else np.ascontiguousarray(P[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
-                          self.trimmed, *self.breaks, *self.trim_pack, step_tol, max_distance,
-                          K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
+                          self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
+                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
@@ -424,15 +378,25 @@ class Projector:
         foot = np.full((n, 3), np.nan)
         nrm = np.full((n, 3), np.nan)
         resid = np.full(n, np.nan)
-        for si, sel in _groups(surf, (status != R.BEYOND) & (status != R.FAILED)):
+        live = (status != R.BEYOND) & (status != R.FAILED)
+        idx = np.flatnonzero(live)
+        if idx.size:
+            # clamped to the domain; point and normal of every answer in one kernel pass
+            ds = dom[surf[idx]]
+            q = np.ascontiguousarray(uv[idx])
+            q[:, 0] = np.clip(q[:, 0], ds[:, 0], ds[:, 1])
+            q[:, 1] = np.clip(q[:, 1], ds[:, 2], ds[:, 3])
+            uv[idx] = q
+            fp = np.empty((idx.size, 3))
+            fnr = np.empty((idx.size, 3))
+            _pf.foot_frames(q, np.ascontiguousarray(surf[idx], dtype=np.int64), Pw, U, V,
+                            meta, dom, DEGENERATE_REL, fp, fnr)
+            foot[idx] = fp
+            nrm[idx] = fnr
+        for si, sel in _groups(surf, live):
             s = self.surfaces[si]
             (u0, u1), (v0, v1) = s.domain
             q = uv[sel]
-            q[:, 0] = np.clip(q[:, 0], u0, u1)
-            q[:, 1] = np.clip(q[:, 1], v0, v1)
-            uv[sel] = q
-            foot[sel] = evaluate(s, q)
-            nrm[sel] = normals(s, q)
             st = status[sel]
             eps_u = 1e-12 * (u1 - u0)
             eps_v = 1e-12 * (v1 - v0)
@@ -480,6 +444,7 @@ class Projector:
                                  "cells_opened": int(work[:, 0].sum()),
                                  "triangles_tested": int(work[:, 1].sum()),
                                  "newton_runs": int((nf - nf0).sum()),
+                                 "certified_skips": int(work[:, 4].sum()),
                                  "lower_bound_above_distance":
                                      int(np.count_nonzero(ok & (lb > dist))),
                                  "approx_error": self.approx_error,
@@ -504,7 +469,8 @@ class Projector:
                 for f in ("point", "uv", "surface", "distance", "signed_distance",
                           "normal", "status", "lower_bound", "residual", "feet_tried"):
                     getattr(out, f)[b] = getattr(sub, f)
-                for k_ in ("newton_runs", "not_proven", "start_cap_reruns"):
+                for k_ in ("newton_runs", "not_proven", "start_cap_reruns",
+                           "certified_skips"):
                     out.stats[k_] += sub.stats[k_]
         return out
 

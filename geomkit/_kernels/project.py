@@ -26,7 +26,8 @@ import numpy as np
 from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
-from .voxel import point_candidates
+from .project_cert import cert_settle
+from .voxel import candidates_batch, point_candidates  # noqa: F401 (the search alone)
 
 MAX_ITER = 100
 FOOT_OK = 0
@@ -75,7 +76,34 @@ def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
         u = umax - left_u
     if left_v > 0.0 and v >= vmax:
         v = vmax - left_v
-    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
+    # biquadratic (spheres, tori, cylinders: conics) as a compile-time constant (literal
+    # arguments): LLVM unrolls the small loops, 0.5-0.65x the evaluation time; bicubic
+    # gained 0.92x for another ~3 s of first-run compilation, so it stays generic
+    if p == 2 and q == 2:
+        surface_derivs2(Pw, 2, 2, U, V, u, v, scr, SKL)
+    else:
+        surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
+
+
+@jit_inline
+def _save(SKL):
+    """The order <= 2 derivatives of ``SKL`` (what :func:`foot_newton` leaves there)."""
+    return (SKL[0, 0, 0], SKL[0, 0, 1], SKL[0, 0, 2], SKL[1, 0, 0], SKL[1, 0, 1],
+            SKL[1, 0, 2], SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2], SKL[2, 0, 0],
+            SKL[2, 0, 1], SKL[2, 0, 2], SKL[1, 1, 0], SKL[1, 1, 1], SKL[1, 1, 2],
+            SKL[0, 2, 0], SKL[0, 2, 1], SKL[0, 2, 2])
+
+
+@jit_inline
+def _restore(SKL, t):
+    """Put back what :func:`_save` took: the same values a new evaluation at the same
+    parameters would give (evaluation is deterministic), without its cost."""
+    SKL[0, 0, 0], SKL[0, 0, 1], SKL[0, 0, 2] = t[0], t[1], t[2]
+    SKL[1, 0, 0], SKL[1, 0, 1], SKL[1, 0, 2] = t[3], t[4], t[5]
+    SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2] = t[6], t[7], t[8]
+    SKL[2, 0, 0], SKL[2, 0, 1], SKL[2, 0, 2] = t[9], t[10], t[11]
+    SKL[1, 1, 0], SKL[1, 1, 1], SKL[1, 1, 2] = t[12], t[13], t[14]
+    SKL[0, 2, 0], SKL[0, 2, 1], SKL[0, 2, 2] = t[15], t[16], t[17]
 
 
 @jit
@@ -205,6 +233,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
             # up to 7.6e-12 instead of rounding level on a cone of radius 4)
             un = _wrap(u + du, umin, umax, closed_u)
             vn = _wrap(v + dv, vmin, vmax, closed_v)
+            here = _save(SKL)
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
             fn = _f(SKL, x)
             if fn <= f:
@@ -212,7 +241,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                 v = vn
                 f = fn
             else:
-                _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
+                _restore(SKL, here)
             status = FOOT_OK
             break
         alpha = 1.0
@@ -222,6 +251,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
         # near convergence a failing decrease is rounding: give up after 2 halvings
         tries = 30 if full_step > 1e4 * step_tol else 2
         full_newton = False
+        here = _save(SKL)
         for _ in range(tries):
             un = _wrap(u + alpha * du, umin, umax, closed_u)
             vn = _wrap(v + alpha * dv, vmin, vmax, closed_v)
@@ -261,8 +291,9 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
                     beta *= 0.5
             _ev(Pw, p, q, U, V, un, vn, umax, vmax, left_u, left_v, bin_, scr, SKL)
         if not accepted:
-            # no decrease along a descent direction: stationary within rounding
-            _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL)
+            # no decrease along a descent direction: stationary within rounding (the
+            # derivatives at (u, v) saved before the trials, not evaluated again)
+            _restore(SKL, here)
             status = FOOT_OK
             break
         moved = un != u or vn != v
@@ -390,9 +421,9 @@ def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, dep
 @jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                   max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
-                   out_rest, out_flags, out_work):
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+                   bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
+                   out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
     m = F.shape[0]
     bin_ = _binomial_table(D2)
@@ -405,6 +436,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
     cd = np.empty(cap)
     cs = np.empty(cap)
     cw = np.empty(cap)
+    settled = np.zeros(cap, dtype=np.int8)
     SKL = np.empty((3, 3, 3))
     pmax = np.int64(1)  # not a literal 1: one compile of derivs_scratch
     qmax = np.int64(1)
@@ -431,6 +463,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         out_work[i, 0] = pops
         out_work[i, 1] = tested
         out_work[i, 2] = k
+        if settled.shape[0] < ct.shape[0]:
+            settled = np.zeros(ct.shape[0], dtype=np.int8)
+        settled[:k] = 0
+        nset = 0
         flags = 1 if ovf else 0
         # feet of an earlier pass (its candidates before skip[i] were tried or pruned
         # there): continued, not repeated
@@ -447,6 +483,9 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         rest = np.inf
         stop = k
         for c in range(skip[i], k):
+            if settled[c] != 0:
+                # proven no nearer than a foot found (second-order certificate)
+                continue
             t = ct[c]
             lbc = cd[c] - fdev[t]
             if lbc > best:
@@ -504,6 +543,13 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             # or within the trim band of a trimmed face prunes nothing
             if cl == INSIDE:
                 best = min(best, d)
+                if certify != 0 and st == FOOT_OK and d <= best:
+                    # the candidates of this face around the foot, settled at once
+                    # when f is provably convex over their parameter box
+                    nset += cert_settle(cbrk, bnd, bnd_off[s], bu, bv, dom[s], u, v, d, SKL,
+                                        x, step_tol, s, c + 1, k, best, ct, cd, fdev,
+                                        face_surf, face_uv, tb, settled)
+        out_work[i, 4] = nset
         out_nf[i] = nf
         out_work[i, 3] = stop
         out_rest[i] = rest
@@ -512,9 +558,9 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-                  max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb,
-                  out_rest, out_flags, out_work):
+                  brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd, bnd_off,
+                  certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st, out_cls,
+                  out_nf, out_lb, out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
 
     For point i, ``out_nf[i]`` feet are written to ``out_s[i, j]`` (surface),
@@ -529,7 +575,15 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
-    of the first candidate left untried by the cap (candidates when none)).
+    of the first candidate left untried by the cap (candidates when none), candidates
+    settled by the second-order certificate).
+
+    Certificate (``certify`` != 0; :func:`geomkit._kernels.project_cert.cert_settle`):
+    after each new nearest foot inside its face, the untried candidates of that face
+    around it (not on a trim boundary: ``tb[t]`` == 0) are settled without a Newton
+    run when a second-order bound proves the distance no lower than the foot's over
+    their parameter box (sub-span derivative bounds ``bnd`` over the borders ``cbrk``,
+    surface s's from ``bnd_off[s]``).
 
     A later pass continues an earlier one: ``out_nf[i]`` (in/out) feet are already in
     the ``out_*`` rows (they count towards ``max_starts`` and their inside distances
@@ -540,34 +594,6 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, step_tol, max_dist,
-         max_starts, skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
-         out_flags, out_work)
-
-
-@jit
-def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
-                      start, tris, max_dist, out_k, out_lb):
-    """The candidate search of :func:`_project_chunk` alone (for profiling)."""
-    stamp = np.full(F.shape[0], -1, dtype=np.int64)
-    hk = np.empty(256)
-    hv = np.empty(256, dtype=np.int64)
-    cap = 64
-    ct = np.empty(cap, dtype=np.int64)
-    cd = np.empty(cap)
-    cs = np.empty(cap)
-    cw = np.empty(cap)
-    for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
-            P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
-            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
-        out_k[i] = k
-        out_lb[i] = LB
-
-
-def candidates_batch(P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
-                     max_dist, out_k, out_lb):
-    """Number of candidate triangles and the lower bound of each point: the first
-    stage of :func:`project_batch` on its own (the benchmark's stage profile)."""
-    prun(_candidates_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, dmax, origin, h,
-         lvl_dims, lvl_off, occ, start, tris, max_dist, out_k, out_lb)
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+         bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
+         out_cls, out_nf, out_lb, out_rest, out_flags, out_work)

@@ -483,3 +483,35 @@ def _tri_aabb(V, F, t, lo, hi):
     for d in range(3):
         lo[d] = min(V[F[t, 0], d], min(V[F[t, 1], d], V[F[t, 2], d]))
         hi[d] = max(V[F[t, 0], d], max(V[F[t, 1], d], V[F[t, 2], d]))
+
+
+CANDIDATES_CHUNK = 64
+"""Points per parallel work item of :func:`candidates_batch`."""
+
+
+@jit
+def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+                      start, tris, max_dist, out_k, out_lb):
+    """The candidate search of :func:`geomkit._kernels.project._project_chunk` alone (for profiling)."""
+    stamp = np.full(F.shape[0], -1, dtype=np.int64)
+    hk = np.empty(256)
+    hv = np.empty(256, dtype=np.int64)
+    cap = 64
+    ct = np.empty(cap, dtype=np.int64)
+    cd = np.empty(cap)
+    cs = np.empty(cap)
+    cw = np.empty(cap)
+    for i in range(i0, i1):
+        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
+            P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
+            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+        out_k[i] = k
+        out_lb[i] = LB
+
+
+def candidates_batch(P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                     max_dist, out_k, out_lb):
+    """Number of candidate triangles and the lower bound of each point: the first
+    stage of :func:`geomkit._kernels.project.project_batch` on its own (the benchmark's stage profile)."""
+    prun(_candidates_chunk, P.shape[0], CANDIDATES_CHUNK, P, V, F, fdev, dmax, origin, h,
+         lvl_dims, lvl_off, occ, start, tris, max_dist, out_k, out_lb)

@@ -1,0 +1,114 @@
+"""The projection's second-order certificate (candidates settled without a Newton run):
+its derivative bounds are true bounds, a settled candidate never changes an answer,
+and it refuses where the distance function is not provably above the foot's."""
+
+import numpy as np
+import pytest
+
+import geomkit
+from geomkit import samples
+from geomkit.projection_cert import sub_span_bounds
+
+
+def _scan_points(surfaces, n, rng, offset=0.01):
+    """Points on the surface moved off it by up to ``offset`` of the model size."""
+    pts = []
+    for s in surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        uv = np.c_[rng.uniform(u0, u1, n), rng.uniform(v0, v1, n)]
+        X = s.evaluate(uv)
+        d = rng.normal(size=(n, 3))
+        d *= (rng.uniform(0, offset * s.size, n) / np.linalg.norm(d, axis=1))[:, None]
+        pts.append(X + d)
+    return np.concatenate(pts)
+
+
+@pytest.mark.parametrize("name", ["freeform_1", "sphere", "torus", "heavy_weights",
+                                  "crease", "cylinder_quarter"])
+def test_sub_span_bounds_hold(name):
+    """Every sampled derivative norm is within its sub-span's bound (the bounds are
+    proven: convex hull of the subdivided Bézier nets and the quotient rule), and the
+    bounds are not vacuous (within 10x of the sampled maximum on most sub-spans)."""
+    rng = np.random.default_rng(0)
+    for s in samples.load(name):
+        bu, bv, B = sub_span_bounds(s, 4, 3)
+        assert np.all(np.isfinite(B)) and np.all(B >= 0)
+        (u0, u1), (v0, v1) = s.domain
+        uv = np.c_[rng.uniform(u0, u1, 20000), rng.uniform(v0, v1, 20000)]
+        uv[:3000, 0] = bu[rng.integers(0, bu.size, 3000)]  # on sub-span borders too
+        uv[3000:6000, 1] = bv[rng.integers(0, bv.size, 3000)]
+        D = s.derivatives(uv, 2)
+        # a value on a border may be the left- or the right-sided one: either cell
+        cells = []
+        for side in ("left", "right"):
+            iu = np.clip(np.searchsorted(bu, uv[:, 0], side) - 1, 0, bu.size - 2)
+            for side_v in ("left", "right"):
+                iv = np.clip(np.searchsorted(bv, uv[:, 1], side_v) - 1, 0, bv.size - 2)
+                cells.append(B[iu, iv])
+        b = np.max(cells, axis=0)
+        val = np.linalg.norm(np.stack([D[:, 1, 0], D[:, 0, 1], D[:, 2, 0], D[:, 1, 1],
+                                       D[:, 0, 2]], axis=1), axis=2)
+        assert np.all(val <= b * (1 + 1e-9) + 1e-12), name
+        assert np.median(b[:, 0] / np.maximum(val[:, 0], 1e-300)) < 10.0
+
+
+@pytest.mark.parametrize("name", ["freeform_1", "sphere", "torus"])
+def test_certificate_on_off_same_answers(name):
+    """Scan points (within 1% of the model size) with the certificate on and off: the
+    same surface and status for every point, distances equal to rounding, feet equal
+    to the Newton's own precision — and far fewer Newton runs with it on."""
+    S = samples.load(name)
+    P = _scan_points(S, 3000, np.random.default_rng(1))
+    pr = geomkit.Projector(S)
+    pr.certify = False
+    off = pr.project(P)
+    pr.certify = True
+    on = pr.project(P)
+    size = pr.size
+    assert np.array_equal(on.surface, off.surface)
+    assert np.array_equal(on.status, off.status)
+    assert np.max(np.abs(on.distance - off.distance)) <= 1e-12 * size
+    assert np.max(np.abs(on.point - off.point)) <= 1e-8 * size
+    assert np.all(on.lower_bound <= on.distance + 1e-12 * size)
+    assert off.stats["certified_skips"] == 0
+    assert on.stats["certified_skips"] > 0.3 * len(P)
+    assert on.stats["newton_runs"] + on.stats["certified_skips"] >= off.stats["newton_runs"]
+    assert on.stats["newton_runs"] < 0.8 * off.stats["newton_runs"]
+
+
+def test_certificate_refuses_near_the_centre_of_curvature():
+    """Points 1e-3 from the sphere's centre (distance ~ radius: the distance function
+    is nearly flat over the whole sphere, the certificate's d* K term alone reaches
+    1) are never certified, and their answers stay
+    exact; at a quarter of the radius from the surface it does certify."""
+    sph = samples.load("sphere")
+    pr = geomkit.Projector(sph)
+    rng = np.random.default_rng(2)
+    d = rng.normal(size=(400, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    near_centre = 1e-3 * d[:6]  # every triangle is a candidate there: a few points
+    res = pr.project(near_centre)
+    assert res.stats["certified_skips"] == 0
+    assert np.max(np.abs(res.distance - (10.0 - 1e-3))) <= 1e-9
+    res2 = pr.project(7.5 * d)  # 2.5 inside the surface of radius 10
+    assert res2.stats["certified_skips"] > 0
+    assert np.max(np.abs(res2.distance - 2.5)) <= 1e-9
+
+
+def test_certificate_trimmed_parts_same_answers():
+    """plate_with_hole (trimmed: trim-boundary triangles are never settled) with
+    points above the hole and its edge: answers equal with the certificate on and
+    off."""
+    plate = samples.load("plate_with_hole")
+    pr = geomkit.Projector(plate)
+    rng = np.random.default_rng(3)
+    a = rng.uniform(0, 2 * np.pi, 2000)
+    r = rng.uniform(0, 40, 2000)
+    P = np.c_[50 + r * np.cos(a), 50 + r * np.sin(a), rng.uniform(-2, 2, 2000)]
+    pr.certify = False
+    off = pr.project(P)
+    pr.certify = True
+    on = pr.project(P)
+    assert np.array_equal(on.surface, off.surface)
+    assert np.array_equal(on.status, off.status)
+    assert np.max(np.abs(on.distance - off.distance)) <= 1e-12 * pr.size
