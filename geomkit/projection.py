@@ -315,7 +315,8 @@ class Projector:
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
-                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd, fst, fcls, nf, lb, rest, flags, work)
+                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd,
+                          fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
             inv[order] = np.arange(n)
