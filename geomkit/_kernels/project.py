@@ -27,7 +27,8 @@ from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 from .project_cert import cert_settle
-from .voxel import candidates_batch, point_candidates  # noqa: F401 (the search alone)
+from .voxel import (candidate_scratch, candidates_batch,  # noqa: F401 (the search alone)
+                    point_candidates)
 
 MAX_ITER = 100
 FOOT_OK = 0
@@ -428,14 +429,8 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
     m = F.shape[0]
     bin_ = _binomial_table(D2)
     K = out_s.shape[1]
-    stamp = np.full(m, -1, dtype=np.int64)
-    hk = np.empty(256)
-    hv = np.empty(256, dtype=np.int64)
     cap = 64
-    ct = np.empty(cap, dtype=np.int64)
-    cd = np.empty(cap)
-    cs = np.empty(cap)
-    cw = np.empty(cap)
+    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(m, cap)
     settled = np.zeros(cap, dtype=np.int8)
     SKL = np.empty((3, 3, 3))
     pmax = np.int64(1)  # not a literal 1: one compile of derivs_scratch

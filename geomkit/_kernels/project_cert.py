@@ -123,6 +123,15 @@ def _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, ua, ub
 
 
 @jit
+def _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
+    """Candidate ``c`` is still to settle: not settled yet, on surface ``s``, not on a
+    trim boundary, and could hold a point within ``best``."""
+    t = ct[c]
+    return (settled[c] == 0 and face_surf[t] == s and tb[t] == 0
+            and cd[c] - fdev[t] <= best)
+
+
+@jit
 def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c0, k,
                 best, ct, cd, fdev, face_surf, face_uv, tb, settled):
     """Mark (``settled[c] = 1``) the candidates ``c0 <= c < k`` of surface ``s`` that
@@ -141,11 +150,9 @@ def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c
     vb = v
     m = 0
     for c in range(c0, k):
-        if settled[c] != 0:
+        if not _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
             continue
         t = ct[c]
-        if face_surf[t] != s or tb[t] != 0 or cd[c] - fdev[t] > best:
-            continue
         for j in range(3):
             ua = min(ua, face_uv[t, j, 0])
             ub = max(ub, face_uv[t, j, 0])
@@ -160,11 +167,9 @@ def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c
         return 0
     n = 0
     for c in range(c0, k):
-        if settled[c] != 0:
+        if not _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
             continue
         t = ct[c]
-        if face_surf[t] != s or tb[t] != 0 or cd[c] - fdev[t] > best:
-            continue
         if not union:
             ua = min(u, face_uv[t, 0, 0], face_uv[t, 1, 0], face_uv[t, 2, 0])
             ub = max(u, face_uv[t, 0, 0], face_uv[t, 1, 0], face_uv[t, 2, 0])

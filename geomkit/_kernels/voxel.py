@@ -444,17 +444,19 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
 
 
 @jit
+def candidate_scratch(m, cap):
+    """Working arrays of :func:`point_candidates` for a mesh of ``m`` triangles and
+    ``cap`` candidates (grown by it as needed): ``(stamp, hk, hv, ct, cd, cs, cw)``."""
+    return (np.full(m, -1, dtype=np.int64), np.empty(256), np.empty(256, dtype=np.int64),
+            np.empty(cap, dtype=np.int64), np.empty(cap), np.empty(cap), np.empty(cap))
+
+
+@jit
 def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
                           out_d, out_t, out_p, work):
     m = F.shape[0]
     zero = np.zeros(m)
-    stamp = np.full(m, -1, dtype=np.int64)
-    hk = np.empty(256)
-    hv = np.empty(256, dtype=np.int64)
-    ct = np.empty(1, dtype=np.int64)
-    cd = np.empty(1)
-    cs = np.empty(1)
-    cw = np.empty(1)
+    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(m, 1)
     for i in range(i0, i1):
         k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
@@ -493,14 +495,7 @@ CANDIDATES_CHUNK = 64
 def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
                       start, tris, max_dist, out_k, out_lb):
     """The candidate search of :func:`geomkit._kernels.project._project_chunk` alone (for profiling)."""
-    stamp = np.full(F.shape[0], -1, dtype=np.int64)
-    hk = np.empty(256)
-    hv = np.empty(256, dtype=np.int64)
-    cap = 64
-    ct = np.empty(cap, dtype=np.int64)
-    cd = np.empty(cap)
-    cs = np.empty(cap)
-    cw = np.empty(cap)
+    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(F.shape[0], 64)
     for i in range(i0, i1):
         k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
             P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
