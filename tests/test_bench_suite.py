@@ -28,9 +28,9 @@ def test_schema_and_measured_errors(tiny):
     res, _ = tiny
     rows = res["rows"]
     assert {r["engine"] for r in rows} == {"evaluation", "distance", "collision"}
-    # 1 evaluation row, 2 distance rows, collide + collide_many + min_distance for the
-    # one tolerance
-    assert len(rows) == 1 + 2 + 3
+    # 1 evaluation row, 2 distance rows, collide (median and mean) + collide_many +
+    # min_distance for the one tolerance
+    assert len(rows) == 1 + 2 + 4
     for r in rows:
         assert tuple(r) == FIELDS
         assert r["geomkit_seconds"] > 0 and math.isfinite(r["geomkit_seconds"])
@@ -167,3 +167,14 @@ def test_projection_mesh_rows_beside_libigl_and_trimesh():
         assert r["geomkit_seconds"] > 0 and r["reference_seconds"] > 0
         if r["reference_error"] is not None:  # a 1e-3 mesh: its error is about that
             assert 0 <= r["reference_error"] < 5e-3
+
+
+def test_collide_mean_row_is_the_mean_of_the_same_calls(tiny):
+    """Beside the median row, a mean row over the same timed calls (hence the same
+    measured error), for geomkit and the reference."""
+    rows = {r["case"]: r for r in tiny[0]["rows"] if r["engine"] == "collision"}
+    med, mean = rows["sphere-sphere collide"], rows["sphere-sphere collide mean"]
+    assert mean["geomkit_error"] == med["geomkit_error"]
+    assert 0 < mean["geomkit_seconds"] < 1.0 and 0 < med["geomkit_seconds"] < 1.0
+    if med["reference_seconds"] is not None:
+        assert mean["reference_seconds"] > 0
