@@ -41,9 +41,16 @@ class TrimPolylines:
         (u0, u1), (v0, v1) = surface.domain
         self.loops = []
         self.domain_loop = False
+        # a loop within `eps` (UV) of the domain's edges is the domain rectangle: the
+        # sliver between them is within eps * speed_bound of the loop in 3-D, at most
+        # 1e-3 of the chord tolerance (files round their pcurves: OCC's closed torus
+        # face ends 2e-10 short of 2 pi)
+        size_uv = max(u1 - u0, v1 - v0)
+        eps = min(1e-6 * size_uv, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+        eps = max(eps, 1e-12 * size_uv)
         for loop in surface.trim:
             pts = self._loop_polyline(loop, chord_tol)
-            if self._is_domain_rectangle(pts, u0, u1, v0, v1):
+            if self._is_domain_rectangle(pts, u0, u1, v0, v1, eps):
                 self.domain_loop = True
                 continue
             self.loops.append(pts)
@@ -77,8 +84,7 @@ class TrimPolylines:
         return self._tree
 
     @staticmethod
-    def _is_domain_rectangle(pts, u0, u1, v0, v1) -> bool:
-        eps = 1e-12 * max(u1 - u0, v1 - v0)
+    def _is_domain_rectangle(pts, u0, u1, v0, v1, eps) -> bool:
         on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
               | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
         if not on.all():
@@ -134,6 +140,28 @@ class TrimPolylines:
         cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
         state[rest] = shapely.contains_xy(region, cu, cv).astype(np.int8)
         return state
+
+
+def speed_bound(s: Surface) -> float:
+    """An upper bound of ``|S_u| + |S_v|`` over the whole domain (so a UV step of
+    length ``d`` moves ``S`` by at most ``d * speed_bound(s)``).
+
+    At fixed ``v``, ``S`` is a rational B-spline curve in ``u`` whose control points
+    lie in the convex hull of the net (diameter ``D``, bounded by its box diagonal) and
+    whose weights lie in ``[w_min, w_max]``.  With ``R_i = N_i w_i / W``:
+    ``S_u = sum R_i' (P_i - c)`` for any ``c`` (``sum R_i' = 0``), and
+    ``sum |R_i'| <= sum |N_i'| w_max / W + |W'| / W <= 4 p (w_max / w_min) / h``,
+    since ``sum |N_i'| <= 2 p / h`` (``h`` the shortest non-empty knot span).  So
+    ``|S_u| <= 4 p (w_max / w_min) D / h_u``; the same in ``v``."""
+    P = s.control_points.reshape(-1, 3)
+    D = float(np.linalg.norm(np.ptp(P, axis=0)))
+    ratio = 1.0 if s.weights is None else float(np.max(s.weights) / np.min(s.weights))
+    total = 0.0
+    for p, U in ((s.degree_u, s.knots_u), (s.degree_v, s.knots_v)):
+        d = np.diff(np.asarray(U, dtype=np.float64))
+        h = float(d[d > 0].min())
+        total += 4.0 * p * ratio * D / h
+    return total
 
 
 def _span_samples(t: np.ndarray, num: int) -> np.ndarray:

@@ -45,3 +45,54 @@ def test_chain_without_periods_keeps_pieces_in_place():
     for c in fixed:
         assert any(np.allclose(c.control_points, b.control_points) or
                    np.allclose(c.control_points[::-1], b.control_points) for b in bad)
+
+
+def _torus_corner_loop():
+    """The rectangle [0, 2 pi]^2 as OCC writes a closed torus face: the four seam and
+    boundary edges in the order right, left... with each joint a jump between two UV
+    images of the one corner point of the torus (every corner maps to it)."""
+    T = TWO_PI
+    right = TrimCurve.polyline([[T, 0], [T, T]])
+    bottom = TrimCurve.polyline([[0, 0], [T, 0]])
+    left = TrimCurve.polyline([[0, T], [0, 0]])
+    top = TrimCurve.polyline([[T, T], [0, T]])
+    return [right, bottom, left, top]
+
+
+def test_same_point_jumps_are_rechained_not_bridged():
+    """Gaps whose ends are one model point, between pieces that close in another
+    order: re-chained (a straight UV bridge between two corners of a torus domain
+    would be a diagonal across the face, not a point)."""
+    pieces = _torus_corner_loop()
+    domain = ((0.0, TWO_PI), (0.0, TWO_PI))
+    corners = {(0.0, 0.0), (TWO_PI, 0.0), (0.0, TWO_PI), (TWO_PI, TWO_PI)}
+
+    def same(a, b):   # every corner of the torus domain is one model point
+        return (float(a[0]), float(a[1])) in corners and (float(b[0]), float(b[1])) in corners
+
+    out, gaps = close_gaps(pieces, domain, "face", same)
+    assert gaps == [] and len(out) == 4            # no bridge added
+    assert {id(c) for c in out} == {id(c) for c in pieces}   # the same pieces, none reversed
+    for a, b in zip(out, out[1:] + out[:1]):
+        assert np.array_equal(a.end, b.start)
+    x, y = np.array([c.start for c in out]).T    # the loop is the rectangle, once
+    assert abs(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) == pytest.approx(
+        TWO_PI ** 2, rel=1e-15)
+
+
+def test_a_pole_gap_is_still_bridged():
+    """A loop that cannot close without the jump (a pole: the degenerate top edge is
+    missing) keeps its bridge along the pole."""
+    T = TWO_PI
+    P = [[0, 0], [T, 0], [T, np.pi]]
+    pieces = [TrimCurve.polyline([p, q]) for p, q in zip(P, P[1:])] + \
+        [TrimCurve.polyline([[0, np.pi], [0, 0]])]
+    domain = ((0.0, T), (0.0, np.pi))
+
+    def same(a, b):   # v = pi is the pole
+        return a[1] == np.pi and b[1] == np.pi
+
+    out, gaps = close_gaps(pieces, domain, "face", same)
+    assert len(out) == 4 and gaps == []      # 3 pieces and the bridge
+    bridge = out[2]
+    assert np.array_equal(bridge.control_points, [[T, np.pi], [0, np.pi]])

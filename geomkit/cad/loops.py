@@ -87,13 +87,27 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     bridged too (the segment maps to that point)."""
     (u0, u1), (v0, v1) = domain
     size = max(u1 - u0, v1 - v0)
-    def bad(a, b):
-        return float(np.hypot(*(a.end - b.start))) > GAP_TOL * size and \
-            not same_point(a.end, b.start)
 
-    if same_point is not None and len(pieces) > 1 and any(
-            bad(a, pieces[(k + 1) % len(pieces)]) for k, a in enumerate(pieces)):
-        pieces = chain(pieces, size)
+    def far(a, b):
+        return float(np.hypot(*(a.end - b.start))) > GAP_TOL * size
+
+    def bad(a, b):
+        return far(a, b) and not same_point(a.end, b.start)
+
+    def joins(p):
+        return [(a, p[(k + 1) % len(p)]) for k, a in enumerate(p)]
+
+    if same_point is not None and len(pieces) > 1 and any(far(a, b) for a, b in joins(pieces)):
+        chained = chain(pieces, size)
+        if any(bad(a, b) for a, b in joins(pieces)):
+            pieces = chained
+        elif not any(far(a, b) for a, b in joins(chained)) and \
+                all(any(c is p for p in pieces) for c in chained):
+            # the far gaps are one model point each, yet the same pieces, in another
+            # order and none reversed, close without them: a loop listed out of order
+            # across a seam corner (OCC writes a closed torus face so).  A straight UV
+            # bridge would map to a curve across the face, not to one point.
+            pieces = chained
     out, gaps = [], []
     for k, a in enumerate(pieces):
         out.append(a)
