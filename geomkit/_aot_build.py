@@ -19,6 +19,7 @@ process with an empty numba cache, and ``setup.py`` ignores its failure.
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 import subprocess
@@ -89,8 +90,7 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     cc.verbose = verbose
     cc.target_cpu = "host"
     entries, flags = [], None
-    counts = {}
-    for mod, qual, sig in rows:
+    for k, (mod, qual, sig) in enumerate(rows):
         obj = import_module(mod)
         for part in qual.split("."):
             obj = getattr(obj, part)
@@ -99,7 +99,6 @@ def build(out_dir, exports=None, verbose=False) -> dict:
         flags = flags or f
         if f != flags:
             raise RuntimeError(f"{mod}.{qual}: compile flags differ from the other exports")
-        k = counts[(mod, qual)] = counts.get((mod, qual), -1) + 1
         sym = _aot.export_symbol(mod, qual, k)
         cc.export(sym, tuple(_aot.parse_type(s) for s in sig))(disp.py_func)
         entries.append([mod, qual, k, sig])
@@ -107,25 +106,29 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     # pycc compiles with a bare Flags(): patch it to the JIT's flags, and give the AOT
     # code generator the host's CPU features (the JIT's) rather than only the model's
     host_features = codegen.JITCPUCodegen._get_host_cpu_features(None)
-    saved = pycc_compiler.Flags, codegen.AOTCPUCodegen._customize_tm_features
-    pycc_compiler.Flags = lambda: _copy_flags(flags)
+    # (pycc passes one Flags object to every export's compile, and a compile changes
+    # it: each gets its own copy, as each JIT compile gets fresh flags)
+    saved = (pycc_compiler.Flags, pycc_compiler.compile_extra,
+             codegen.AOTCPUCodegen._customize_tm_features)
+    compile_extra = pycc_compiler.compile_extra
+
+    def compile_copy(typingctx, targetctx, func, args, return_type, fl, **kw):
+        return compile_extra(typingctx, targetctx, func, args, return_type,
+                             copy.deepcopy(fl), **kw)
+    pycc_compiler.Flags = lambda: copy.deepcopy(flags)
+    pycc_compiler.compile_extra = compile_copy
     codegen.AOTCPUCodegen._customize_tm_features = lambda self: host_features
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         cc.compile()
     finally:
-        pycc_compiler.Flags, codegen.AOTCPUCodegen._customize_tm_features = saved
+        (pycc_compiler.Flags, pycc_compiler.compile_extra,
+         codegen.AOTCPUCodegen._customize_tm_features) = saved
     manifest = {"stamp": _numba._kernels_stamp().hex(), "numba": numba.__version__,
                 "cpu": list(_aot.host_cpu()), "exports": entries,
                 "built_seconds": round(time.time() - t0, 1)}
     (out_dir / _aot.MANIFEST.name).write_text(json.dumps(manifest, indent=1) + "\n")
     return manifest
-
-
-def _copy_flags(flags):
-    import copy
-
-    return copy.deepcopy(flags)
 
 
 def main(argv=None) -> int:

@@ -156,7 +156,9 @@ def host_cpu():
 
 
 def export_symbol(module: str, qualname: str, k: int) -> str:
-    return f"{module.rsplit('.', 1)[-1]}__{qualname.replace('.', '_')}__{k}"
+    """The name of export number ``k`` (its place in the export list) in ``_aot_lib``;
+    pycc compiles its exports sorted by name, i.e. in the list's order."""
+    return f"k{k:03d}_{module.rsplit('.', 1)[-1]}__{qualname.replace('.', '_')}"
 
 
 def load(stamp_hex: str):

@@ -124,7 +124,7 @@ _RECORD = os.environ.get("GEOMKIT_AOT_RECORD")
 types as numba sees them) and write them there at exit (:mod:`geomkit._aot_build`
 generates the ahead-of-time export list from it)."""
 
-_recorded: dict = {}
+_recorded: dict = {}  # (module, qualname) -> {signature: None}, in first-call order
 
 
 class _Recording:
@@ -134,15 +134,17 @@ class _Recording:
     def __call__(self, *args, **kws):
         key = (self.py_func.__module__, self.py_func.__qualname__)
         sig = ("kwargs",) if kws else tuple(str(numba.typeof(a)) for a in args)
-        _recorded.setdefault(key, set()).add(sig)
+        _recorded.setdefault(key, {}).setdefault(sig, None)
         return super().__call__(*args, **kws)
 
 
 def _write_recorded():
     import json
 
-    rows = [[m, q, list(sig)] for (m, q), sigs in sorted(_recorded.items())
-            for sig in sorted(sigs)]
+    # in the order of the first calls: the build compiles them in that order, as the
+    # JIT does in the recorded run (an other order can type differently: see
+    # docs/compile.md, "Ahead-of-time kernels")
+    rows = [[m, q, list(sig)] for (m, q), sigs in _recorded.items() for sig in sigs]
     with open(_RECORD, "w") as fh:
         json.dump(rows, fh, indent=0)
 
