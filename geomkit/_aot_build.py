@@ -2,8 +2,8 @@
 
 ::
 
-    python -m geomkit._aot_build record     # regenerate _kernels/_aot_exports.json
-    python -m geomkit._aot_build build [DIR] # compile _aot_lib + manifest into DIR
+    python geomkit/_aot_build.py record      # regenerate _kernels/_aot_exports.json
+    python geomkit/_aot_build.py build [DIR] # compile _aot_lib + manifest into DIR
 
 ``record`` runs ``geomkit demo`` in a child process with ``GEOMKIT_AOT_RECORD`` set:
 every kernel call made *from Python* is recorded with its argument types (calls from
@@ -29,9 +29,20 @@ import time
 from importlib import import_module
 from pathlib import Path
 
-from ._kernels import _aot
-
 ROOT = Path(__file__).resolve().parents[1]
+
+if __name__ == "__main__" and not __package__:
+    # run by path (setup.py, in pip's isolated build environment, which has numba and
+    # numpy but not geomkit's other dependencies): import geomkit._kernels without
+    # geomkit/__init__.py
+    import types as _types
+
+    _pkg = _types.ModuleType("geomkit")
+    _pkg.__path__ = [str(ROOT / "geomkit")]
+    sys.modules.setdefault("geomkit", _pkg)
+    __package__ = "geomkit"
+
+from ._kernels import _aot  # noqa: E402
 
 
 def record(out=_aot.EXPORTS, grid=None) -> list:
@@ -148,8 +159,8 @@ def main(argv=None) -> int:
                            GEOMKIT_AOT="0")
                 env["PYTHONPATH"] = os.pathsep.join(
                     [str(ROOT)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
-                return subprocess.run([sys.executable, "-m", "geomkit._aot_build", *argv],
-                                      env=env).returncode
+                return subprocess.run([sys.executable, str(Path(__file__).resolve()),
+                                       *argv], env=env).returncode
         man = build(out, verbose="-v" in argv)
         print(f"built {len(man['exports'])} ahead-of-time entries into {out} "
               f"in {man['built_seconds']} s")
