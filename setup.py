@@ -45,8 +45,12 @@ class build_aot(build_ext):
             man.unlink()
         t0 = time.time()
         try:
-            r = subprocess.run([sys.executable, str(ROOT / "geomkit" / "_aot_build.py"),
-                                "build", str(out)], cwd=str(ROOT))
+            # by path, without geomkit/__init__.py (see _aot_build.by_path_command)
+            code = ("import runpy, sys; sys.argv = sys.argv[1:]; "
+                    "runpy.run_path(sys.argv[0], run_name='__main__')")
+            r = subprocess.run([sys.executable, "-c", code,
+                                str(ROOT / "geomkit" / "_aot_build.py"), "build", str(out)],
+                               cwd=str(ROOT))
             ok = r.returncode == 0 and man.exists()
         except Exception as e:  # never fail the install
             print(f"geomkit: ahead-of-time build did not run: {e}")

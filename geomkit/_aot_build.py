@@ -142,6 +142,14 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     return manifest
 
 
+def by_path_command(*argv) -> list:
+    """The command running this file by path, not as ``python FILE`` (that would put
+    ``geomkit/`` first on ``sys.path``, where ``types.py`` hides the standard library's)."""
+    code = ("import runpy, sys; sys.argv = sys.argv[1:]; "
+            "runpy.run_path(sys.argv[0], run_name='__main__')")
+    return [sys.executable, "-c", code, str(Path(__file__).resolve()), *map(str, argv)]
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["record"]:
@@ -159,8 +167,7 @@ def main(argv=None) -> int:
                            GEOMKIT_AOT="0")
                 env["PYTHONPATH"] = os.pathsep.join(
                     [str(ROOT)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
-                return subprocess.run([sys.executable, str(Path(__file__).resolve()),
-                                       *argv], env=env).returncode
+                return subprocess.run(by_path_command(*argv), env=env).returncode
         man = build(out, verbose="-v" in argv)
         print(f"built {len(man['exports'])} ahead-of-time entries into {out} "
               f"in {man['built_seconds']} s")
