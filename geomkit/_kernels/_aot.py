@@ -161,6 +161,11 @@ def export_symbol(module: str, qualname: str, k: int) -> str:
     return f"k{k:03d}_{module.rsplit('.', 1)[-1]}__{qualname.replace('.', '_')}"
 
 
+def active() -> bool:
+    """True when the ahead-of-time module is loaded and its kernels are routed."""
+    return _table is not None
+
+
 def load(stamp_hex: str):
     """Load the ahead-of-time module if it is valid for this process; sets
     :data:`status`.  Returns the table or None."""
