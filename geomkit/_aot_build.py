@@ -131,6 +131,9 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     codegen.AOTCPUCodegen._customize_tm_features = lambda self: host_features
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
+        old = out_dir / _aot.MANIFEST.name
+        if old.exists():  # no manifest until the new module is complete
+            old.unlink()
         cc.compile()
     finally:
         (pycc_compiler.Flags, pycc_compiler.compile_extra,

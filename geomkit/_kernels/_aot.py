@@ -166,6 +166,20 @@ def active() -> bool:
     return _table is not None
 
 
+def mismatch(man: dict, stamp_hex: str):
+    """Why the build described by manifest ``man`` cannot serve this process (None if
+    it can): other kernel sources, numba version or CPU than the running ones."""
+    import numba
+
+    if man.get("stamp") != stamp_hex:
+        return "kernel sources changed since the build"
+    if man.get("numba") != numba.__version__:
+        return f"built with numba {man.get('numba')}, running {numba.__version__}"
+    if man.get("cpu") != list(host_cpu()):
+        return f"built for CPU {(man.get('cpu') or ['?'])[0]}, not this one's features"
+    return None
+
+
 def load(stamp_hex: str):
     """Load the ahead-of-time module if it is valid for this process; sets
     :data:`status`.  Returns the table or None."""
@@ -182,13 +196,7 @@ def load(stamp_hex: str):
         import numba
 
         man = json.loads(MANIFEST.read_text())
-        why = None
-        if man.get("stamp") != stamp_hex:
-            why = "kernel sources changed since the build"
-        elif man.get("numba") != numba.__version__:
-            why = f"built with numba {man.get('numba')}, running {numba.__version__}"
-        elif man.get("cpu") != list(host_cpu()):
-            why = f"built for CPU {man.get('cpu', ['?'])[0]}, not this one"
+        why = mismatch(man, stamp_hex)
         if why:
             status = f"ahead-of-time kernels not used ({why}): JIT"
             return None
@@ -210,6 +218,30 @@ def load(stamp_hex: str):
         return None
 
 
+routers: list = []
+"""Every :class:`Router` made in this process."""
+
+
+class use_aot:
+    """``with use_aot(False):`` runs every routed kernel on its JIT dispatcher (to
+    compare the two in one process); ``use_aot(True)`` restores the routing."""
+
+    def __init__(self, on: bool):
+        self.on = on
+
+    def __enter__(self):
+        self.saved = [r.entries for r in routers]
+        for r in routers:
+            if not self.on:
+                r.entries = []
+        return self
+
+    def __exit__(self, *exc):
+        for r, e in zip(routers, self.saved):
+            r.entries = e
+        return False
+
+
 class Router:
     """The Python-visible name of an exported kernel: runs the ahead-of-time
     function when the arguments have exactly its types, else the JIT dispatcher
@@ -218,6 +250,8 @@ class Router:
     def __init__(self, dispatcher, entries):
         self.dispatcher = dispatcher
         self.entries = entries
+        self.aot_calls = 0  # calls that ran the ahead-of-time code (diagnostics, tests)
+        routers.append(self)
         self.__wrapped__ = dispatcher
         f = dispatcher.py_func
         self.__doc__ = f.__doc__
@@ -240,6 +274,7 @@ class Router:
         if not kws:
             for check, fn in self.entries:
                 if check(args):
+                    self.aot_calls += 1
                     return fn(*args)
         return self.dispatcher(*args, **kws)
 
