@@ -16,6 +16,10 @@
   ``parallel=True`` / ``prange`` (:data:`pjit`) compiles the whole call tree of the
   loop body three more times (parfor kernel, gufunc wrapper, caller), which cost more
   than half of the first-run compile time of the projection kernels.
+* ahead-of-time kernels (:mod:`._aot`): when the package was built with them, the
+  decorator returns a router for each exported kernel, which runs the compiled
+  module's code for calls from Python with exactly the exported argument types and
+  this dispatcher otherwise (docs/compile.md).
 """
 
 from __future__ import annotations
@@ -50,6 +54,8 @@ def _kernels_stamp() -> bytes:
         h = hashlib.sha256()
         here = Path(__file__).resolve().parent
         for f in sorted(here.glob("*.py")):
+            if f.name.startswith("_aot"):  # the loader and router: no compiled code
+                continue
             h.update(f.name.encode())
             h.update(f.read_bytes())
         _STAMP = h.digest()
@@ -142,8 +148,7 @@ def _write_recorded():
     import json
 
     # in the order of the first calls: the build compiles them in that order, as the
-    # JIT does in the recorded run (an other order can type differently: see
-    # docs/compile.md, "Ahead-of-time kernels")
+    # JIT did in the recorded run
     rows = [[m, q, list(sig)] for (m, q), sigs in _recorded.items() for sig in sigs]
     with open(_RECORD, "w") as fh:
         json.dump(rows, fh, indent=0)
