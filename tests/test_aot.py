@@ -68,7 +68,11 @@ def _arrays():
             a.astype(np.int64), a.astype(np.float32), a.astype(np.int8), a[None],
             np.zeros(0), np.zeros((0, 3)), unaligned, np.int64(3), np.float64(2.5),
             3, 2.5, True, np.bool_(False), None, 2**70, (1, 2), (1.0, 2), (a, a[0]),
-            np.int32(4), "x", [1.0]]
+            np.int32(4), "x", [1.0],
+            # equal to float64 but not numpy's canonical dtype object (seen in the demo)
+            np.zeros(3, np.dtype("f8").newbyteorder("S").newbyteorder("S")),
+            np.zeros(3, np.dtype("f8", metadata={"a": 1})),
+            np.zeros(3, np.dtype("f8").newbyteorder("S"))]
 
 
 def test_router_type_check_agrees_with_numba_typeof():
@@ -153,6 +157,20 @@ def _jobs():
     d = geomkit.surface_distance(a, b, tol=1e-9)
     out += [np.array([d.distance, d.lower, d.upper]), d.uv_a, d.uv_b]
     return out
+
+
+@needs_aot
+def test_the_demo_runs_only_ahead_of_time_code(tmp_path):
+    """Every kernel call the demo makes from Python has its exported types (a call
+    sent to the JIT would compile on a fresh install: a cold demo's whole point)."""
+    from geomkit.demo import run_demo
+
+    jit0 = {id(r): r.jit_calls for r in _aot.routers}
+    aot0 = sum(r.aot_calls for r in _aot.routers)
+    run_demo(tmp_path / "demo", grid=8, warm_up=False)
+    sent = [r.__qualname__ for r in _aot.routers if r.jit_calls != jit0[id(r)]]
+    assert not sent, f"demo calls sent to the JIT: {sent}"
+    assert sum(r.aot_calls for r in _aot.routers) > aot0
 
 
 @needs_aot

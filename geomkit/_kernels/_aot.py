@@ -134,7 +134,7 @@ _C, _F, _ALIGNED, _WRITEABLE = 0x1, 0x2, 0x100, 0x400  # ndarray.flags.num bits
 def signature_checker(argtypes):
     """A predicate over an argument tuple: exactly these numba types (generated
     code: one test per argument, arrays by their ``flags.num`` bits; ~0.1 us an
-    argument).  An array whose dtype is not numpy's canonical object fails (JIT)."""
+    argument)."""
     lines = ["def check(args):", f"    if len(args) != {len(argtypes)}:", "        return False"]
     ns = {"ndarray": np.ndarray, "float": float, "int": int, "bool": bool}
     if argtypes:
@@ -150,8 +150,9 @@ def signature_checker(argtypes):
             else:  # F: F and not C; A: neither
                 mask |= _C | _F
                 need |= _F if t.layout == "F" else 0
-            cond = (f"type({a}) is not ndarray or {a}.dtype is not D{i} or "
-                    f"{a}.ndim != {t.ndim} or ({a}.flags.num & {mask}) != {need}")
+            cond = (f"type({a}) is not ndarray or ({a}.dtype is not D{i} and "
+                    f"{a}.dtype != D{i}) or {a}.ndim != {t.ndim} or "
+                    f"({a}.flags.num & {mask}) != {need}")
         elif t == types.none:
             cond = f"{a} is not None"
         elif t == types.float64:
@@ -281,6 +282,7 @@ class Router:
         self.dispatcher = dispatcher
         self.entries = entries
         self.aot_calls = 0  # calls that ran the ahead-of-time code (diagnostics, tests)
+        self.jit_calls = 0  # calls sent to the JIT dispatcher
         routers.append(self)
         self.__wrapped__ = dispatcher
         f = dispatcher.py_func
@@ -306,6 +308,7 @@ class Router:
                 if check(args):
                     self.aot_calls += 1
                     return fn(*args)
+        self.jit_calls += 1
         return self.dispatcher(*args, **kws)
 
     def __repr__(self):
