@@ -33,16 +33,15 @@ class build_aot(build_ext):
     def run(self):
         super().run()
         self._aot_outputs = []
+        out = (ROOT if self.inplace else Path(self.build_lib)).joinpath(*KERNELS)
+        out.mkdir(parents=True, exist_ok=True)
+        man = out / "_aot_manifest.json"
+        for old in list(out.glob("_aot_lib*")) + [man]:  # a previous build's
+            if old.exists():
+                old.unlink()
         if os.environ.get("GEOMKIT_NO_AOT", "") not in ("", "0"):
             print("geomkit: GEOMKIT_NO_AOT set: no ahead-of-time kernels (JIT)")
             return
-        out = (ROOT if self.inplace else Path(self.build_lib)).joinpath(*KERNELS)
-        out.mkdir(parents=True, exist_ok=True)
-        for old in out.glob("_aot_lib*"):
-            old.unlink()
-        man = out / "_aot_manifest.json"
-        if man.exists():
-            man.unlink()
         t0 = time.time()
         try:
             # by path, without geomkit/__init__.py (see _aot_build.by_path_command)
