@@ -1,7 +1,7 @@
 """Build hook: the ahead-of-time compiled kernels (docs/compile.md).
 
 Everything else is in pyproject.toml.  ``build_ext`` runs
-``geomkit/_aot_build.py build`` (numba's pycc) in a child process and puts the
+``geomkit/_kernels/_aot_build.py build`` (numba's pycc) in a child process and puts the
 extension module ``geomkit/_kernels/_aot_lib`` and its manifest into the build (or,
 for ``pip install -e .``, into the source tree).  The AOT build never fails the
 install: if it fails the package is installed without it and runs on the JIT
@@ -47,8 +47,8 @@ class build_aot(build_ext):
             # by path, without geomkit/__init__.py (see _aot_build.by_path_command)
             code = ("import runpy, sys; sys.argv = sys.argv[1:]; "
                     "runpy.run_path(sys.argv[0], run_name='__main__')")
-            r = subprocess.run([sys.executable, "-c", code,
-                                str(ROOT / "geomkit" / "_aot_build.py"), "build", str(out)],
+            tool = ROOT / "geomkit" / "_kernels" / "_aot_build.py"
+            r = subprocess.run([sys.executable, "-c", code, str(tool), "build", str(out)],
                                cwd=str(ROOT))
             ok = r.returncode == 0 and man.exists()
         except Exception as e:  # never fail the install

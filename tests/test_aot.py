@@ -1,4 +1,4 @@
-"""Ahead-of-time compiled kernels (geomkit/_kernels/_aot.py, geomkit/_aot_build.py).
+"""Ahead-of-time compiled kernels (geomkit/_kernels/_aot.py and _aot_build.py).
 
 The export list must match the kernels (names, arity, and the argument types the demo
 calls them with); the router must hand the compiled code only arguments of exactly
@@ -23,8 +23,9 @@ from geomkit._kernels._numba import _kernels_stamp
 
 EXPORTS = json.loads(_aot.EXPORTS.read_text())
 
-needs_aot = pytest.mark.skipif(not _aot.active(), reason=f"no ahead-of-time kernels: "
-                               f"{_aot.status} (build: python geomkit/_aot_build.py build)")
+needs_aot = pytest.mark.skipif(
+    not _aot.active(), reason=f"no ahead-of-time kernels: {_aot.status} "
+                              f"(build: python geomkit/_kernels/_aot_build.py build)")
 
 
 def _kernel(mod, qual):
@@ -50,12 +51,12 @@ def test_export_list_names_existing_kernels_with_their_arity():
 def test_export_list_matches_the_demo_calls():
     """Regenerate the list (the demo run with call recording, in a child process) and
     compare: fails when a kernel's Python call changed types or a new kernel is called
-    from Python (``python geomkit/_aot_build.py record`` rewrites the list)."""
-    from geomkit._aot_build import record
+    from Python (``python geomkit/_kernels/_aot_build.py record`` rewrites the list)."""
+    from geomkit._kernels._aot_build import record
 
     fresh = record(out=None, grid=8)
     assert fresh == EXPORTS, "the exported kernels no longer match the demo's calls: " \
-                             "run `python geomkit/_aot_build.py record`"
+                             "run `python geomkit/_kernels/_aot_build.py record`"
 
 
 def _arrays():

@@ -1,6 +1,6 @@
 """Ahead-of-time compiled kernels: the loader and the call router.
 
-``python -m geomkit._aot_build`` (run by ``setup.py`` when the package is built or
+``python geomkit/_kernels/_aot_build.py`` (run by ``setup.py`` when the package is built or
 installed) compiles the kernels listed in ``_aot_exports.json`` -- the kernels the
 demo's jobs call from Python, with the argument types they call them with -- into
 the extension module ``_aot_lib`` next to this file, and writes ``_aot_manifest.json``

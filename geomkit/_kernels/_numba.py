@@ -127,7 +127,7 @@ class _Dispatcher(_CachedDispatcher):
 
 _RECORD = os.environ.get("GEOMKIT_AOT_RECORD")
 """When set (a file name): record every call of a kernel *from Python* (the argument
-types as numba sees them) and write them there at exit (:mod:`geomkit._aot_build`
+types as numba sees them) and write them there at exit (:mod:`geomkit._kernels._aot_build`
 generates the ahead-of-time export list from it)."""
 
 _recorded: dict = {}  # (module, qualname) -> {signature: None}, in first-call order

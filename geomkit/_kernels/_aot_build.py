@@ -1,9 +1,12 @@
 """Build the ahead-of-time compiled kernels (see :mod:`geomkit._kernels._aot`).
 
+Not a kernel: the build tool, kept here (with the loader) so that it imports only
+``geomkit._kernels``; files named ``_aot*`` are outside the kernel source stamp.
+
 ::
 
-    python geomkit/_aot_build.py record      # regenerate _kernels/_aot_exports.json
-    python geomkit/_aot_build.py build [DIR] # compile _aot_lib + manifest into DIR
+    python geomkit/_kernels/_aot_build.py record      # regenerate _kernels/_aot_exports.json
+    python geomkit/_kernels/_aot_build.py build [DIR] # compile _aot_lib + manifest into DIR
 
 ``record`` runs ``geomkit demo`` in a child process with ``GEOMKIT_AOT_RECORD`` set:
 every kernel call made *from Python* is recorded with its argument types (calls from
@@ -29,7 +32,7 @@ import time
 from importlib import import_module
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 if __name__ == "__main__" and not __package__:
     # run by path (setup.py, in pip's isolated build environment, which has numba and
@@ -40,9 +43,9 @@ if __name__ == "__main__" and not __package__:
     _pkg = _types.ModuleType("geomkit")
     _pkg.__path__ = [str(ROOT / "geomkit")]
     sys.modules.setdefault("geomkit", _pkg)
-    __package__ = "geomkit"
+    __package__ = "geomkit._kernels"
 
-from ._kernels import _aot  # noqa: E402
+from . import _aot  # noqa: E402
 
 
 def record(out=_aot.EXPORTS, grid=None) -> list:
@@ -91,7 +94,7 @@ def build(out_dir, exports=None, verbose=False) -> dict:
 
     import numba
 
-    from ._kernels import _numba
+    from . import _numba
 
     t0 = time.time()
     out_dir = Path(out_dir)

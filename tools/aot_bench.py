@@ -1,6 +1,6 @@
 """Warm speed of the ahead-of-time kernels against the JIT's, in one process.
 
-``python -m geomkit._aot_bench [repeats]``: each job runs alternately with the
+``python tools/aot_bench.py [repeats]``: each job runs alternately with the
 ahead-of-time code (:mod:`geomkit._kernels._aot`) and with the JIT dispatchers
 (``use_aot(False)``, compiled and warmed first), ``repeats`` times; prints the
 medians and their ratio.  The jobs are the demo's steps at the demo's sizes plus a
@@ -14,15 +14,17 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]))
+
 
 def _jobs():
-    from . import samples
-    from .deviation import deviation
-    from .demo import PROBE_RADIUS, synthetic_scan
-    from .distance import surface_distance
-    from .projection import project_points
-    from .section import plane_section
-    from .tessellate import tessellate
+    from geomkit import samples
+    from geomkit.deviation import deviation
+    from geomkit.demo import PROBE_RADIUS, synthetic_scan
+    from geomkit.distance import surface_distance
+    from geomkit.projection import project_points
+    from geomkit.section import plane_section
+    from geomkit.tessellate import tessellate
 
     surf = samples.load("freeform_1")[0]
     C, N, _ = synthetic_scan(surf, 40)
@@ -41,7 +43,7 @@ def _jobs():
 
 
 def run(repeats: int = 7) -> dict:
-    from ._kernels import _aot
+    from geomkit._kernels import _aot
 
     if not _aot.active():
         raise SystemExit(f"no ahead-of-time kernels: {_aot.status}")
