@@ -228,3 +228,22 @@ def test_aot_kernels_release_the_gil():
     assert R.aot_calls == n0 + 2
     assert call > 0.05, call
     assert gap < 0.5 * call, (gap, call)
+
+
+def test_a_kernel_calling_a_router_compiles_against_its_dispatcher():
+    """numba types a router as its dispatcher: kernels that call an exported kernel
+    compile and run as before (a call from Python goes through the router)."""
+    from geomkit._kernels._numba import _decorator
+
+    def add(a, k):
+        return a[k] + k
+
+    disp = _decorator(cache=False)(add)
+    r = _aot.Router(disp, [])
+    try:
+        caller = _decorator(cache=False)(lambda a, k: r(a, k) * 2)
+        assert caller(np.arange(4.0), 2) == 8.0
+        assert r(np.arange(4.0), 1) == 2.0 and r.jit_calls == 1
+        assert len(disp.signatures) == 1  # one compile, shared by both paths
+    finally:
+        _aot.routers.remove(r)
