@@ -53,6 +53,22 @@ def _compile(groups) -> None:
             surface_distance(a, b, tol=1e-6)
 
 
+def kernels_status() -> str:
+    """Whether the kernels run ahead-of-time compiled code or compile on first use
+    (:mod:`geomkit._kernels._aot`), and if not, why."""
+    from ._kernels import _aot
+
+    return _aot.status
+
+
+def needed() -> bool:
+    """False when the ahead-of-time kernels are in use: nothing is left to compile in
+    the background."""
+    from ._kernels import _aot
+
+    return not _aot.active()
+
+
 def start_background(groups) -> subprocess.Popen:
     """Compile the kernels of ``groups`` (names from :data:`GROUPS`) in a separate
     Python process; returns its ``Popen`` (``wait()`` to let it finish).

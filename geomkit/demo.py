@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from . import samples
+from ._warmup import needed as warmup_needed
 from ._warmup import start_background
 from .clearance import Stylus, probe_clearance
 from .deviation import _rodrigues, align_rigid, deviation
@@ -105,7 +106,8 @@ def run_demo(out_dir="geomkit-demo", grid: int = 40, tol: float = 1e-4,
         if progress is not None:
             progress(name, summary if done else None,
                      now - started[name] if done else None)
-    helper = start_background(["distance", "section"]) if warm_up else None
+    helper = (start_background(["distance", "section"])
+              if warm_up and warmup_needed() else None)
     case = samples.load_case("freeform_1")
     surf = case.surfaces[0]
     units = case.units  # None: the bundled samples do not state one ("model units")

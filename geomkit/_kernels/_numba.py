@@ -16,6 +16,10 @@
   ``parallel=True`` / ``prange`` (:data:`pjit`) compiles the whole call tree of the
   loop body three more times (parfor kernel, gufunc wrapper, caller), which cost more
   than half of the first-run compile time of the projection kernels.
+* ahead-of-time kernels (:mod:`._aot`): when the package was built with them, the
+  decorator returns a router for each exported kernel, which runs the compiled
+  module's code for calls from Python with exactly the exported argument types and
+  this dispatcher otherwise (docs/compile.md).
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ from pathlib import Path
 import numba
 from numba.core import caching, errors, types
 from numba.core.registry import CPUDispatcher
+
+from . import _aot
 
 # The OpenMP layer parks idle threads deeply: every parallel call then pays ~7 ms of
 # wake-up, which dominates the many small kernel calls of adaptive refinement
@@ -48,6 +54,8 @@ def _kernels_stamp() -> bytes:
         h = hashlib.sha256()
         here = Path(__file__).resolve().parent
         for f in sorted(here.glob("*.py")):
+            if f.name.startswith("_aot"):  # the loader and router: no compiled code
+                continue
             h.update(f.name.encode())
             h.update(f.read_bytes())
         _STAMP = h.digest()
@@ -117,10 +125,47 @@ class _Dispatcher(_CachedDispatcher):
         return super().get_call_template(args, kws)
 
 
+_RECORD = os.environ.get("GEOMKIT_AOT_RECORD")
+"""When set (a file name): record every call of a kernel *from Python* (the argument
+types as numba sees them) and write them there at exit (:mod:`geomkit._kernels._aot_build`
+generates the ahead-of-time export list from it)."""
+
+_recorded: dict = {}  # (module, qualname) -> {signature: None}, in first-call order
+
+
+class _Recording:
+    """Dispatcher mixin of the recording mode (:data:`_RECORD`): calls from Python go
+    through this ``__call__``; calls from other kernels are compiled and never do."""
+
+    def __call__(self, *args, **kws):
+        key = (self.py_func.__module__, self.py_func.__qualname__)
+        sig = ("kwargs",) if kws else tuple(str(numba.typeof(a)) for a in args)
+        _recorded.setdefault(key, {}).setdefault(sig, None)
+        return super().__call__(*args, **kws)
+
+
+def _write_recorded():
+    import json
+
+    # in the order of the first calls: the build compiles them in that order, as the
+    # JIT did in the recorded run
+    rows = [[m, q, list(sig)] for (m, q), sigs in _recorded.items() for sig in sigs]
+    with open(_RECORD, "w") as fh:
+        json.dump(rows, fh, indent=0)
+
+
+if _RECORD:
+    import atexit
+
+    atexit.register(_write_recorded)
+
+
 def _decorator(cache=True, dispatcher=None, **options):
     targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
                          **options)
     cls = _Dispatcher if dispatcher is None else dispatcher
+    if _RECORD:
+        cls = type(cls.__name__, (_Recording, cls), {})
 
     def wrap(func):
         if numba.config.DISABLE_JIT:
@@ -128,6 +173,11 @@ def _decorator(cache=True, dispatcher=None, **options):
         disp = cls(py_func=func, locals={}, targetoptions=targetoptions)
         if cache:
             disp.enable_caching()
+        if not _RECORD:
+            table = _aot.load(_kernels_stamp().hex())
+            entries = table and table.get((func.__module__, func.__qualname__))
+            if entries:
+                return _aot.Router(disp, entries)
         return disp
     return wrap
 

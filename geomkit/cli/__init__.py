@@ -61,12 +61,24 @@ def _add_cad_options(p) -> None:
                         "default: such a file is an error")
 
 
+def _version_line() -> str:
+    import numba
+
+    from .. import __version__
+    from .._warmup import kernels_status
+
+    return f"geomkit {__version__} (numba {numba.__version__}; {kernels_status()})"
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog="geomkit",
                                  description="Exact NURBS surface geometry with stated "
                                              "error bounds.",
                                  epilog=EXAMPLES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=_version_line(),
+                    help="the version, and whether the kernels are compiled ahead of "
+                         "time or on first use (JIT)")
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section, "
                                     "clearance)",
