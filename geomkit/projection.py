@@ -41,7 +41,8 @@ from .errors import InvalidInputError
 from .evaluation import DEGENERATE_REL
 from .projection_cert import pack_span_bounds
 from .projection_trim import (TRIM_SAMPLES, TRIM_STARTS,  # noqa: F401 (public here)
-                              _TrimData, _trim_boundary_triangles)
+                              _TrimData, _trim_boundary_triangles,
+                              cert_boxes)
 from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
@@ -233,9 +234,11 @@ class Projector:
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
             self.mesh.face_deviation + PROJ_TRIM_TARGET * self.mesh.tol * tb))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
-        # second-order certificate: triangles on a trim boundary (never settled) and
-        # per-span derivative bounds (geomkit.projection_cert)
-        self.cert_pack = (tb.astype(np.int8), *pack_span_bounds(
+        # second-order certificate: the parameter box of each candidate's piece of its
+        # face (trim slivers included, NaN: never settled) and per-span derivative
+        # bounds (geomkit.projection_cert)
+        self.cert_pack = (cert_boxes(self.mesh, self.surfaces, self.trimmed),
+                          *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)

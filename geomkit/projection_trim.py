@@ -3,6 +3,8 @@ samples on the trim curves' images that seed the trim-boundary Newton."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -17,6 +19,22 @@ TRIM_STARTS = 3
 """Trim-boundary Newton starts per point: from its nearest boundary samples."""
 
 
+def _boundary_edges(mesh, trimmed) -> np.ndarray:
+    """(m, 3) bool: edge k (corners k, k+1) of a triangle of a trimmed face is on the
+    mesh boundary (no other triangle has it)."""
+    F = mesh.faces
+    on = trimmed[mesh.face_surface] != 0
+    out = np.zeros(F.shape, bool)
+    if not on.any():
+        return out
+    idx = np.flatnonzero(on)
+    E = np.sort(np.stack([F[idx][:, [0, 1]], F[idx][:, [1, 2]], F[idx][:, [2, 0]]],
+                         axis=1), axis=2).reshape(-1, 2)  # (3k, 2), vertex ids
+    _, inv, cnt = np.unique(E, axis=0, return_inverse=True, return_counts=True)
+    out[idx] = (cnt[inv.ravel()] == 1).reshape(-1, 3)
+    return out
+
+
 def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
     """(m,) bool: triangles of trimmed faces with an edge on the mesh boundary.
 
@@ -26,19 +44,7 @@ def _trim_boundary_triangles(mesh, trimmed) -> np.ndarray:
     hole), so ``d(x, t) + e_t`` measured on the parametric gap alone is no upper bound
     of the distance to the trimmed face there — it pruned the nearest face of a real
     part (a disk above a plate's hole)."""
-    F = mesh.faces
-    on = trimmed[mesh.face_surface] != 0
-    out = np.zeros(F.shape[0], bool)
-    if not on.any():
-        return out
-    idx = np.flatnonzero(on)
-    E = np.sort(np.stack([F[idx][:, [0, 1]], F[idx][:, [1, 2]], F[idx][:, [2, 0]]],
-                         axis=1), axis=2).reshape(-1, 2)  # (3k, 2), vertex ids
-    _, inv, cnt = np.unique(E, axis=0, return_inverse=True, return_counts=True)
-    single = (cnt[inv.ravel()] == 1).reshape(-1, 3)
-    out[idx] = single.any(axis=1)
-    return out
-
+    return _boundary_edges(mesh, trimmed).any(axis=1)
 
 
 class _TrimData:
@@ -67,3 +73,204 @@ class _TrimData:
         near = np.full((P.shape[0], TRIM_STARTS), -1, dtype=np.int64)
         near[:, :k] = np.asarray(idx, dtype=np.int64).reshape(P.shape[0], k)
         return near
+
+
+CERT_SAMPLES = 64
+"""Samples per trim segment that seed the parameters of the boundary vertices."""
+CERT_NEAREST = 6
+"""Trim samples (hence segments) tried per boundary vertex."""
+
+
+def _bernstein(p, t):
+    """(n, p + 1) Bernstein basis of degree ``p`` at the parameters ``t`` (n,)."""
+    n = t.shape[0]
+    a = np.ones((n, p + 1))
+    b = np.ones((n, p + 1))
+    for k in range(1, p + 1):
+        a[:, k] = a[:, k - 1] * t  # t^k
+        b[:, k] = b[:, k - 1] * (1.0 - t)  # (1 - t)^k
+    c = np.array([math.comb(p, k) for k in range(p + 1)], dtype=np.float64)
+    return c * a * b[:, ::-1]
+
+
+def _curve(Q, p, t):
+    """Point (n, 2) and derivative (n, 2) of the rational Bézier segments ``Q`` (n,
+    p + 1, 3) (homogeneous: u w, v w, w) of degree ``p`` at ``t`` (n,)."""
+    H = np.einsum("ni,nic->nc", _bernstein(p, t), Q)
+    D = np.einsum("ni,nic->nc", _bernstein(p - 1, t), p * np.diff(Q, axis=1))
+    C = H[:, :2] / H[:, 2:]
+    return C, (D[:, :2] - C * D[:, 2:]) / H[:, 2:]
+
+
+def _split_rows(P, t):
+    """de Casteljau of every row of ``P`` (n, k, 3) at its own ``t`` (n,): (left,
+    right)."""
+    L, R, Q = [P[:, 0]], [P[:, -1]], P
+    tt = t[:, None, None]
+    for _ in range(P.shape[1] - 1):
+        Q = (1.0 - tt) * Q[:, :-1] + tt * Q[:, 1:]
+        L.append(Q[:, 0])
+        R.append(Q[:, -1])
+    return np.stack(L, axis=1), np.stack(R[::-1], axis=1)
+
+
+def _seeds(seg, deg, uv):
+    """For each parameter point ``uv`` (n, 2): the segments and parameters of its
+    :data:`CERT_NEAREST` nearest samples on the trim curves (n, k)."""
+    M = seg.shape[0] * CERT_SAMPLES
+    suv = np.empty((M, 2))
+    sseg = np.empty(M, dtype=np.int64)
+    st = np.empty(M)
+    _tf.trim_samples(seg, deg, CERT_SAMPLES, suv, sseg, st)
+    k = min(CERT_NEAREST, M)
+    _, idx = cKDTree(suv).query(uv, k=k)
+    idx = np.asarray(idx).reshape(uv.shape[0], k)
+    S = np.full((uv.shape[0], CERT_NEAREST), -1, dtype=np.int64)
+    T = np.zeros((uv.shape[0], CERT_NEAREST))
+    S[:, :k] = sseg[idx]
+    T[:, :k] = st[idx]
+    return S, T
+
+
+def _refine(seg, deg, S, T, X, tol):
+    """Gauss-Newton on ``|C_S(t) - X|`` from ``T`` (all flat, S the segment indices
+    into ``seg``, -1 none): the parameters and whether each lands within ``tol`` (per
+    row) of its point."""
+    T = T.copy()
+    ok = np.zeros(S.shape, bool)
+    live = S >= 0
+    for p in np.unique(deg[S[live]]):
+        sel = np.flatnonzero(live & (deg[np.maximum(S, 0)] == p))
+        Q = seg[S[sel], :p + 1]
+        t = T[sel]
+        for _ in range(10):
+            C, dC = _curve(Q, p, t)
+            g = np.einsum("nc,nc->n", C - X[sel], dC)
+            h = np.einsum("nc,nc->n", dC, dC)
+            t = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), 0.0, 1.0)
+        C, _ = _curve(Q, p, t)
+        T[sel] = t
+        ok[sel] = np.linalg.norm(C - X[sel], axis=1) <= tol[sel]
+    return T, ok
+
+
+def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
+    """(m, 4) parameter boxes ``(umin, umax, vmin, vmax)`` holding every point of each
+    candidate triangle's piece of its face, for the projection's certificate
+    (:func:`geomkit._kernels.project_cert.cert_settle`); NaN rows are never settled.
+
+    Inside a face the piece is the parameter triangle.  A triangle with an edge on a
+    trim polyline also stands for the sliver between that chord and the exact trim
+    curve (the face runs past the mesh where the curve bulges away from the
+    triangle): the arc between the edge's two vertices lies in the convex hull of its
+    rational Bézier sub-segment (positive weights), so the box also holds that hull.
+    The arc is found by locating both vertices on one trim segment (within ``1e-9`` of
+    the parameter domain's size).  An edge within that of a side of the domain has no sliver
+    (the face ends there: the box reaches the side), nor has an edge found twice in parameters (the mesh split along
+    a line inside the face: the other triangle goes on); any other edge (a vertex off
+    the exact trim curve, no common segment, a non-positive weight) gives NaN: no
+    certificate."""
+    fuv = mesh.face_uv
+    box = np.stack([fuv[..., 0].min(1), fuv[..., 0].max(1), fuv[..., 1].min(1),
+                    fuv[..., 1].max(1)], axis=1)
+    bedge = _boundary_edges(mesh, trimmed)
+    segs, degs, E_tri, E_a, E_b, E_tol, SA, TA, SB, TB = ([] for _ in range(10))
+    so = 0
+    for si in np.flatnonzero(trimmed):
+        tri, k = np.nonzero(bedge & (mesh.face_surface == si)[:, None])
+        if tri.size == 0:
+            continue
+        s = surfaces[si]
+        (u0, u1), (v0, v1) = s.domain
+        tol = 1e-9 * max(u1 - u0, v1 - v0)
+        a = fuv[tri, k]
+        b = fuv[tri, (k + 1) % 3]
+        lo = np.array([u0, v0])
+        hi = np.array([u1, v1])
+        side = ((np.abs(a - lo) <= tol) & (np.abs(b - lo) <= tol)) \
+            | ((np.abs(a - hi) <= tol) & (np.abs(b - hi) <= tol))
+        # an edge twice in parameters (the mesh split along a seam or a knot line,
+        # vertices not shared): the face goes on in the other triangle
+        key = np.concatenate([np.minimum(a, b), np.maximum(a, b)], axis=1)
+        _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        free = ~side.any(axis=1) & (cnt[inv.ravel()] == 1)
+        # an edge within tol of a domain side: the box reaches that side
+        st = tri[side[:, 0]]
+        box[st[np.abs(a[side[:, 0], 0] - u0) <= tol], 0] = u0
+        box[st[np.abs(a[side[:, 0], 0] - u1) <= tol], 1] = u1
+        st = tri[side[:, 1]]
+        box[st[np.abs(a[side[:, 1], 1] - v0) <= tol], 2] = v0
+        box[st[np.abs(a[side[:, 1], 1] - v1) <= tol], 3] = v1
+        if not free.any():
+            continue
+        tri, a, b = tri[free], a[free], b[free]
+        seg, deg, _, _ = _segments(s)
+        seg = np.ascontiguousarray(seg)
+        Sa, Ta = _seeds(seg, deg, a)
+        Sb, Tb = _seeds(seg, deg, b)
+        segs.append(seg)
+        degs.append(deg)
+        SA.append(np.where(Sa >= 0, Sa + so, -1))
+        SB.append(np.where(Sb >= 0, Sb + so, -1))
+        TA.append(Ta)
+        TB.append(Tb)
+        so += seg.shape[0]
+        E_tri.append(tri)
+        E_a.append(a)
+        E_b.append(b)
+        E_tol.append(np.full(tri.size, tol))
+    if not E_tri:
+        return np.ascontiguousarray(box)
+    pmax = max(sg.shape[1] for sg in segs)
+    seg = np.ones((so, pmax, 3))
+    o = 0
+    for sg in segs:
+        seg[o:o + sg.shape[0], :sg.shape[1]] = sg
+        o += sg.shape[0]
+    deg = np.concatenate(degs)
+    tri, a, b, tol = (np.concatenate(E) for E in (E_tri, E_a, E_b, E_tol))
+    Sa, Sb, Ta, Tb = (np.concatenate(E) for E in (SA, SB, TA, TB))
+    kk = Sa.shape[1]
+    Ta, oka = _refine(seg, deg, Sa.ravel(), Ta.ravel(), np.repeat(a, kk, axis=0),
+                      np.repeat(tol, kk))
+    Tb, okb = _refine(seg, deg, Sb.ravel(), Tb.ravel(), np.repeat(b, kk, axis=0),
+                      np.repeat(tol, kk))
+    Ta, oka, Tb, okb = (x.reshape(-1, kk) for x in (Ta, oka, Tb, okb))
+    # both vertices on one segment: the pair with the shortest arc
+    same = (Sa[:, :, None] == Sb[:, None, :]) & oka[:, :, None] & okb[:, None, :]
+    gap = np.where(same, np.abs(Ta[:, :, None] - Tb[:, None, :]), np.inf).reshape(
+        tri.size, -1)
+    flat = gap.argmin(axis=1)
+    ia, ib = np.divmod(flat, kk)
+    rows = np.arange(tri.size)
+    found = np.isfinite(gap[rows, flat])
+    sg = Sa[rows, ia]
+    t0 = np.clip(np.minimum(Ta[rows, ia], Tb[rows, ib]) - 1e-9, 0.0, 1.0)
+    t1 = np.clip(np.maximum(Ta[rows, ia], Tb[rows, ib]) + 1e-9, 0.0, 1.0)
+    hull = np.full((tri.size, 4), np.nan)
+    for p in np.unique(deg[sg[found]]):
+        sel = np.flatnonzero(found & (deg[sg] == p))
+        left, _ = _split_rows(seg[sg[sel], :p + 1], t1[sel])
+        _, sub = _split_rows(left, t0[sel] / t1[sel])
+        w = sub[..., 2]
+        pos = (w > 0).all(axis=1)
+        X = sub[..., :2] / np.where(w > 0, w, 1.0)[..., None]
+        h = np.stack([X[..., 0].min(1), X[..., 0].max(1), X[..., 1].min(1),
+                      X[..., 1].max(1)], axis=1)
+        h[:, ::2] -= tol[sel, None]
+        h[:, 1::2] += tol[sel, None]
+        h[~pos] = np.nan
+        hull[sel] = h
+    # a triangle's box grows by the hull of each of its boundary arcs (NaN spreads)
+    with np.errstate(invalid="ignore"):
+        np.minimum.at(box[:, 0], tri, hull[:, 0])
+        np.maximum.at(box[:, 1], tri, hull[:, 1])
+        np.minimum.at(box[:, 2], tri, hull[:, 2])
+        np.maximum.at(box[:, 3], tri, hull[:, 3])
+    # the face lies in the domain
+    dm = np.array([[*s.domain[0], *s.domain[1]] for s in surfaces])[mesh.face_surface]
+    box[:, 0] = np.maximum(box[:, 0], dm[:, 0])
+    box[:, 1] = np.minimum(box[:, 1], dm[:, 1])
+    box[:, 2] = np.maximum(box[:, 2], dm[:, 2])
+    box[:, 3] = np.minimum(box[:, 3], dm[:, 3])
+    return np.ascontiguousarray(box)

@@ -422,7 +422,7 @@ def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, dep
 @jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd,
                    bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
                    out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
@@ -543,7 +543,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                     # when f is provably convex over their parameter box
                     nset += cert_settle(cbrk, bnd, bnd_off[s], bu, bv, dom[s], u, v, d, SKL,
                                         x, step_tol, s, c + 1, k, best, ct, cd, fdev,
-                                        face_surf, face_uv, tb, settled)
+                                        face_surf, tbox, settled)
         out_work[i, 4] = nset
         out_nf[i] = nf
         out_work[i, 3] = stop
@@ -553,7 +553,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd, bnd_off,
+                  brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd, bnd_off,
                   certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st, out_cls,
                   out_nf, out_lb, out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
@@ -575,7 +575,8 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
 
     Certificate (``certify`` != 0; :func:`geomkit._kernels.project_cert.cert_settle`):
     after each new nearest foot inside its face, the untried candidates of that face
-    around it (not on a trim boundary: ``tb[t]`` == 0) are settled without a Newton
+    around it (whose piece of the face lies in the box ``tbox[t]``, NaN: never) are
+    settled without a Newton
     run when a second-order bound proves the distance no lower than the foot's over
     their parameter box (sub-span derivative bounds ``bnd`` over the borders ``cbrk``,
     surface s's from ``bnd_off[s]``).
@@ -589,6 +590,6 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd,
          bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
          out_cls, out_nf, out_lb, out_rest, out_flags, out_work)
