@@ -1,5 +1,7 @@
-"""Trim data of the projector: trim-boundary triangles of the candidate mesh and
-samples on the trim curves' images that seed the trim-boundary Newton."""
+"""Trim data of the projector: trim-boundary triangles of the candidate mesh, the
+parameter boxes of the candidates' pieces of their faces (the certificate's: trim
+slivers included) and samples on the trim curves' images that seed the
+trim-boundary Newton."""
 
 from __future__ import annotations
 
@@ -165,11 +167,11 @@ def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
     triangle): the arc between the edge's two vertices lies in the convex hull of its
     rational Bézier sub-segment (positive weights), so the box also holds that hull.
     The arc is found by locating both vertices on one trim segment (within ``1e-9`` of
-    the parameter domain's size).  An edge within that of a side of the domain has no sliver
-    (the face ends there: the box reaches the side), nor has an edge found twice in parameters (the mesh split along
-    a line inside the face: the other triangle goes on); any other edge (a vertex off
-    the exact trim curve, no common segment, a non-positive weight) gives NaN: no
-    certificate."""
+    the parameter domain's size).  An edge within that of a side of the domain has no
+    sliver (the face ends there: the box reaches the side), nor has an edge found
+    twice in parameters (the mesh split along a line inside the face: the other
+    triangle goes on); any other edge (a vertex off the exact trim curve, no common
+    segment, a non-positive weight) gives NaN: no certificate."""
     fuv = mesh.face_uv
     box = np.stack([fuv[..., 0].min(1), fuv[..., 0].max(1), fuv[..., 1].min(1),
                     fuv[..., 1].max(1)], axis=1)
