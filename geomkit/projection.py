@@ -235,9 +235,12 @@ class Projector:
             self.mesh.face_deviation + PROJ_TRIM_TARGET * self.mesh.tol * tb))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
         # second-order certificate: the parameter box of each candidate's piece of its
-        # face (trim slivers included, NaN: never settled) and per-span derivative
-        # bounds (geomkit.projection_cert)
-        self.cert_pack = (cert_boxes(self.mesh, self.surfaces, self.trimmed),
+        # face (trim slivers included, NaN: never settled; the deep flag: a foot in
+        # the box is inside the face) and per-span derivative bounds
+        # (geomkit.projection_cert)
+        self.trim_pack = _pack_trims(self.surfaces)
+        self.cert_pack = (cert_boxes(self.mesh, self.surfaces, self.trimmed,
+                                     self.trim_pack[4]),
                           *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True
@@ -265,7 +268,6 @@ class Projector:
                                            for s in self.surfaces])
         self.approx_error = float(self.face_approx_error.max())
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
-        self.trim_pack = _pack_trims(self.surfaces)
         self.morton = False  # Morton-ordered points: same answers, speed gain not
         # shown on the loaded machine (-20% .. +16% per case), so off by default
         self.build_time = time.perf_counter() - t0

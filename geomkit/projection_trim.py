@@ -156,10 +156,14 @@ def _refine(seg, deg, S, T, X, tol):
     return T, ok
 
 
-def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
-    """(m, 4) parameter boxes ``(umin, umax, vmin, vmax)`` holding every point of each
+def cert_boxes(mesh, surfaces, trimmed, ttol) -> np.ndarray:
+    """(m, 5): parameter boxes ``(umin, umax, vmin, vmax)`` holding every point of each
     candidate triangle's piece of its face, for the projection's certificate
-    (:func:`geomkit._kernels.project_cert.cert_settle`); NaN rows are never settled.
+    (:func:`geomkit._kernels.project_cert.cert_settle`; NaN rows are never settled),
+    and a *deep* flag (column 4, 1.0 or 0.0): the whole box of a triangle of a trimmed
+    face lies inside the face, farther than the classification band ``ttol[s]`` from
+    its trim curves and domain sides, so a foot in that box is INSIDE without
+    classifying it (:func:`_deep`).
 
     Inside a face the piece is the parameter triangle.  A triangle with an edge on a
     trim polyline also stands for the sliver between that chord and the exact trim
@@ -177,6 +181,7 @@ def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
                     fuv[..., 1].max(1)], axis=1)
     bedge = _boundary_edges(mesh, trimmed)
     segs, degs, E_tri, E_a, E_b, E_tol, SA, TA, SB, TB = ([] for _ in range(10))
+    seg_of = {}  # surface -> (first global segment, count)
     so = 0
     for si in np.flatnonzero(trimmed):
         tri, k = np.nonzero(bedge & (mesh.face_surface == si)[:, None])
@@ -216,13 +221,14 @@ def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
         SB.append(np.where(Sb >= 0, Sb + so, -1))
         TA.append(Ta)
         TB.append(Tb)
+        seg_of[si] = (so, seg.shape[0])
         so += seg.shape[0]
         E_tri.append(tri)
         E_a.append(a)
         E_b.append(b)
         E_tol.append(np.full(tri.size, tol))
     if not E_tri:
-        return np.ascontiguousarray(box)
+        return _deep(mesh, surfaces, trimmed, ttol, box, bedge, None)
     pmax = max(sg.shape[1] for sg in segs)
     seg = np.ones((so, pmax, 3))
     o = 0
@@ -269,10 +275,84 @@ def cert_boxes(mesh, surfaces, trimmed) -> np.ndarray:
         np.maximum.at(box[:, 1], tri, hull[:, 1])
         np.minimum.at(box[:, 2], tri, hull[:, 2])
         np.maximum.at(box[:, 3], tri, hull[:, 3])
-    # the face lies in the domain
-    dm = np.array([[*s.domain[0], *s.domain[1]] for s in surfaces])[mesh.face_surface]
-    box[:, 0] = np.maximum(box[:, 0], dm[:, 0])
+    return _deep(mesh, surfaces, trimmed, ttol, box, bedge,
+                 (tri, hull, found, sg, t0, t1, seg, deg, seg_of))
+
+
+def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
+    """Clip ``box`` to the domains and append the deep flag (:func:`cert_boxes`).
+
+    The boundary of a trimmed face lies in the union of its *obstacles*: the hull box
+    of every located trim arc (``arcs``), the whole hull box of every trim segment not
+    covered by located arcs (a loop the mesh dropped, a bridge), and the domain's
+    sides.  A triangle not on the mesh boundary lies in the trim polylines' region,
+    which differs from the face only in slivers inside arc hulls; so when its box,
+    grown by ``ttol[s]`` (and rounding), meets no obstacle and stays that far inside
+    the domain, the box holds no point of the face's boundary, contains points of the
+    face, and is connected: all of it is inside the face, beyond the band.  A surface
+    with a refused (NaN) arc gets no deep triangle."""
+    fs = mesh.face_surface
+    dm = np.array([[*s.domain[0], *s.domain[1]] for s in surfaces])[fs]
+    box[:, 0] = np.maximum(box[:, 0], dm[:, 0])  # the face lies in the domain
     box[:, 1] = np.minimum(box[:, 1], dm[:, 1])
     box[:, 2] = np.maximum(box[:, 2], dm[:, 2])
     box[:, 3] = np.minimum(box[:, 3], dm[:, 3])
-    return np.ascontiguousarray(box)
+    deep = np.zeros(box.shape[0])
+    inner = ~bedge.any(axis=1)
+    for si in np.flatnonzero(trimmed):
+        s = surfaces[si]
+        (u0, u1), (v0, v1) = s.domain
+        cand = np.flatnonzero(inner & (fs == si))
+        if cand.size == 0:
+            continue
+        seg, deg, _, _ = _segments(s)
+        obst = [_segment_hulls(seg, deg, np.ones(seg.shape[0], bool))]
+        if arcs is not None and si in arcs[8]:
+            tri, hull, found, sg, t0, t1, gseg, gdeg, seg_of = arcs
+            o, n = seg_of[si]
+            mine = fs[tri] == si
+            h = hull[mine]
+            if np.isnan(h).any():
+                continue
+            obst = [h]
+            cov = np.zeros(n, bool)
+            g, a, b = sg[mine] - o, t0[mine], t1[mine]
+            order = np.lexsort((a, g))
+            g, a, b = g[order], a[order], b[order]
+            for j in range(n):
+                lo, hi = np.searchsorted(g, [j, j + 1])
+                reach = 0.0
+                for k in range(lo, hi):  # the arcs cover [0, 1] without a gap
+                    if a[k] > reach:
+                        break
+                    reach = max(reach, b[k])
+                cov[j] = reach >= 1.0
+            obst.append(_segment_hulls(seg, deg, ~cov))
+        O = np.concatenate(obst)
+        if np.isnan(O).any():
+            continue
+        g = ttol[si] + 1e-9 * max(u1 - u0, v1 - v0)
+        B = box[cand]
+        ok = ((B[:, 0] - u0 > g) & (u1 - B[:, 1] > g) & (B[:, 2] - v0 > g)
+              & (v1 - B[:, 3] > g))
+        for i in range(0, cand.size, 256):  # no obstacle meets the grown box
+            b = B[i:i + 256, None, :]
+            hit = ((O[None, :, 0] <= b[..., 1] + g) & (O[None, :, 1] >= b[..., 0] - g)
+                   & (O[None, :, 2] <= b[..., 3] + g) & (O[None, :, 3] >= b[..., 2] - g))
+            ok[i:i + 256] &= ~hit.any(axis=1)
+        deep[cand[ok]] = 1.0
+    return np.ascontiguousarray(np.concatenate([box, deep[:, None]], axis=1))
+
+
+def _segment_hulls(seg, deg, sel):
+    """(k, 4) boxes of the control points of the selected trim segments (NaN for a
+    non-positive weight)."""
+    out = []
+    for j in np.flatnonzero(sel):
+        Q = seg[j, :deg[j] + 1]
+        if not (Q[:, 2] > 0).all():
+            out.append([np.nan] * 4)
+            continue
+        X = Q[:, :2] / Q[:, 2:]
+        out.append([X[:, 0].min(), X[:, 0].max(), X[:, 1].min(), X[:, 1].max()])
+    return np.array(out, dtype=np.float64).reshape(-1, 4)

@@ -196,7 +196,7 @@ def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
     pr = geomkit.Projector(samples.load("plate_with_hole"))
     mesh = pr.mesh
     bedge = _boundary_edges(mesh, pr.trimmed)
-    ref = cert_boxes(mesh, pr.surfaces, pr.trimmed)
+    ref = cert_boxes(mesh, pr.surfaces, pr.trimmed, pr.trim_pack[4])
     # a vertex of a hole edge (not on the domain's sides)
     fuv = mesh.face_uv
     mid = np.abs(fuv - fuv.reshape(-1, 2).mean(0)).max(axis=2) < 0.3 * np.ptp(
@@ -209,7 +209,7 @@ def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
     import copy
     m2 = copy.copy(mesh)
     m2.face_uv = moved
-    box = cert_boxes(m2, pr.surfaces, pr.trimmed)
+    box = cert_boxes(m2, pr.surfaces, pr.trimmed, pr.trim_pack[4])
     refused = np.isnan(box[:, 0])
     assert refused[t]
     assert np.array_equal(box[~hit.any(1)], ref[~hit.any(1)])
@@ -237,3 +237,37 @@ def test_certificate_trim_boundary_same_answers_impeller(impeller, which):
     assert np.all(on.lower_bound <= on.distance + 1e-12 * pr.size)
     assert on.stats["certified_skips"] > 0.2 * len(P)
     assert on.stats["newton_runs"] < off.stats["newton_runs"]
+
+
+def test_deep_triangles_are_inside_their_faces(impeller):
+    """Every parameter point in the box of a triangle flagged deep is INSIDE its face
+    by classify_uv (the oracle the kernel's classification follows, default band), and
+    flagged triangles exist; a point in the box of a deep triangle then skips the
+    classification: same answers with the flags cleared."""
+    from geomkit.bench.projection_mesh import case_points
+
+    S, pr = impeller
+    box = pr.cert_pack[0]
+    deep = np.flatnonzero(box[:, 4] != 0)
+    assert deep.size > 500
+    rng = np.random.default_rng(6)
+    fs = pr.mesh.face_surface
+    for si in np.unique(fs[deep]):
+        t = deep[fs[deep] == si]
+        r = rng.random((t.size, 8, 2))
+        r[:, :2] = [[0, 0], [1, 1]]  # box corners too
+        uv = np.stack([box[t, 0, None] + r[..., 0] * (box[t, 1] - box[t, 0])[:, None],
+                       box[t, 2, None] + r[..., 1] * (box[t, 3] - box[t, 2])[:, None]],
+                      axis=-1).reshape(-1, 2)
+        assert np.all(S[si].classify_uv(uv) == geomkit.INSIDE), si
+    scan, _ = case_points(S, 1500, np.random.default_rng(7))
+    ref = pr.project(scan)
+    saved = box[:, 4].copy()
+    try:
+        box[:, 4] = 0.0
+        off = pr.project(scan)
+    finally:
+        box[:, 4] = saved
+    assert np.array_equal(ref.surface, off.surface)
+    assert np.array_equal(ref.status, off.status)
+    assert np.array_equal(ref.distance, off.distance)

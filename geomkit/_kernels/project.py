@@ -513,7 +513,10 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                                       closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
                                       step_tol, bin_, scr, SKL)
             cl = INSIDE
-            if trimmed[s] != 0:
+            # a foot in the box of a deep triangle is inside its face (beyond the
+            # band: geomkit.projection_trim.cert_boxes), no classification needed
+            if trimmed[s] != 0 and not (tbox[t, 4] != 0.0 and tbox[t, 0] <= u <= tbox[t, 1]
+                                        and tbox[t, 2] <= v <= tbox[t, 3]):
                 cl = _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding,
                                  stack, depths, left, right)
             # insert sorted by distance
@@ -567,7 +570,9 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
-    trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
+    trimmed surfaces, whose Newton feet prune candidates only when inside the face (a
+    foot in the box of a triangle with ``tbox[t, 4]`` != 0 is inside without a
+    classification).  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
     of the first candidate left untried by the cap (candidates when none), candidates
@@ -575,8 +580,8 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
 
     Certificate (``certify`` != 0; :func:`geomkit._kernels.project_cert.cert_settle`):
     after each new nearest foot inside its face, the untried candidates of that face
-    around it (whose piece of the face lies in the box ``tbox[t]``, NaN: never) are
-    settled without a Newton
+    around it (whose piece of the face lies in the box ``tbox[t, :4]``, NaN: never)
+    are settled without a Newton
     run when a second-order bound proves the distance no lower than the foot's over
     their parameter box (sub-span derivative bounds ``bnd`` over the borders ``cbrk``,
     surface s's from ``bnd_off[s]``).
