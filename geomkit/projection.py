@@ -236,11 +236,12 @@ class Projector:
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
         # second-order certificate: the parameter box of each candidate's piece of its
         # face (trim slivers included, NaN: never settled; the deep flag: a foot in
-        # the box is inside the face) and per-span derivative bounds
+        # the box is inside the face), each trimmed surface's grid of deep parameter
+        # cells, and per-span derivative bounds
         # (geomkit.projection_cert)
         self.trim_pack = _pack_trims(self.surfaces)
-        self.cert_pack = (cert_boxes(self.mesh, self.surfaces, self.trimmed,
-                                     self.trim_pack[4]),
+        self.cert_pack = (*cert_boxes(self.mesh, self.surfaces, self.trimmed,
+                                      self.trim_pack[4]),
                           *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True

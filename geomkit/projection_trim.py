@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 
 from ._kernels import trim_feet as _tf
 from .evaluation import evaluate
-from .trimming import _segments
+from .trimming import INSIDE, _segments
 from .types import Surface
 
 TRIM_SAMPLES = 32
@@ -299,39 +299,39 @@ def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
     box[:, 3] = np.minimum(box[:, 3], dm[:, 3])
     deep = np.zeros(box.shape[0])
     inner = ~bedge.any(axis=1)
+    gdeep, goff, o = [], np.zeros((len(surfaces), 2), dtype=np.int64), 0
     for si in np.flatnonzero(trimmed):
         s = surfaces[si]
         (u0, u1), (v0, v1) = s.domain
-        cand = np.flatnonzero(inner & (fs == si))
-        if cand.size == 0:
-            continue
         seg, deg, _, _ = _segments(s)
-        obst = [_segment_hulls(seg, deg, np.ones(seg.shape[0], bool))]
+        O = _segment_hulls(seg, deg, np.ones(seg.shape[0], bool))
         if arcs is not None and si in arcs[8]:
             tri, hull, found, sg, t0, t1, gseg, gdeg, seg_of = arcs
-            o, n = seg_of[si]
+            o_s, n = seg_of[si]
             mine = fs[tri] == si
             h = hull[mine]
-            if np.isnan(h).any():
-                continue
-            obst = [h]
-            cov = np.zeros(n, bool)
-            g, a, b = sg[mine] - o, t0[mine], t1[mine]
-            order = np.lexsort((a, g))
-            g, a, b = g[order], a[order], b[order]
-            for j in range(n):
-                lo, hi = np.searchsorted(g, [j, j + 1])
-                reach = 0.0
-                for k in range(lo, hi):  # the arcs cover [0, 1] without a gap
-                    if a[k] > reach:
-                        break
-                    reach = max(reach, b[k])
-                cov[j] = reach >= 1.0
-            obst.append(_segment_hulls(seg, deg, ~cov))
-        O = np.concatenate(obst)
+            if not np.isnan(h).any():  # else: the whole segments' hulls
+                cov = np.zeros(n, bool)
+                g, a, b = sg[mine] - o_s, t0[mine], t1[mine]
+                order = np.lexsort((a, g))
+                g, a, b = g[order], a[order], b[order]
+                for j in range(n):
+                    lo, hi = np.searchsorted(g, [j, j + 1])
+                    reach = 0.0
+                    for k in range(lo, hi):  # the arcs cover [0, 1] without a gap
+                        if a[k] > reach:
+                            break
+                        reach = max(reach, b[k])
+                    cov[j] = reach >= 1.0
+                O = np.concatenate([h, _segment_hulls(seg, deg, ~cov)])
         if np.isnan(O).any():
             continue
         g = ttol[si] + 1e-9 * max(u1 - u0, v1 - v0)
+        cells = _deep_cells(s, O, g)
+        goff[si] = (o, DEEP_GRID)
+        gdeep.append(cells.ravel())
+        o += cells.size
+        cand = np.flatnonzero(inner & (fs == si))
         B = box[cand]
         ok = ((B[:, 0] - u0 > g) & (u1 - B[:, 1] > g) & (B[:, 2] - v0 > g)
               & (v1 - B[:, 3] > g))
@@ -341,7 +341,41 @@ def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
                    & (O[None, :, 2] <= b[..., 3] + g) & (O[None, :, 3] >= b[..., 2] - g))
             ok[i:i + 256] &= ~hit.any(axis=1)
         deep[cand[ok]] = 1.0
-    return np.ascontiguousarray(np.concatenate([box, deep[:, None]], axis=1))
+    gdeep = np.concatenate(gdeep) if gdeep else np.zeros(1, dtype=np.int8)
+    return (np.ascontiguousarray(np.concatenate([box, deep[:, None]], axis=1)),
+            np.ascontiguousarray(gdeep, dtype=np.int8), goff)
+
+
+DEEP_GRID = 32
+"""Cells per direction of a trimmed surface's grid of deep parameter cells."""
+
+
+def _deep_cells(s, O, g):
+    """(G, G) int8: cell (i, j) of the surface's domain split :data:`DEEP_GRID` times
+    each way is *deep* (1) when, grown by ``g`` and rounding, it meets no obstacle box
+    of ``O`` (k, 4) and no domain side, and its centre is INSIDE the face: then the
+    cell holds no boundary point and is connected, so all of it is inside the face
+    beyond ``g`` (the argument of :func:`_deep`)."""
+    G = DEEP_GRID
+    (u0, u1), (v0, v1) = s.domain
+    du, dv = (u1 - u0) / G, (v1 - v0) / G
+    eu, ev = g + 1e-12 * (u1 - u0), g + 1e-12 * (v1 - v0)
+    free = np.ones((G, G), bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False  # the domain sides
+    if not (du > 2 * eu and dv > 2 * ev):
+        return np.zeros((G, G), dtype=np.int8)
+    ia = np.clip(np.floor((O[:, 0] - eu - u0) / du).astype(np.int64) - 1, 0, G - 1)
+    ib = np.clip(np.floor((O[:, 1] + eu - u0) / du).astype(np.int64) + 1, 0, G - 1)
+    ja = np.clip(np.floor((O[:, 2] - ev - v0) / dv).astype(np.int64) - 1, 0, G - 1)
+    jb = np.clip(np.floor((O[:, 3] + ev - v0) / dv).astype(np.int64) + 1, 0, G - 1)
+    for a, b, c, d in zip(ia, ib, ja, jb):  # one cell of slack each way (rounding)
+        free[a:b + 1, c:d + 1] = False
+    out = np.zeros((G, G), dtype=np.int8)
+    i, j = np.nonzero(free)
+    if i.size:
+        uv = np.c_[u0 + (i + 0.5) * du, v0 + (j + 0.5) * dv]
+        out[i, j] = s.classify_uv(uv) == INSIDE
+    return out
 
 
 def _segment_hulls(seg, deg, sel):

@@ -196,7 +196,7 @@ def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
     pr = geomkit.Projector(samples.load("plate_with_hole"))
     mesh = pr.mesh
     bedge = _boundary_edges(mesh, pr.trimmed)
-    ref = cert_boxes(mesh, pr.surfaces, pr.trimmed, pr.trim_pack[4])
+    ref = cert_boxes(mesh, pr.surfaces, pr.trimmed, pr.trim_pack[4])[0]
     # a vertex of a hole edge (not on the domain's sides)
     fuv = mesh.face_uv
     mid = np.abs(fuv - fuv.reshape(-1, 2).mean(0)).max(axis=2) < 0.3 * np.ptp(
@@ -209,7 +209,7 @@ def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
     import copy
     m2 = copy.copy(mesh)
     m2.face_uv = moved
-    box = cert_boxes(m2, pr.surfaces, pr.trimmed, pr.trim_pack[4])
+    box = cert_boxes(m2, pr.surfaces, pr.trimmed, pr.trim_pack[4])[0]
     refused = np.isnan(box[:, 0])
     assert refused[t]
     assert np.array_equal(box[~hit.any(1)], ref[~hit.any(1)])
@@ -240,9 +240,9 @@ def test_certificate_trim_boundary_same_answers_impeller(impeller, which):
 
 
 def test_deep_triangles_are_inside_their_faces(impeller):
-    """Every parameter point in the box of a triangle flagged deep is INSIDE its face
-    by classify_uv (the oracle the kernel's classification follows, default band), and
-    flagged triangles exist; a point in the box of a deep triangle then skips the
+    """Every parameter point in the box of a triangle flagged deep, or in a deep cell
+    of its surface's grid, is INSIDE its face by classify_uv (the oracle the kernel's
+    classification follows, default band), and both exist; a foot there skips the
     classification: same answers with the flags cleared."""
     from geomkit.bench.projection_mesh import case_points
 
@@ -260,14 +260,31 @@ def test_deep_triangles_are_inside_their_faces(impeller):
                        box[t, 2, None] + r[..., 1] * (box[t, 3] - box[t, 2])[:, None]],
                       axis=-1).reshape(-1, 2)
         assert np.all(S[si].classify_uv(uv) == geomkit.INSIDE), si
+    from geomkit.projection_trim import DEEP_GRID
+    gdeep, goff = pr.cert_pack[1], pr.cert_pack[2]
+    ncells = 0
+    for si in np.flatnonzero(goff[:, 1]):
+        G = goff[si, 1]
+        cells = gdeep[goff[si, 0]:goff[si, 0] + G * G].reshape(G, G)
+        i, j = np.nonzero(cells)
+        ncells += i.size
+        (u0, u1), (v0, v1) = S[si].domain
+        r = rng.random((i.size, 6, 2))
+        r[:, :2] = [[0, 0], [1 - 1e-15, 1 - 1e-15]]
+        uv = np.stack([u0 + (i[:, None] + r[..., 0]) * (u1 - u0) / G,
+                       v0 + (j[:, None] + r[..., 1]) * (v1 - v0) / G], axis=-1)
+        assert np.all(S[si].classify_uv(uv.reshape(-1, 2)) == geomkit.INSIDE), si
+    assert G == DEEP_GRID and ncells > 5000
     scan, _ = case_points(S, 1500, np.random.default_rng(7))
     ref = pr.project(scan)
-    saved = box[:, 4].copy()
+    saved, cells = box[:, 4].copy(), pr.cert_pack[1].copy()
     try:
         box[:, 4] = 0.0
+        pr.cert_pack[1][:] = 0
         off = pr.project(scan)
     finally:
         box[:, 4] = saved
+        pr.cert_pack[1][:] = cells
     assert np.array_equal(ref.surface, off.surface)
     assert np.array_equal(ref.status, off.status)
     assert np.array_equal(ref.distance, off.distance)

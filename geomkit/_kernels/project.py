@@ -420,9 +420,24 @@ def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, dep
 
 
 @jit
+def _deep_cell(gdeep, goff, dom, s, u, v):
+    """(u, v) lies in a deep cell of trimmed surface ``s``'s grid (``goff[s]`` =
+    (offset into ``gdeep``, cells per direction), 0 cells: none): inside the face
+    beyond the classification band (:func:`geomkit.projection_trim._deep_cells`)."""
+    G = goff[s, 1]
+    if G == 0:
+        return False
+    fu = (u - dom[s, 0]) / (dom[s, 1] - dom[s, 0]) * G
+    fv = (v - dom[s, 2]) / (dom[s, 3] - dom[s, 2]) * G
+    if not (fu >= 0.0 and fu < G and fv >= 0.0 and fv < G):
+        return False
+    return gdeep[goff[s, 0] + np.int64(fu) * G + np.int64(fv)] != 0
+
+
+@jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd,
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd,
                    bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
                    out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
@@ -516,7 +531,8 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
             # a foot in the box of a deep triangle is inside its face (beyond the
             # band: geomkit.projection_trim.cert_boxes), no classification needed
             if trimmed[s] != 0 and not (tbox[t, 4] != 0.0 and tbox[t, 0] <= u <= tbox[t, 1]
-                                        and tbox[t, 2] <= v <= tbox[t, 3]):
+                                        and tbox[t, 2] <= v <= tbox[t, 3]) \
+                    and not _deep_cell(gdeep, goff, dom, s, u, v):
                 cl = _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding,
                                  stack, depths, left, right)
             # insert sorted by distance
@@ -556,7 +572,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd, bnd_off,
+                  brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd, bnd_off,
                   certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st, out_cls,
                   out_nf, out_lb, out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
@@ -571,8 +587,8 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
     trimmed surfaces, whose Newton feet prune candidates only when inside the face (a
-    foot in the box of a triangle with ``tbox[t, 4]`` != 0 is inside without a
-    classification).  ``out_flags[i]`` bit 0:
+    foot in the box of a triangle with ``tbox[t, 4]`` != 0, or in a deep cell of its
+    surface's grid ``gdeep`` / ``goff``, is inside without a classification).  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
     of the first candidate left untried by the cap (candidates when none), candidates
@@ -595,6 +611,6 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, cbrk, bnd,
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd,
          bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
          out_cls, out_nf, out_lb, out_rest, out_flags, out_work)
