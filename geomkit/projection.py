@@ -168,7 +168,7 @@ def _c0_breaks(surfaces):
 
 def _pack_trims(surfaces):
     """Trim segments of all surfaces for the kernel's foot classification
-    (:func:`geomkit._kernels.project._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
+    (:func:`geomkit._kernels.foot_class._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
     ``tloop`` (S,), ``toff[s] = (offset, count, loops)`` and the band ``ttol[s]``
     (:func:`geomkit.trimming.classify_uv`'s default)."""
     parts = [_segments(s) if s.is_trimmed else None for s in surfaces]
