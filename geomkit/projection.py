@@ -41,7 +41,8 @@ from .errors import InvalidInputError
 from .evaluation import DEGENERATE_REL
 from .projection_cert import pack_span_bounds
 from .projection_trim import (TRIM_SAMPLES, TRIM_STARTS,  # noqa: F401 (public here)
-                              _TrimData, _trim_boundary_triangles)
+                              _TrimData, _trim_boundary_triangles,
+                              cert_boxes)
 from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
@@ -167,7 +168,7 @@ def _c0_breaks(surfaces):
 
 def _pack_trims(surfaces):
     """Trim segments of all surfaces for the kernel's foot classification
-    (:func:`geomkit._kernels.project._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
+    (:func:`geomkit._kernels.foot_class._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
     ``tloop`` (S,), ``toff[s] = (offset, count, loops)`` and the band ``ttol[s]``
     (:func:`geomkit.trimming.classify_uv`'s default)."""
     parts = [_segments(s) if s.is_trimmed else None for s in surfaces]
@@ -233,9 +234,15 @@ class Projector:
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
             self.mesh.face_deviation + PROJ_TRIM_TARGET * self.mesh.tol * tb))
         self.dmax = float(self.fdev.max()) if self.fdev.size else 0.0
-        # second-order certificate: triangles on a trim boundary (never settled) and
-        # per-span derivative bounds (geomkit.projection_cert)
-        self.cert_pack = (tb.astype(np.int8), *pack_span_bounds(
+        # second-order certificate: the parameter box of each candidate's piece of its
+        # face (trim slivers included, NaN: never settled; the deep flag: a foot in
+        # the box is inside the face), each trimmed surface's grid of deep parameter
+        # cells, and per-span derivative bounds
+        # (geomkit.projection_cert)
+        self.trim_pack = _pack_trims(self.surfaces)
+        self.cert_pack = (*cert_boxes(self.mesh, self.surfaces, self.trimmed,
+                                      self.trim_pack[4]),
+                          *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
@@ -262,7 +269,6 @@ class Projector:
                                            for s in self.surfaces])
         self.approx_error = float(self.face_approx_error.max())
         self.trims = {i: _TrimData(s) for i, s in enumerate(self.surfaces) if s.is_trimmed}
-        self.trim_pack = _pack_trims(self.surfaces)
         self.morton = False  # Morton-ordered points: same answers, speed gain not
         # shown on the loaded machine (-20% .. +16% per case), so off by default
         self.build_time = time.perf_counter() - t0

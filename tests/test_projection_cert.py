@@ -96,9 +96,9 @@ def test_certificate_refuses_near_the_centre_of_curvature():
 
 
 def test_certificate_trimmed_parts_same_answers():
-    """plate_with_hole (trimmed: trim-boundary triangles are never settled) with
-    points above the hole and its edge: answers equal with the certificate on and
-    off."""
+    """plate_with_hole (trimmed: every triangle borders the outer or the hole's trim
+    polyline) with points above the hole and its edge: answers equal with the
+    certificate on and off, and trim-boundary triangles settled."""
     plate = samples.load("plate_with_hole")
     pr = geomkit.Projector(plate)
     rng = np.random.default_rng(3)
@@ -112,3 +112,179 @@ def test_certificate_trimmed_parts_same_answers():
     assert np.array_equal(on.surface, off.surface)
     assert np.array_equal(on.status, off.status)
     assert np.max(np.abs(on.distance - off.distance)) <= 1e-12 * pr.size
+    assert on.stats["certified_skips"] > 0
+
+
+@pytest.fixture(scope="module")
+def impeller():
+    """pyiges' impeller: (surfaces, Projector)."""
+    pytest.importorskip("pyiges")
+    from geomkit.bench.projection_mesh import load_case
+    S = load_case("impeller")
+    return S, geomkit.Projector(S)
+
+
+def _boundary_arcs_hold(pr, max_refused):
+    """Every sample of the exact trim curves between the two vertices of a trim
+    polyline edge (located by brute force: the nearest of 4,001 samples per segment)
+    lies in the certificate box of that edge's triangle, unless the box is NaN
+    (refused: at most ``max_refused`` of the boundary triangles)."""
+    from geomkit._kernels import trim_feet as tf
+    from geomkit.projection_trim import _boundary_edges
+    from geomkit.trimming import _segments
+
+    box = pr.cert_pack[0]
+    bedge = _boundary_edges(pr.mesh, pr.trimmed)
+    fuv = pr.mesh.face_uv
+    nb = bedge.any(axis=1)
+    assert np.isnan(box[nb, 0]).mean() <= max_refused
+    assert not np.isnan(box[~nb]).any()
+    from scipy.spatial import cKDTree
+
+    per, checked, grown = 4001, 0, 0
+    for si in np.flatnonzero(pr.trimmed):
+        s = pr.surfaces[si]
+        seg, deg, _, _ = _segments(s)
+        seg = np.ascontiguousarray(seg)
+        M = seg.shape[0] * per
+        suv, sseg, st = np.empty((M, 2)), np.empty(M, dtype=np.int64), np.empty(M)
+        tf.trim_samples(seg, deg, per, suv, sseg, st)
+        tri, k = np.nonzero(bedge & (pr.mesh.face_surface == si)[:, None])
+        tree = cKDTree(suv)
+        A, B = fuv[tri, k], fuv[tri, (k + 1) % 3]
+        da, IA = tree.query(A)
+        db, IB = tree.query(B)
+        (u0, u1), (v0, v1) = s.domain  # the face lies in the domain
+        for t, ia, ib, ea, eb in zip(tri, IA, IB, da, db):
+            if np.isnan(box[t, 0]) or sseg[ia] != sseg[ib] or max(ea, eb) > 1e-3:
+                continue  # refused, a seam or a segment junction: not this test
+            lo, hi = sorted((ia, ib))
+            arc = suv[lo + 1:hi]  # strictly between the two vertices, in the domain
+            arc = np.c_[np.clip(arc[:, 0], u0, u1), np.clip(arc[:, 1], v0, v1)]
+            inside = ((arc[:, 0] >= box[t, 0]) & (arc[:, 0] <= box[t, 1])
+                      & (arc[:, 1] >= box[t, 2]) & (arc[:, 1] <= box[t, 3]))
+            assert inside.all(), (si, t, arc[~inside][:3], box[t])
+            tb = fuv[t]
+            grown += bool(((arc[:, 0] < tb[:, 0].min()) | (arc[:, 0] > tb[:, 0].max())
+                           | (arc[:, 1] < tb[:, 1].min())
+                           | (arc[:, 1] > tb[:, 1].max())).any())
+            checked += 1
+    return checked, grown
+
+
+def test_trim_boundary_boxes_hold_the_arcs():
+    """plate_with_hole: every triangle has a box (none refused), every hole arc lies in
+    its triangle's box."""
+    pr = geomkit.Projector(samples.load("plate_with_hole"))
+    checked, _ = _boundary_arcs_hold(pr, 0.0)
+    assert checked > 20
+
+
+def test_trim_boundary_boxes_hold_the_arcs_impeller(impeller):
+    """pyiges' impeller (trim curves of degree 1-3 on 277 faces): the arcs lie in
+    their boxes, the boxes do grow past the triangles where the arc bulges out (the
+    sliver the certificate must cover), and most boundary triangles get a box."""
+    checked, grown = _boundary_arcs_hold(impeller[1], 0.25)
+    assert checked > 500 and grown > 50
+
+
+def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
+    """A boundary vertex moved off the exact trim curve (1e-6 in parameters): its
+    triangles get no box (NaN: never settled); the others are unchanged."""
+    from geomkit.projection_trim import _boundary_edges, cert_boxes
+
+    pr = geomkit.Projector(samples.load("plate_with_hole"))
+    mesh = pr.mesh
+    bedge = _boundary_edges(mesh, pr.trimmed)
+    ref = cert_boxes(mesh, pr.surfaces, pr.trimmed, pr.trim_pack[4])[0]
+    # a vertex of a hole edge (not on the domain's sides)
+    fuv = mesh.face_uv
+    mid = np.abs(fuv - fuv.reshape(-1, 2).mean(0)).max(axis=2) < 0.3 * np.ptp(
+        fuv.reshape(-1, 2), axis=0).max()
+    t, k = np.argwhere(bedge & mid)[0]
+    uv0 = fuv[t, k].copy()
+    hit = np.all(fuv == uv0, axis=2)  # every corner at that vertex
+    moved = fuv.copy()
+    moved[hit] += 1e-6
+    import copy
+    m2 = copy.copy(mesh)
+    m2.face_uv = moved
+    box = cert_boxes(m2, pr.surfaces, pr.trimmed, pr.trim_pack[4])[0]
+    refused = np.isnan(box[:, 0])
+    assert refused[t]
+    assert np.array_equal(box[~hit.any(1)], ref[~hit.any(1)])
+
+
+@pytest.mark.parametrize("which", ["scan", "box"])
+def test_certificate_trim_boundary_same_answers_impeller(impeller, which):
+    """pyiges' impeller, 1,500 scan / 300 box points (the bench's point sets): the same
+    answers with the certificate on and off, and trim-boundary triangles settled (the
+    impeller's triangles mostly border a trim curve)."""
+    from geomkit.bench.projection_mesh import case_points
+
+    S, pr = impeller
+    scan, box = case_points(S, 1500, np.random.default_rng(5))
+    P = scan if which == "scan" else box[:300]
+    try:
+        pr.certify = False
+        off = pr.project(P)
+    finally:
+        pr.certify = True
+    on = pr.project(P)
+    assert np.array_equal(on.surface, off.surface)
+    assert np.array_equal(on.status, off.status)
+    assert np.max(np.abs(on.distance - off.distance)) <= 1e-12 * pr.size
+    assert np.all(on.lower_bound <= on.distance + 1e-12 * pr.size)
+    assert on.stats["certified_skips"] > 0.2 * len(P)
+    assert on.stats["newton_runs"] < off.stats["newton_runs"]
+
+
+def test_deep_triangles_are_inside_their_faces(impeller):
+    """Every parameter point in the box of a triangle flagged deep, or in a deep cell
+    of its surface's grid, is INSIDE its face by classify_uv (the oracle the kernel's
+    classification follows, default band), and both exist; a foot there skips the
+    classification: same answers with the flags cleared."""
+    from geomkit.bench.projection_mesh import case_points
+
+    S, pr = impeller
+    box = pr.cert_pack[0]
+    deep = np.flatnonzero(box[:, 4] != 0)
+    assert deep.size > 500
+    rng = np.random.default_rng(6)
+    fs = pr.mesh.face_surface
+    for si in np.unique(fs[deep]):
+        t = deep[fs[deep] == si]
+        r = rng.random((t.size, 8, 2))
+        r[:, :2] = [[0, 0], [1, 1]]  # box corners too
+        uv = np.stack([box[t, 0, None] + r[..., 0] * (box[t, 1] - box[t, 0])[:, None],
+                       box[t, 2, None] + r[..., 1] * (box[t, 3] - box[t, 2])[:, None]],
+                      axis=-1).reshape(-1, 2)
+        assert np.all(S[si].classify_uv(uv) == geomkit.INSIDE), si
+    from geomkit.projection_trim import DEEP_GRID
+    gdeep, goff = pr.cert_pack[1], pr.cert_pack[2]
+    ncells = 0
+    for si in np.flatnonzero(goff[:, 1]):
+        G = goff[si, 1]
+        cells = gdeep[goff[si, 0]:goff[si, 0] + G * G].reshape(G, G)
+        i, j = np.nonzero(cells)
+        ncells += i.size
+        (u0, u1), (v0, v1) = S[si].domain
+        r = rng.random((i.size, 6, 2))
+        r[:, :2] = [[0, 0], [1 - 1e-15, 1 - 1e-15]]
+        uv = np.stack([u0 + (i[:, None] + r[..., 0]) * (u1 - u0) / G,
+                       v0 + (j[:, None] + r[..., 1]) * (v1 - v0) / G], axis=-1)
+        assert np.all(S[si].classify_uv(uv.reshape(-1, 2)) == geomkit.INSIDE), si
+    assert G == DEEP_GRID and ncells > 5000
+    scan, _ = case_points(S, 1500, np.random.default_rng(7))
+    ref = pr.project(scan)
+    saved, cells = box[:, 4].copy(), pr.cert_pack[1].copy()
+    try:
+        box[:, 4] = 0.0
+        pr.cert_pack[1][:] = 0
+        off = pr.project(scan)
+    finally:
+        box[:, 4] = saved
+        pr.cert_pack[1][:] = cells
+    assert np.array_equal(ref.surface, off.surface)
+    assert np.array_equal(ref.status, off.status)
+    assert np.array_equal(ref.distance, off.distance)

@@ -25,7 +25,8 @@ import numpy as np
 
 from ._numba import jit, jit_inline, prun
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
-from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE, classify_point
+from .foot_class import _deep_cell, _foot_class
+from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE  # noqa: F401 (re-exported)
 from .project_cert import cert_settle
 from .voxel import (candidate_scratch, candidates_batch,  # noqa: F401 (the search alone)
                     point_candidates)
@@ -395,34 +396,9 @@ def foot_c0(Pw, p, q, U, V, dom, brk_u, brk_v, closed_u, closed_v, x, u, v, step
 
 
 @jit
-def _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding, stack, depths, left,
-                right):
-    """INSIDE / OUTSIDE / BOUNDARY of the foot (u, v) on trimmed surface ``s``: the
-    domain rectangle, then the trim loops (:func:`geomkit._kernels.trim.classify_point`)
-    — the same answer as :func:`geomkit.trimming.classify_uv` with its default band
-    ``ttol[s]``."""
-    tol = ttol[s]
-    dd = min(min(u - dom[s, 0], dom[s, 1] - u), min(v - dom[s, 2], dom[s, 3] - v))
-    if dd < -tol:
-        return OUTSIDE
-    out = BOUNDARY if dd <= tol else INSIDE
-    o = toff[s, 0]
-    n = toff[s, 1]
-    if n == 0:
-        return out
-    res = classify_point(tseg[o:o + n], tdeg[o:o + n], tloop[o:o + n], toff[s, 2], u, v,
-                         tol, winding, stack, depths, left, right)
-    if res == OUTSIDE:
-        return OUTSIDE
-    if res == BOUNDARY:
-        return BOUNDARY
-    return out
-
-
-@jit
 def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
                    lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
-                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd,
                    bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
                    out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
     """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
@@ -513,7 +489,11 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                                       closed[s, 0] != 0, closed[s, 1] != 0, x, u0, v0,
                                       step_tol, bin_, scr, SKL)
             cl = INSIDE
-            if trimmed[s] != 0:
+            # a foot in the box of a deep triangle is inside its face (beyond the
+            # band: geomkit.projection_trim.cert_boxes), no classification needed
+            if trimmed[s] != 0 and not (tbox[t, 4] != 0.0 and tbox[t, 0] <= u <= tbox[t, 1]
+                                        and tbox[t, 2] <= v <= tbox[t, 3]) \
+                    and not _deep_cell(gdeep, goff, dom, s, u, v):
                 cl = _foot_class(tseg, tdeg, tloop, toff, ttol, dom, s, u, v, winding,
                                  stack, depths, left, right)
             # insert sorted by distance
@@ -543,7 +523,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                     # when f is provably convex over their parameter box
                     nset += cert_settle(cbrk, bnd, bnd_off[s], bu, bv, dom[s], u, v, d, SKL,
                                         x, step_tol, s, c + 1, k, best, ct, cd, fdev,
-                                        face_surf, face_uv, tb, settled)
+                                        face_surf, tbox, settled)
         out_work[i, 4] = nset
         out_nf[i] = nf
         out_work[i, 3] = stop
@@ -553,7 +533,7 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
 
 def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, lvl_off,
                   occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all,
-                  brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd, bnd_off,
+                  brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd, bnd_off,
                   certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st, out_cls,
                   out_nf, out_lb, out_rest, out_flags, out_work):
     """Candidate feet of each point: up to ``max_starts`` Newton runs per point.
@@ -567,7 +547,9 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     candidates left untried by that cap (inf when none).  ``out_lb[i]`` is the mesh
     lower bound of the point's distance
     (certified up to the mesh deviation bounds ``fdev``).  ``trimmed[s]`` != 0 marks
-    trimmed surfaces, whose Newton feet prune candidates only when inside the face.  ``out_flags[i]`` bit 0:
+    trimmed surfaces, whose Newton feet prune candidates only when inside the face (a
+    foot in the box of a triangle with ``tbox[t, 4]`` != 0, or in a deep cell of its
+    surface's grid ``gdeep`` / ``goff``, is inside without a classification).  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
     ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
     of the first candidate left untried by the cap (candidates when none), candidates
@@ -575,7 +557,8 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
 
     Certificate (``certify`` != 0; :func:`geomkit._kernels.project_cert.cert_settle`):
     after each new nearest foot inside its face, the untried candidates of that face
-    around it (not on a trim boundary: ``tb[t]`` == 0) are settled without a Newton
+    around it (whose piece of the face lies in the box ``tbox[t, :4]``, NaN: never)
+    are settled without a Newton
     run when a second-order bound proves the distance no lower than the foot's over
     their parameter box (sub-span derivative bounds ``bnd`` over the borders ``cbrk``,
     surface s's from ``bnd_off[s]``).
@@ -589,6 +572,6 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     """
     prun(_project_chunk, P.shape[0], PROJECT_CHUNK, P, V, F, fdev, face_surf, face_uv, dmax,
          origin, h, lvl_dims, lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom,
-         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tb, cbrk, bnd,
+         closed, trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd,
          bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
          out_cls, out_nf, out_lb, out_rest, out_flags, out_work)

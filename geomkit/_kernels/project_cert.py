@@ -123,21 +123,24 @@ def _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, ua, ub
 
 
 @jit
-def _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
-    """Candidate ``c`` is still to settle: not settled yet, on surface ``s``, not on a
-    trim boundary, and could hold a point within ``best``."""
+def _open(c, settled, ct, cd, fdev, face_surf, tbox, s, best):
+    """Candidate ``c`` is still to settle: not settled yet, on surface ``s``, with a
+    box of its surface piece (``tbox[t]`` not NaN) and could hold a point within
+    ``best``."""
     t = ct[c]
-    return (settled[c] == 0 and face_surf[t] == s and tb[t] == 0
+    return (settled[c] == 0 and face_surf[t] == s and tbox[t, 0] == tbox[t, 0]
             and cd[c] - fdev[t] <= best)
 
 
 @jit
 def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c0, k,
-                best, ct, cd, fdev, face_surf, face_uv, tb, settled):
+                best, ct, cd, fdev, face_surf, tbox, settled):
     """Mark (``settled[c] = 1``) the candidates ``c0 <= c < k`` of surface ``s`` that
     are not settled yet, could hold a point within ``best`` (lower bound
-    ``cd[c] - fdev[t] <= best``) and are not on a trim boundary (``tb[t] == 0``) when
-    the certificate (module docstring) holds on the box of their parameter triangles
+    ``cd[c] - fdev[t] <= best``) and have a box ``tbox[t]`` = (umin, umax, vmin,
+    vmax) of their piece of the face (the parameter triangle, grown by the hull of
+    the trim arc of a boundary edge: :func:`geomkit.projection_trim.cert_boxes`; NaN:
+    never settled) when the certificate (module docstring) holds on the box of those
     and the foot (u, v) at distance ``d`` — all of them in one box, else each in its
     own; ``SKL`` holds the derivatives at the foot, ``x`` is the point, ``dm`` the
     domain (umin, umax, vmin, vmax), ``brk_u`` / ``brk_v`` the C0 piece borders
@@ -150,14 +153,13 @@ def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c
     vb = v
     m = 0
     for c in range(c0, k):
-        if not _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
+        if not _open(c, settled, ct, cd, fdev, face_surf, tbox, s, best):
             continue
         t = ct[c]
-        for j in range(3):
-            ua = min(ua, face_uv[t, j, 0])
-            ub = max(ub, face_uv[t, j, 0])
-            va = min(va, face_uv[t, j, 1])
-            vb = max(vb, face_uv[t, j, 1])
+        ua = min(ua, tbox[t, 0])
+        ub = max(ub, tbox[t, 1])
+        va = min(va, tbox[t, 2])
+        vb = max(vb, tbox[t, 3])
         m += 1
     if m == 0:
         return 0
@@ -167,14 +169,14 @@ def cert_settle(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, s, c
         return 0
     n = 0
     for c in range(c0, k):
-        if not _open(c, settled, ct, cd, fdev, face_surf, tb, s, best):
+        if not _open(c, settled, ct, cd, fdev, face_surf, tbox, s, best):
             continue
         t = ct[c]
         if not union:
-            ua = min(u, face_uv[t, 0, 0], face_uv[t, 1, 0], face_uv[t, 2, 0])
-            ub = max(u, face_uv[t, 0, 0], face_uv[t, 1, 0], face_uv[t, 2, 0])
-            va = min(v, face_uv[t, 0, 1], face_uv[t, 1, 1], face_uv[t, 2, 1])
-            vb = max(v, face_uv[t, 0, 1], face_uv[t, 1, 1], face_uv[t, 2, 1])
+            ua = min(u, tbox[t, 0])
+            ub = max(u, tbox[t, 1])
+            va = min(v, tbox[t, 2])
+            vb = max(v, tbox[t, 3])
             if not _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol,
                              ua, ub, va, vb):
                 continue
