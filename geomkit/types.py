@@ -437,9 +437,14 @@ class Surface:
         return classify_uv(self, uv, tol)
 
     def bezier_patches(self) -> "BezierPatches":
-        """Bézier extraction; see :func:`geomkit.bezier.bezier_patches`."""
-        from .bezier import bezier_patches
-        return bezier_patches(self)
+        """Bézier extraction; see :func:`geomkit.bezier.bezier_patches`.  Computed once
+        per surface and kept (the patches are read-only): repeated distance queries and
+        sections of one surface (a probe path against a part) do not extract again."""
+        bp = self._cache.get("bezier_patches")
+        if bp is None:
+            from .bezier import bezier_patches
+            bp = self._cache["bezier_patches"] = bezier_patches(self)
+        return bp
 
     def to_geomdl(self):
         """A ``geomdl`` surface (``BSpline.Surface`` or ``NURBS.Surface``); trims dropped."""

@@ -262,3 +262,18 @@ def test_bounds_are_tight_at_patch_corners():
     # 8 octant patches: each box spans exactly one octant-ish quarter
     assert B.shape == (4, 2, 2, 3)
     assert np.allclose(np.abs(B[..., 2]).max(axis=-1), 10.0)
+
+
+def test_surface_keeps_its_patches():
+    """``Surface.bezier_patches()`` extracts once (repeated distance queries against
+    one part) and returns read-only arrays equal to a fresh extraction."""
+    from geomkit.bezier import bezier_patches
+    from geomkit.samples import load
+
+    s = load("freeform_1")[0]
+    bp = s.bezier_patches()
+    assert s.bezier_patches() is bp
+    fresh = bezier_patches(s)
+    np.testing.assert_array_equal(bp.homogeneous, fresh.homogeneous)
+    np.testing.assert_array_equal(bp.u_breaks, fresh.u_breaks)
+    assert not bp.homogeneous.flags.writeable
