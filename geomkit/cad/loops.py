@@ -84,7 +84,10 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     With ``same_point(uv_a, uv_b) -> bool`` (the two UV points are one model point: a
     pole, a degenerate edge), a loop with a gap that is neither small nor one point is
     first re-chained (:func:`chain`), and a larger gap whose ends are one model point is
-    bridged too (the segment maps to that point)."""
+    bridged too (the segment maps to that point: a pole) — unless the same pieces, none
+    reversed, close in another order without it (a loop listed out of order across a
+    seam corner, whose UV images of one point are not joined by a degenerate edge):
+    then the loop is re-chained instead."""
     (u0, u1), (v0, v1) = domain
     size = max(u1 - u0, v1 - v0)
 
