@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit, jit_inline
 
 KDOP_DIRS = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0],
                       [1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, -1.0],
@@ -356,10 +356,11 @@ def refit_kdop(T, child, rng, Rw, tw, K):
                 Ki[2 * d + 1] = max(a[2 * d + 1], b[2 * d + 1])
 
 
-@jit
+@jit_inline
 def rigid_code(P, tol):
     """Check one rigid pose ``P`` (4, 4): ``(code, value)`` as :func:`pose_status`
-    (code 0: rigid)."""
+    (code 0: rigid).  Inlined: the single-call kernel checks both poses of every call
+    (as a call it cost an array reference count round trip each)."""
     for r in range(4):
         for c in range(4):
             if not np.isfinite(P[r, c]):

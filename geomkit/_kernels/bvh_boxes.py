@@ -177,7 +177,7 @@ def _leaf_pair(NA, TA, orderA, NB, TB, orderB, i, j, Rr, tr, first_only, out_pai
 
 @jit
 def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
-                  st, scr, tbs, seed):
+                  st, scr, tbs, seed, root_overlaps=False):
     """:func:`geomkit._kernels.bvh_query.collide_trees` for packed box trees in A's
     frame, B moved by ``(Rr, tr)``; scratch passed in (``st`` (STACK, 2) int64,
     ``scr`` (4, 3, 3), ``tbs`` (LEAF_BUF, 3, 3)) so that a batch allocates it once.
@@ -191,6 +191,8 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
     ``seed[0] < 0`` for none); a hit there ends the query, else the traversal runs
     as without it (the seed pair's tests are counted in ``bv_tests``).  On return
     ``seed`` holds the leaf pair of the first hit found (unchanged if none).
+    ``root_overlaps``: the caller has tested the root pair and found it overlapping
+    (not tested again; still counted in ``bv_tests``).
     Returns ``(n_pairs, bv_tests)`` as ``collide_trees``.
     """
     Rab = scr[0]
@@ -212,7 +214,8 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
         i = st[top, 0]
         j = st[top, 1]
         tests += 1
-        if _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
+        if not (root_overlaps and i == 0 and j == 0) and \
+                _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
             continue
         la = NA[i, 15] < 0.0
         lb = NB[j, 15] < 0.0
@@ -364,16 +367,16 @@ def collide_packed(ba, bb, Pa, Pb, first_only, w):
     orderB = carray(_i64_at(bb + 8 * fb), mb)
     tagsA = carray(_i64_at(ba + 8 * (fa + ma)), ma)
     tagsB = carray(_i64_at(bb + 8 * (fb + mb)), mb)
-    W = carray(_i64_at(w), W[POSED_LENGTH])
-    cap = (W.shape[0] - POSED_FIXED) // 4
-    pairs = W[POSED_FIXED:POSED_FIXED + 2 * cap].reshape((cap, 2))
-    tags = W[POSED_FIXED + 2 * cap:POSED_FIXED + 4 * cap].reshape((cap, 2))
+    cap = (W[POSED_LENGTH] - POSED_FIXED) // 4
+    # views made from addresses (a slice's .reshape calls numba's reshape helper)
+    pairs = carray(_i64_at(w + 8 * POSED_FIXED), (cap, 2))
+    tags = carray(_i64_at(w + 8 * (POSED_FIXED + 2 * cap)), (cap, 2))
     seed = W[POSED_ANSWER + 2:POSED_ANSWER + 4]
     seed[0] = -1
     seed[1] = -1
     n, tests = collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, pairs,
-                             W[:2 * STACK].reshape((STACK, 2)), S[:4], S[4:4 + LEAF_BUF],
-                             seed)
+                             carray(_i64_at(w), (STACK, 2)), S[:4], S[4:4 + LEAF_BUF],
+                             seed, True)
     for k in range(min(n, cap)):
         tags[k, 0] = tagsA[pairs[k, 0]]
         tags[k, 1] = tagsB[pairs[k, 1]]
