@@ -67,6 +67,23 @@ def test_budget_out_stays_honest(max_pairs):
     assert r.upper - truth <= 1e-12 + 1e-9                   # the upper side is sharp
 
 
+@pytest.mark.parametrize("name", ["torus_sphere_axis", "concentric_spheres"])
+def test_tol_below_rounding_floor_stops_early(name):
+    """A tol below the rounding floor (2 * ROUNDING * scene size, which both ends of
+    the interval carry) cannot be certified: the answer says so after a bounded search
+    instead of spending the whole budget (200,000 pairs, 0.3-0.5 s before), and its
+    interval still holds the truth, at most twice the floor wide."""
+    a, b, truth = CASES[name]
+    r = surface_distance(a, b, tol=1e-15)
+    floor = r.stats["rounding_floor"]
+    assert 1e-15 < floor < 1e-11
+    assert not r.certified and r.stats["stop"] == "certified"
+    assert r.stats["pairs_examined"] < 20_000
+    assert r.lower <= truth <= r.upper and r.upper - r.lower <= 2 * floor
+    r9 = surface_distance(a, b, tol=1e-9)                   # above the floor: certified
+    assert r9.certified and r9.lower <= truth <= r9.upper
+
+
 @pytest.mark.parametrize("d", [1e-12, 1e-10, 1e-7, 0.3, 3.0])
 @pytest.mark.parametrize("direction", [(1.0, 0.0, 0.0), (0.3, -0.5, 0.8)])
 def test_nearly_concentric_separators_stay_sound(d, direction):
