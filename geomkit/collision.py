@@ -336,13 +336,17 @@ _MISSES = {}
 
 _FAST_CAP = 64
 _F64 = np.dtype(np.float64)
-_MANY_CHUNK = 256
-"""Pose pairs per task of :func:`collide_many` on threads (box trees).  A box-tree
-query costs ~10-30 µs, so a task is a few ms of work: handing a task to a pool
-thread can wait a scheduler time slice on a loaded machine (measured under load
-~8 on 2 cores: 200 poses in tasks of 16 took 90 µs/query on 2 threads against
-14 µs/query in the calling thread alone); a batch of at most one chunk runs in the
-calling thread."""
+_MANY_CHUNK = 32
+"""Pose pairs per task of :func:`collide_many` on threads (box trees; a batch of at
+most one chunk runs in the calling thread).  A box-tree query costs ~1-30 µs, so a
+task is ~0.1-1 ms of work.  Measured on 2 cores (sphere–torus, 1e-2 meshes, 100 /
+200 poses, 15 calls each, µs per pose, median): with another engineer's job on the
+machine (load ~2) chunks of 256 (one thread) 5.8 / 6.8, 64: 4.3 / 4.8, 32: 3.8 /
+4.3; with six more busy processes (load ~8) 6.6 / 6.4 against 6.8 / 7.5 for 32 —
+the threads help on a machine with a core to spare and cost little on a saturated
+one, where an earlier session had seen 90 against 14 µs/query with tasks of 16 (a
+pool thread that has not started is cancelled, :func:`geomkit._kernels._numba.prun`,
+but one preempted inside its task is waited for)."""
 _scratch = threading.local()
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
 _NO_PAIRS.flags.writeable = False
