@@ -245,6 +245,9 @@ class Projector:
                           *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True
+        # candidates of a trimmed face settled by a foot outside it
+        # (geomkit._kernels.project_outside)
+        self.outside_rule = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
         self.packed = _pack(self.surfaces)
@@ -321,7 +324,8 @@ class Projector:
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
-                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd,
+                          int(self.certify) | (2 if self.outside_rule else 0), step_tol,
+                          max_distance, K, skip, fs, fuv, fd,
                           fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
