@@ -28,6 +28,7 @@ from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
 from .foot_class import _deep_cell, _foot_class
 from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE  # noqa: F401 (re-exported)
 from .project_cert import cert_settle
+from .project_bilinear import derivs2, derivs2_bilinear
 from .project_outside import settled_outside
 from .voxel import (candidate_scratch, candidates_batch,  # noqa: F401 (the search alone)
                     point_candidates)
@@ -84,6 +85,9 @@ def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
     # gained 0.92x for another ~3 s of first-run compilation, so it stays generic
     if p == 2 and q == 2:
         surface_derivs2(Pw, 2, 2, U, V, u, v, scr, SKL)
+    elif p == 1 and q == 1:
+        # planar faces, bilinear patches: no basis recurrence (project_bilinear)
+        derivs2_bilinear(Pw, U, V, u, v, SKL)
     else:
         surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
 
@@ -317,7 +321,7 @@ def foot_newton(Pw, p, q, U, V, umin, umax, vmin, vmax, closed_u, closed_v, x, u
 @jit
 def _slope(Pw, p, q, U, V, u, v, x, along_u, bin_, scr, SKL):
     """d/du (along_u = 1) or d/dv of |S - x|^2 / 2 at (u, v)."""
-    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
+    derivs2(Pw, p, q, U, V, u, v, scr, SKL)
     k = 1 if along_u else 0
     g = 0.0
     for c in range(3):

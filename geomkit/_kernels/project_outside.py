@@ -52,7 +52,7 @@ import math
 
 from ._numba import jit
 from .project_cert import _cell
-from .surface import surface_derivs2
+from .project_bilinear import derivs2
 from .trim import OUTSIDE
 
 FOOT_OK = 0
@@ -108,7 +108,7 @@ def _box_gradient(Pw, p, q, U, V, cbrk, bnd, bo, brk_u, brk_v, x, ua, ub, va, vb
     cv = 0.5 * (va + vb)
     hu = max(ub - cu, cu - ua)
     hv = max(vb - cv, cv - va)
-    surface_derivs2(Pw, p, q, U, V, cu, cv, scr, SKL)
+    derivs2(Pw, p, q, U, V, cu, cv, scr, SKL)
     r0 = SKL[0, 0, 0] - x[0]
     r1 = SKL[0, 0, 1] - x[1]
     r2 = SKL[0, 0, 2] - x[2]
