@@ -71,11 +71,13 @@ def _wrap(u, lo, hi, closed):
     return min(hi, max(lo, u))
 
 
-@jit
+@jit_inline
 def _ev(Pw, p, q, U, V, u, v, umax, vmax, left_u, left_v, bin_, scr, SKL):
     """Derivatives at (u, v); on an upper piece bound that is an interior C0 knot the
     left-sided ones (evaluated ``left_u`` before the knot: the knot itself gives the
-    right-sided derivatives)."""
+    right-sided derivatives).  Inlined at the numba IR level (a call of its own, with
+    its array arguments exploded and reference-counted, cost ~0.2 us per evaluation:
+    a Newton run 10-15 % faster without it)."""
     if left_u > 0.0 and u >= umax:
         u = umax - left_u
     if left_v > 0.0 and v >= vmax:

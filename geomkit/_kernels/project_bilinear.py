@@ -16,7 +16,7 @@ interior knot), so the values are those of ``surface_derivs2`` to rounding.
 
 from __future__ import annotations
 
-from ._numba import jit
+from ._numba import jit, jit_inline
 from .basis import find_span
 from .surface import surface_derivs2
 
@@ -70,10 +70,12 @@ def derivs2_bilinear(Pw, U, V, u, v, SKL):
         SKL[0, 2, c] = -2.0 * wv * sv * iw
 
 
-@jit
+@jit_inline
 def derivs2(Pw, p, q, U, V, u, v, scr, SKL):
     """:func:`geomkit._kernels.surface.surface_derivs2`, by :func:`derivs2_bilinear`
-    on a degree (1, 1) surface."""
+    on a degree (1, 1) surface.  Inlined at the numba IR level: as a call of its own
+    (with the ~10 array arguments exploded and reference-counted) it cost ~250 ns per
+    evaluation on top of the ~30 ns bilinear one."""
     if p == 1 and q == 1:
         derivs2_bilinear(Pw, U, V, u, v, SKL)
     else:

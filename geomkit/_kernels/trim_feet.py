@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, prun
+from ._numba import jit, jit_inline, prun
 from .project import MAX_ITER
 
 TRIM_FEET_CHUNK = 16
@@ -87,7 +87,7 @@ def trim_curve_d2(Q, n, t, B, B1, B2, out):
     out[2, 1] = (e1 - 2.0 * dw * C1 - ew * C) / aw
 
 
-@jit
+@jit_inline
 def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
     """f, f', f'' of f(t) = |S(C(t)) - x|^2 / 2 and the 3-D speed |dS/dt|."""
     trim_curve_d2(Q, n, t, B, B1, B2, Cd)
