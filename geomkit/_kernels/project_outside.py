@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 
-from ._numba import jit
+from ._numba import jit, jit_inline
 from .project_cert import _cell
 from .project_bilinear import derivs2
 from .trim import OUTSIDE
@@ -68,7 +68,7 @@ def _iv_mul_lo(a0, a1, b0, b1):
     return min(min(a0 * b0, a0 * b1), min(a1 * b0, a1 * b1))
 
 
-@jit
+@jit_inline
 def _box_gradient(Pw, p, q, U, V, cbrk, bnd, bo, brk_u, brk_v, x, ua, ub, va, vb, scr,
                   SKL):
     """``(ok, gu, gv, eu, ev)``: over the box [ua, ub] x [va, vb], grad f lies in
@@ -154,7 +154,7 @@ def outside_settles(Pw, p, q, U, V, cbrk, bnd, bo, brk_u, brk_v, x, zu, zv, ua, 
     return ok and _radial(gu, gv, eu, ev, ua, ub, va, vb, zu, zv)
 
 
-@jit
+@jit_inline
 def settled_outside(i, nf, s, out_s, out_uv, out_st, out_cls, Pw_all, U_all, V_all,
                     meta, dom, closed, brk_all, brk_off, cbrk, bnd, bnd_off, tb, x, scr,
                     SKL):
