@@ -47,7 +47,7 @@ from .results import Projection
 from .tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
 from .trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
 from .types import Surface
-from .voxel import VoxelGrid
+from .voxel import VoxelGrid, sliver_voxel_size
 
 __all__ = ["Projector", "project_points", "DEFAULT_MESH_TOL", "DEVIATION_SAFETY"]
 
@@ -209,7 +209,8 @@ class Projector:
         largest value used (coarser meshes give too many near-tie candidates).  Finer
         meshes change speed, not the answer: it always comes from the exact surface.
     voxel_size : float, optional
-        See :class:`~geomkit.VoxelGrid`.
+        See :class:`~geomkit.VoxelGrid`; default its rule, or
+        :func:`geomkit.voxel.sliver_voxel_size` for a mesh of slivers.
     """
 
     def __init__(self, surfaces, mesh_tol: float | None = None,
@@ -228,7 +229,8 @@ class Projector:
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
         self.mesh = _tessellate(self.surfaces, mesh_tol, None, None, SAMPLES_PER_EDGE,
                                 PROJ_TRIM_TARGET)
-        self.grid = VoxelGrid(self.mesh, voxel_size)
+        self.grid = VoxelGrid(self.mesh, voxel_size if voxel_size is not None
+                              else sliver_voxel_size(self.mesh))
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
         tb = _trim_boundary_triangles(self.mesh, self.trimmed)
         self.fdev = np.ascontiguousarray(DEVIATION_SAFETY * (
@@ -245,6 +247,9 @@ class Projector:
                           *pack_span_bounds(
             self.surfaces, np.bincount(self.mesh.face_surface, minlength=len(self.surfaces))))
         self.certify = True
+        # candidates of a trimmed face settled by a foot outside it
+        # (geomkit._kernels.project_outside)
+        self.outside_rule = True
         self.face_uv = np.ascontiguousarray(self.mesh.face_uv)
         self.face_surf = np.ascontiguousarray(self.mesh.face_surface.astype(np.int64))
         self.packed = _pack(self.surfaces)
@@ -321,7 +326,8 @@ class Projector:
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
-                          int(self.certify), step_tol, max_distance, K, skip, fs, fuv, fd,
+                          int(self.certify) | (2 if self.outside_rule else 0), step_tol,
+                          max_distance, K, skip, fs, fuv, fd,
                           fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)

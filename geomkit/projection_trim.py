@@ -327,8 +327,9 @@ def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
         if np.isnan(O).any():
             continue
         g = ttol[si] + 1e-9 * max(u1 - u0, v1 - v0)
-        cells = _deep_cells(s, O, g)
-        goff[si] = (o, DEEP_GRID)
+        G = _deep_grid(int(np.count_nonzero(trimmed)))
+        cells = _deep_cells(s, O, g, G)
+        goff[si] = (o, G)
         gdeep.append(cells.ravel())
         o += cells.size
         cand = np.flatnonzero(inner & (fs == si))
@@ -347,16 +348,28 @@ def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
 
 
 DEEP_GRID = 32
-"""Cells per direction of a trimmed surface's grid of deep parameter cells."""
+"""Cells per direction of a trimmed surface's grid of deep parameter cells (at
+least; see :data:`DEEP_CELLS`)."""
+DEEP_CELLS = 1 << 18
+"""Cells of all deep grids together: models with few trimmed faces get finer grids
+(up to :data:`DEEP_GRID_MAX` per direction), so fewer feet near the domain sides and
+the trim curves need a classification (the plate with a hole: 37 % of its scan points'
+feet at 32 x 32, the two cells along each domain side never being deep)."""
+DEEP_GRID_MAX = 256
 
 
-def _deep_cells(s, O, g):
-    """(G, G) int8: cell (i, j) of the surface's domain split :data:`DEEP_GRID` times
-    each way is *deep* (1) when, grown by ``g`` and rounding, it meets no obstacle box
-    of ``O`` (k, 4) and no domain side, and its centre is INSIDE the face: then the
-    cell holds no boundary point and is connected, so all of it is inside the face
-    beyond ``g`` (the argument of :func:`_deep`)."""
-    G = DEEP_GRID
+def _deep_grid(n_trimmed):
+    """Cells per direction of each deep grid for ``n_trimmed`` trimmed surfaces."""
+    G = int(math.sqrt(DEEP_CELLS / max(1, n_trimmed)))
+    return max(DEEP_GRID, min(DEEP_GRID_MAX, G))
+
+
+def _deep_cells(s, O, g, G=DEEP_GRID):
+    """(G, G) int8: cell (i, j) of the surface's domain split ``G`` times each way is
+    *deep* (1) when, grown by ``g`` and rounding, it meets no obstacle box of ``O``
+    (k, 4) and no domain side, and its centre is INSIDE the face: then the cell holds
+    no boundary point and is connected, so all of it is inside the face beyond ``g``
+    (the argument of :func:`_deep`)."""
     (u0, u1), (v0, v1) = s.domain
     du, dv = (u1 - u0) / G, (v1 - v0) / G
     eu, ev = g + 1e-12 * (u1 - u0), g + 1e-12 * (v1 - v0)

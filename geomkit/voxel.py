@@ -32,11 +32,43 @@ from ._validate import as_mesh_arrays, as_points
 from .errors import InvalidInputError
 from .results import MeshNearest
 
-__all__ = ["VoxelGrid", "nearest_triangles", "CROSSED", "ENCLOSED", "MAX_VOXELS"]
+__all__ = ["VoxelGrid", "nearest_triangles", "CROSSED", "ENCLOSED", "MAX_VOXELS",
+           "sliver_voxel_size"]
 
 CROSSED = _vk.CROSSED
 ENCLOSED = _vk.ENCLOSED
 MAX_VOXELS = 1 << 22
+SLIVER_RATIO = 0.3
+""":func:`sliver_voxel_size` applies when the triangles' typical width is below this
+fraction of the median edge."""
+
+
+def sliver_voxel_size(mesh):
+    """A voxel size for a mesh of long thin triangles, or None for a regular one.
+
+    The default rule (the median edge) makes voxels as long as the long edges of a
+    sliver mesh (a plate's fan triangles around a hole: 108 triangles, 50 long and 1
+    wide, in 9 voxels of ~37 triangles each), so every query tests dozens of
+    triangles.  ``sqrt(2 area)`` per triangle is about the edge for a well-shaped
+    triangle and about the width times the length's square root for a sliver; when
+    its median is below :data:`SLIVER_RATIO` times the median edge it is returned
+    (at least the size that keeps the grid within :data:`MAX_VOXELS`): the exact
+    triangle / voxel binning then puts each sliver only in the voxels it crosses.
+    """
+    V, F = _mesh_arrays(mesh)
+    if F.shape[0] == 0:
+        return None
+    E = V[F]
+    he = float(np.median(np.linalg.norm(E - np.roll(E, 1, axis=1), axis=2)))
+    area = 0.5 * np.linalg.norm(np.cross(E[:, 1] - E[:, 0], E[:, 2] - E[:, 0]), axis=1)
+    h = float(np.median(np.sqrt(2.0 * area)))
+    if not (he > 0 and h > 0 and h < SLIVER_RATIO * he):
+        return None
+    ext = E.reshape(-1, 3).max(axis=0) - E.reshape(-1, 3).min(axis=0)
+    vol = float(np.prod(np.maximum(ext, h)))
+    if vol / h ** 3 > MAX_VOXELS:
+        h = (vol / MAX_VOXELS) ** (1.0 / 3.0) * 1.0001
+    return h if h < he else None
 
 
 def _mesh_arrays(mesh, field="mesh"):

@@ -120,10 +120,14 @@ def test_freeform_nearer_of_two_close_basins():
     _check_projection(pr, [s], P)
 
 
-def test_rerun_continues_the_first_pass(impeller, monkeypatch):
+@pytest.mark.parametrize("outside_rule", [False, True])
+def test_rerun_continues_the_first_pass(impeller, monkeypatch, outside_rule):
     """Points whose first pass hit the start cap are rerun from where it stopped (its
     feet kept, its Newton runs not repeated): the same answers as one pass with no
-    cap, and every Newton run counted once (``newton_runs`` equals the feet kept)."""
+    cap, and every Newton run counted once (``newton_runs`` equals the feet kept).
+    With the outside rule (``geomkit._kernels.project_outside``) few box points reach
+    the default cap: a first-pass cap of 4 then, so the rerun path still runs (and
+    the rule with the earlier pass's OUTSIDE feet)."""
     import geomkit.projection as gp
 
     rng = np.random.default_rng(3)
@@ -131,6 +135,9 @@ def test_rerun_continues_the_first_pass(impeller, monkeypatch):
     hi = np.max([s.bounds[1] for s in impeller], axis=0)
     P = rng.uniform(lo, hi, (150, 3))  # box points: many candidates within reach
     pr = geomkit.Projector(impeller)
+    pr.outside_rule = outside_rule
+    if outside_rule:
+        monkeypatch.setattr(gp, "MAX_STARTS_TRIMMED", 4)
     P = P[pr.project(P).feet_tried < 127]  # where the int8 count of feet is exact
     two = pr.project(P)
     assert two.stats["start_cap_reruns"] > 10

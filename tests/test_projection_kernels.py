@@ -56,6 +56,41 @@ def test_surface_derivs2_equals_the_general_kernel(s):
             assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
 
 
+@pytest.mark.parametrize("rational", [False, True])
+@pytest.mark.parametrize("nu,nv", [(2, 2), (3, 5)])
+def test_bilinear_derivs2_equals_the_general_kernel(nu, nv, rational):
+    """The degree (1, 1) fast path (``project_bilinear``) against surface_derivs (one
+    span and several, rational and not; random parameters, knots, ends) and the
+    plate with a hole: equal to rounding."""
+    from geomkit._kernels.project_bilinear import derivs2, derivs2_bilinear
+
+    rng = np.random.default_rng(nu * nv + rational)
+    surfs = [_random_surface(rng, 1, 1, nu, nv, rational)]
+    if nu == 2 and not rational:
+        surfs.append(samples.load("plate_with_hole")[0])
+    bin_ = _binomial_table(D2)
+    for s in surfs:
+        (a, b), (c, d) = s.domain
+        uv = np.column_stack([rng.uniform(a, b, 300), rng.uniform(c, d, 300)])
+        ku = np.unique(s.knots_u)
+        kv = np.unique(s.knots_v)
+        uv = np.vstack([uv, np.column_stack([ku, np.full(ku.size, 0.5 * (c + d))]),
+                        np.column_stack([np.full(kv.size, 0.5 * (a + b)), kv]),
+                        [[a, c], [b, d], [a, d], [b, c]]])
+        scr = derivs_scratch(1, 1, D2)
+        S1 = np.empty((3, 3, 3))
+        S2 = np.full((3, 3, 3), np.nan)
+        S3 = np.full((3, 3, 3), np.nan)
+        for u, v in uv:
+            surface_derivs(s.homogeneous, 1, 1, s.knots_u, s.knots_v, u, v, D2, bin_, scr, S1)
+            derivs2_bilinear(s.homogeneous, s.knots_u, s.knots_v, u, v, S2)
+            derivs2(s.homogeneous, 1, 1, s.knots_u, s.knots_v, u, v, scr, S3)
+            scale = max(np.abs(S1[k, l]).max() for k, l in ORDERS)
+            for k, l in ORDERS:
+                assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
+                assert np.array_equal(S2[k, l], S3[k, l])
+
+
 def test_candidate_overflow_never_drops_a_candidate():
     """The sphere's centre sees every triangle as a candidate (far more than the 64 of
     the initial buffer): the buffer grows instead of dropping candidates (issue 15: an

@@ -8,7 +8,8 @@ import numpy as np
 
 from ._numba import jit, prun
 from .project import PROJECT_CHUNK, _surface
-from .surface import (D2, POLE_RATIO, _binomial_table, derivs_scratch, surface_derivs2,
+from .project_bilinear import derivs2
+from .surface import (D2, POLE_RATIO, _binomial_table, derivs_scratch,
                       surface_normal)
 
 
@@ -28,7 +29,7 @@ def _frames_chunk(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, 
         Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, s)
         u = uv[i, 0]
         v = uv[i, 1]
-        surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
+        derivs2(Pw, p, q, U, V, u, v, scr, SKL)
         for c in range(3):
             out_p[i, c] = SKL[0, 0, c]
         su0, su1, su2 = SKL[1, 0, 0], SKL[1, 0, 1], SKL[1, 0, 2]

@@ -7,11 +7,12 @@ import math
 
 import numpy as np
 
-from ._numba import jit, prun
+from ._numba import jit, jit_inline, prun
 from .project import MAX_ITER
 
 TRIM_FEET_CHUNK = 16
-from .surface import D2, _binomial_table, derivs_scratch, surface_derivs2
+from .project_bilinear import derivs2
+from .surface import D2, _binomial_table, derivs_scratch
 
 
 @jit
@@ -59,31 +60,40 @@ def trim_curve_d2(Q, n, t, B, B1, B2, out):
     """Rational 2-D Bézier curve (homogeneous control points ``Q`` (n+1, 3)) at t:
     ``out[0]`` = C, ``out[1]`` = C', ``out[2]`` = C''."""
     _bernstein_d2(n, t, B, B1, B2)
-    A = np.zeros((3, 3))  # [order, component]
+    # homogeneous value and derivatives in registers (no array per call)
+    a0 = a1 = aw = d0 = d1 = dw = e0 = e1 = ew = 0.0
     for i in range(n + 1):
-        for c in range(3):
-            A[0, c] += B[i] * Q[i, c]
-            A[1, c] += B1[i] * Q[i, c]
-            A[2, c] += B2[i] * Q[i, c]
-    w = A[0, 2]
-    w1 = A[1, 2]
-    w2 = A[2, 2]
-    for c in range(2):
-        C = A[0, c] / w
-        C1 = (A[1, c] - w1 * C) / w
-        C2 = (A[2, c] - 2.0 * w1 * C1 - w2 * C) / w
-        out[0, c] = C
-        out[1, c] = C1
-        out[2, c] = C2
+        q0 = Q[i, 0]
+        q1 = Q[i, 1]
+        qw = Q[i, 2]
+        a0 += B[i] * q0
+        a1 += B[i] * q1
+        aw += B[i] * qw
+        d0 += B1[i] * q0
+        d1 += B1[i] * q1
+        dw += B1[i] * qw
+        e0 += B2[i] * q0
+        e1 += B2[i] * q1
+        ew += B2[i] * qw
+    C = a0 / aw
+    C1 = (d0 - dw * C) / aw
+    out[0, 0] = C
+    out[1, 0] = C1
+    out[2, 0] = (e0 - 2.0 * dw * C1 - ew * C) / aw
+    C = a1 / aw
+    C1 = (d1 - dw * C) / aw
+    out[0, 1] = C
+    out[1, 1] = C1
+    out[2, 1] = (e1 - 2.0 * dw * C1 - ew * C) / aw
 
 
-@jit
+@jit_inline
 def _trim_point(Pw, p, q, U, V, dom, Q, n, t, x, bin_, scr, SKL, B, B1, B2, Cd):
     """f, f', f'' of f(t) = |S(C(t)) - x|^2 / 2 and the 3-D speed |dS/dt|."""
     trim_curve_d2(Q, n, t, B, B1, B2, Cd)
     u = min(dom[1], max(dom[0], Cd[0, 0]))
     v = min(dom[3], max(dom[2], Cd[0, 1]))
-    surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL)
+    derivs2(Pw, p, q, U, V, u, v, scr, SKL)
     cu = Cd[1, 0]
     cv = Cd[1, 1]
     f = 0.0
