@@ -43,7 +43,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit
+from ._numba import jit, jit_inline
 
 CERT_MARGIN = 1e-9
 """Relative margin of the certificate's inequality (rounding of its evaluation)."""
@@ -60,19 +60,19 @@ def _cell(b, t):
     return min(max(i, 0), b.shape[0] - 2)
 
 
-@jit
-def _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, ua, ub, va,
-              vb):
-    """True when the certificate (module docstring) holds on the box
-    [ua, ub] x [va, vb] around the foot (u, v)."""
-    # one C0 piece: no interior crease in the closed box (a foot on a crease, where f
-    # has a kink, is never certified)
+@jit_inline
+def box_bounds(cbrk, bnd, bo, brk_u, brk_v, ua, ub, va, vb):
+    """``(ok, Mu, Mv, Muu, Muv, Mvv)``: bounds of ``|S_u|``, ``|S_v|``, ``|S_uu|``,
+    ``|S_uv|``, ``|S_vv|`` over the parameter box [ua, ub] x [va, vb] (the largest of
+    the sub-span bounds ``bnd`` of the cells it meets; ``bo`` the surface's row of
+    ``bnd_off``, ``cbrk`` the cell borders); ok is False when a C0 piece border
+    (``brk_u`` / ``brk_v``, domain ends included) lies in the closed box."""
     for j in range(1, brk_u.shape[0] - 1):
         if ua <= brk_u[j] <= ub:
-            return False
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0
     for j in range(1, brk_v.shape[0] - 1):
         if va <= brk_v[j] <= vb:
-            return False
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0
     bu = cbrk[bo[1]:bo[1] + bo[2]]
     bv = cbrk[bo[3]:bo[3] + bo[4]]
     ia = _cell(bu, ua)
@@ -80,15 +80,32 @@ def _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, ua, ub
     ja = _cell(bv, va)
     jb = _cell(bv, vb)
     nv = bo[4] - 1
+    Mu = 0.0
+    Mv = 0.0
     Muu = 0.0
     Muv = 0.0
     Mvv = 0.0
     for iu in range(ia, ib + 1):
         row = bo[0] + iu * nv
         for iv in range(ja, jb + 1):
+            Mu = max(Mu, bnd[row + iv, 0])
+            Mv = max(Mv, bnd[row + iv, 1])
             Muu = max(Muu, bnd[row + iv, 2])
             Muv = max(Muv, bnd[row + iv, 3])
             Mvv = max(Mvv, bnd[row + iv, 4])
+    return True, Mu, Mv, Muu, Muv, Mvv
+
+
+@jit
+def _cert_box(cbrk, bnd, bo, brk_u, brk_v, dm, u, v, d, SKL, x, step_tol, ua, ub, va,
+              vb):
+    """True when the certificate (module docstring) holds on the box
+    [ua, ub] x [va, vb] around the foot (u, v)."""
+    # one C0 piece: no interior crease in the closed box (a foot on a crease, where f
+    # has a kink, is never certified)
+    ok, _, _, Muu, Muv, Mvv = box_bounds(cbrk, bnd, bo, brk_u, brk_v, ua, ub, va, vb)
+    if not ok:
+        return False
     su0, su1, su2 = SKL[1, 0, 0], SKL[1, 0, 1], SKL[1, 0, 2]
     sv0, sv1, sv2 = SKL[0, 1, 0], SKL[0, 1, 1], SKL[0, 1, 2]
     la = math.sqrt(su0 * su0 + su1 * su1 + su2 * su2)

@@ -51,7 +51,7 @@ from __future__ import annotations
 import math
 
 from ._numba import jit, jit_inline
-from .project_cert import _cell
+from .project_cert import box_bounds
 from .project_bilinear import derivs2
 from .trim import OUTSIDE
 
@@ -78,32 +78,9 @@ def _box_gradient(Pw, p, q, U, V, cbrk, bnd, bo, brk_u, brk_v, x, ua, ub, va, vb
     (the derivatives at the box centre)."""
     if not (ua <= ub and va <= vb):  # NaN box: the piece is not bounded by it
         return False, 0.0, 0.0, 0.0, 0.0
-    for j in range(1, brk_u.shape[0] - 1):
-        if ua <= brk_u[j] <= ub:
-            return False, 0.0, 0.0, 0.0, 0.0
-    for j in range(1, brk_v.shape[0] - 1):
-        if va <= brk_v[j] <= vb:
-            return False, 0.0, 0.0, 0.0, 0.0
-    bu = cbrk[bo[1]:bo[1] + bo[2]]
-    bv = cbrk[bo[3]:bo[3] + bo[4]]
-    ia = _cell(bu, ua)
-    ib = _cell(bu, ub)
-    ja = _cell(bv, va)
-    jb = _cell(bv, vb)
-    nv = bo[4] - 1
-    Mu = 0.0
-    Mv = 0.0
-    Muu = 0.0
-    Muv = 0.0
-    Mvv = 0.0
-    for iu in range(ia, ib + 1):
-        row = bo[0] + iu * nv
-        for iv in range(ja, jb + 1):
-            Mu = max(Mu, bnd[row + iv, 0])
-            Mv = max(Mv, bnd[row + iv, 1])
-            Muu = max(Muu, bnd[row + iv, 2])
-            Muv = max(Muv, bnd[row + iv, 3])
-            Mvv = max(Mvv, bnd[row + iv, 4])
+    ok, Mu, Mv, Muu, Muv, Mvv = box_bounds(cbrk, bnd, bo, brk_u, brk_v, ua, ub, va, vb)
+    if not ok:  # a crease in the box
+        return False, 0.0, 0.0, 0.0, 0.0
     cu = 0.5 * (ua + ub)
     cv = 0.5 * (va + vb)
     hu = max(ub - cu, cu - ua)
