@@ -30,8 +30,9 @@ from .trim import BOUNDARY, INSIDE, MAX_DEPTH, OUTSIDE  # noqa: F401 (re-exporte
 from .project_cert import cert_settle
 from .project_bilinear import derivs2, derivs2_bilinear
 from .project_outside import settled_outside
+from ._borrow import borrow_all
 from .voxel import (candidate_scratch, candidates_batch,  # noqa: F401 (the search alone)
-                    point_candidates)
+                    search)
 
 MAX_ITER = 100
 FOOT_OK = 0
@@ -408,35 +409,59 @@ def _project_chunk(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                    trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd,
                    bnd_off, certify, step_tol, max_dist, max_starts, skip, out_s, out_uv, out_d, out_st,
                    out_cls, out_nf, out_lb, out_rest, out_flags, out_work):
-    """:func:`project_batch` for the points ``i0 .. i1 - 1``."""
-    m = F.shape[0]
-    bin_ = _binomial_table(D2)
-    K = out_s.shape[1]
-    cap = 64
-    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(m, cap)
-    settled = np.zeros(cap, dtype=np.int8)
-    SKL = np.empty((3, 3, 3))
+    """:func:`project_batch` for the points ``i0 .. i1 - 1``: its scratch arrays, then
+    :func:`_project_range`."""
     pmax = np.int64(1)  # not a literal 1: one compile of derivs_scratch
     qmax = np.int64(1)
     for s in range(meta.shape[0]):
         pmax = max(pmax, meta[s, 3])
         qmax = max(qmax, meta[s, 4])
-    scr = derivs_scratch(pmax, qmax, D2)
-    # trim classification scratch (as trim._classify_points_range)
     p1 = tseg.shape[1]
-    winding = np.empty(max(np.int64(1), np.max(toff[:, 2])), dtype=np.int64)
-    stack = np.empty((MAX_DEPTH + 2, p1, 3))
-    depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
-    left = np.empty((p1, 3))
-    right = np.empty((p1, 3))
-    x = np.empty(3)
+    # trim classification scratch (as trim._classify_points_range)
+    tscr = (np.empty(max(np.int64(1), np.max(toff[:, 2])), dtype=np.int64),
+            np.empty((MAX_DEPTH + 2, p1, 3)), np.empty(MAX_DEPTH + 2, dtype=np.int64),
+            np.empty((p1, 3)), np.empty((p1, 3)))
+    _project_range(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
+                   lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep,
+                   goff, cbrk, bnd, bnd_off, certify, step_tol, max_dist, max_starts, skip,
+                   out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+                   out_flags, out_work, candidate_scratch(F.shape[0], 64),
+                   np.zeros(64, dtype=np.int8), np.empty((3, 3, 3)),
+                   derivs_scratch(pmax, qmax, D2), _binomial_table(D2), np.empty(3), tscr)
+
+
+@jit
+def _project_range(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims,
+                   lvl_off, occ, start, tris, Pw_all, U_all, V_all, meta, dom, closed,
+                   trimmed, brk_all, brk_off, tseg, tdeg, tloop, toff, ttol, tbox, gdeep,
+                   goff, cbrk, bnd, bnd_off, certify, step_tol, max_dist, max_starts, skip,
+                   out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+                   out_flags, out_work, sc, settled, SKL, scr, bin_, x, tscr):
+    """The loop of :func:`_project_chunk` over borrowed arrays
+    (:mod:`geomkit._kernels._borrow`: no atomic reference counts in the loop; every
+    array here is owned by the caller, which outlives this call)."""
+    (P, V, F, fdev, face_surf, face_uv, origin, lvl_dims, lvl_off, occ, start, tris,
+     Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all, brk_off) = borrow_all((
+        P, V, F, fdev, face_surf, face_uv, origin, lvl_dims, lvl_off, occ, start, tris,
+        Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all, brk_off))
+    (tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd, bnd_off, skip, out_s,
+     out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest, out_flags, out_work) = \
+        borrow_all((tseg, tdeg, tloop, toff, ttol, tbox, gdeep, goff, cbrk, bnd, bnd_off,
+                    skip, out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
+                    out_flags, out_work))
+    sc, settled, SKL, scr, bin_, x, tscr = borrow_all((sc, settled, SKL, scr, bin_, x,
+                                                      tscr))
+    winding, stack, depths, left, right = tscr
+    K = out_s.shape[1]
     for i in range(i0, i1):
         x[0] = P[i, 0]
         x[1] = P[i, 1]
         x[2] = P[i, 2]
-        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
+        k, UB, LB, ovf, pops, tested, sc = search(
             x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
-            start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+            start, tris, sc, i, max_dist)
+        ct, cd, cs, cw = sc[3], sc[4], sc[5], sc[6]
         out_lb[i] = LB
         out_work[i, 0] = pops
         out_work[i, 1] = tested

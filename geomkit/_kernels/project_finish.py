@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, prun
 from .project import PROJECT_CHUNK, _surface
 from .project_bilinear import derivs2
@@ -21,9 +22,16 @@ def _frames_chunk(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, 
     for s in range(meta.shape[0]):
         pmax = max(pmax, meta[s, 3])
         qmax = max(qmax, meta[s, 4])
-    scr = derivs_scratch(pmax, qmax, D2)
-    bin_ = _binomial_table(D2)
-    SKL = np.empty((3, 3, 3))
+    _frames_range(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, out_p, out_n,
+                  derivs_scratch(pmax, qmax, D2), _binomial_table(D2), np.empty((3, 3, 3)))
+
+
+@jit
+def _frames_range(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, out_p,
+                  out_n, scr, bin_, SKL):
+    """The loop of :func:`_frames_chunk` over borrowed arrays (:mod:`._borrow`)."""
+    uv, surf, Pw_all, U_all, V_all, meta, dom, out_p, out_n, scr, bin_, SKL = borrow_all((
+        uv, surf, Pw_all, U_all, V_all, meta, dom, out_p, out_n, scr, bin_, SKL))
     for i in range(i0, i1):
         s = surf[i]
         Pw, p, q, U, V = _surface(Pw_all, U_all, V_all, meta, s)

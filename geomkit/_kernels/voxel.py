@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
 from .tess import point_triangle_closest
 
@@ -270,24 +271,59 @@ def _decode(val):
 
 
 @jit_inline
-def _gap2(lev, i, j, k, origin, h, qlo, qhi):
-    """Squared distance between cell (lev, i, j, k) and the box [qlo, qhi]."""
+def _gap2(lev, i, j, k, origin, h, lx, ly, lz, ux, uy, uz):
+    """Squared distance between cell (lev, i, j, k) and the box [l, u]."""
     s = h * (1 << lev)
     g = 0.0
     lo = origin[0] + i * s
-    d = max(0.0, max(lo - qhi[0], qlo[0] - (lo + s)))
+    d = max(0.0, max(lo - ux, lx - (lo + s)))
     g += d * d
     lo = origin[1] + j * s
-    d = max(0.0, max(lo - qhi[1], qlo[1] - (lo + s)))
+    d = max(0.0, max(lo - uy, ly - (lo + s)))
     g += d * d
     lo = origin[2] + k * s
-    d = max(0.0, max(lo - qhi[2], qlo[2] - (lo + s)))
+    d = max(0.0, max(lo - uz, lz - (lo + s)))
     return g + d * d
 
 
+@jit
+def _heap_grow(hk, hv, n, need):
+    """The heap's arrays with room for at least ``need`` entries (the first ``n``
+    copied).  Called only when they are full: the callers' loops reassign their heap
+    arrays in that rare branch only (an array variable rebound on every push costs
+    two atomic reference-count updates per array)."""
+    m = max(need, 2 * hk.shape[0])
+    nk = np.empty(m, dtype=hk.dtype)
+    nv = np.empty(m, dtype=hv.dtype)
+    for r in range(n):
+        nk[r] = hk[r]
+        nv[r] = hv[r]
+    return nk, nv
+
+
 @jit_inline
-def _push_children(val, lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv, n, bound2):
-    """Push the occupied children of a cell whose squared box gap is <= bound2."""
+def _heap_add(hk, hv, n, key, val):
+    """:func:`_heap_push` into arrays with room (``n < hk.shape[0]``); returns the new
+    size."""
+    i = n
+    while i > 0:
+        parent = (i - 1) // 2
+        if hk[parent] <= key:
+            break
+        hk[i] = hk[parent]
+        hv[i] = hv[parent]
+        i = parent
+    hk[i] = key
+    hv[i] = val
+    return n + 1
+
+
+@jit_inline
+def _push_children(val, lvl_dims, lvl_off, occ, origin, h, lx, ly, lz, ux, uy, uz, hk, hv,
+                   n, bound2):
+    """Push the occupied children of a cell whose squared gap to the box [l, u] is <=
+    bound2 (the
+    heap needs room for 8 more: :func:`_heap_grow`); returns the new size."""
     lev, i, j, k = _decode(val)
     c = lev - 1
     nx = lvl_dims[c, 0]
@@ -308,15 +344,23 @@ def _push_children(val, lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv, n, 
                     continue
                 if occ[off + (ci * ny + cj) * nz + ck] == 0:
                     continue
-                key = _gap2(c, ci, cj, ck, origin, h, qlo, qhi)
+                key = _gap2(c, ci, cj, ck, origin, h, lx, ly, lz, ux, uy, uz)
                 if key > bound2:
                     continue
-                hk, hv, n = _heap_push(hk, hv, n, key, _encode(c, ci, cj, ck))
-    return hk, hv, n
+                n = _heap_add(hk, hv, n, key, _encode(c, ci, cj, ck))
+    return n
 
 
 @jit_inline
-def _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv):
+def _top_cells(lvl_dims):
+    top = lvl_dims.shape[0] - 1
+    return lvl_dims[top, 0] * lvl_dims[top, 1] * lvl_dims[top, 2]
+
+
+@jit_inline
+def _seed_heap(lvl_dims, lvl_off, occ, origin, h, lx, ly, lz, ux, uy, uz, hk, hv):
+    """Push the occupied top-level cells with their squared gaps to the box [l, u] (the heap needs room for
+    :func:`_top_cells`); returns the size."""
     top = lvl_dims.shape[0] - 1
     n = 0
     off = lvl_off[top]
@@ -324,28 +368,12 @@ def _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv):
         for j in range(lvl_dims[top, 1]):
             for k in range(lvl_dims[top, 2]):
                 if occ[off + (i * lvl_dims[top, 1] + j) * lvl_dims[top, 2] + k]:
-                    key = _gap2(top, i, j, k, origin, h, qlo, qhi)
-                    hk, hv, n = _heap_push(hk, hv, n, key, _encode(top, i, j, k))
-    return hk, hv, n
+                    key = _gap2(top, i, j, k, origin, h, lx, ly, lz, ux, uy, uz)
+                    n = _heap_add(hk, hv, n, key, _encode(top, i, j, k))
+    return n
 
 
 # ---------------------------------------------------------------- point queries
-@jit
-def _grow(ct, cd, cs, cw, n):
-    """The candidate arrays at twice the size, the first ``n`` entries copied."""
-    m = 2 * ct.shape[0]
-    nt = np.empty(m, dtype=ct.dtype)
-    nd = np.empty(m)
-    ns = np.empty(m)
-    nw = np.empty(m)
-    for r in range(n):
-        nt[r] = ct[r]
-        nd[r] = cd[r]
-        ns[r] = cs[r]
-        nw[r] = cw[r]
-    return nt, nd, ns, nw
-
-
 @jit
 def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
                      start, tris, stamp, qid, hk, hv, cand_t, cand_d, cand_s, cand_w,
@@ -357,23 +385,33 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     stands for (both ways), so with d_t the point–triangle distance the surface piece
     lies in ``[d_t - fdev[t], d_t + fdev[t]]``.  Collects every triangle with
     ``d_t - fdev[t] <= UB`` (UB = min over triangles of ``d_t + fdev[t]``), nearest
-    first; the candidate arrays grow when full (then ``overflow`` is True).  Returns
-    ``(count, UB, LB, overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w)``
-    (``pops`` cells opened, ``tested`` point–triangle distances, the arrays possibly
-    new ones) with LB a guaranteed lower bound of the point's distance to the
-    surfaces.  With ``max_dist`` finite, the search stops once every remaining triangle is farther
-    than ``max_dist`` (then count may be 0 and LB > max_dist).
+    first, into ``cand_*``.  Returns ``(count, UB, LB, pops, tested, heap)``
+    (``pops`` cells opened, ``tested`` point–triangle distances) with LB a guaranteed
+    lower bound of the point's distance to the surfaces.  With ``max_dist`` finite,
+    the search stops once every remaining triangle is farther than ``max_dist`` (then
+    count may be 0 and LB > max_dist).
+
+    The arrays are not grown for the caller (it borrows them, see
+    :mod:`geomkit._kernels._borrow`): ``heap`` > 0 is the heap size the search
+    needed beyond ``hk`` (it grew a private copy), and a count above
+    ``cand_t.shape[0]`` says the candidates did not fit: none is kept, the caller
+    grows the arrays to at least ``count`` and searches again with a new ``qid``
+    (:func:`search`).  ``stamp[t] == qid`` marks triangles tested for this query.
     """
-    q = np.empty(3)
-    q[0] = px
-    q[1] = py
-    q[2] = pz
-    hk, hv, n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, q, q, hk, hv)
+    (V, F, fdev, origin, lvl_dims, lvl_off, occ, start, tris, stamp, hk, hv, cand_t,
+     cand_d, cand_s, cand_w) = borrow_all((V, F, fdev, origin, lvl_dims, lvl_off, occ,
+                                           start, tris, stamp, hk, hv, cand_t, cand_d,
+                                           cand_s, cand_w))
+    top = _top_cells(lvl_dims) + 8
+    grown = 0
+    if hk.shape[0] < top:
+        hk, hv = _heap_grow(hk, hv, 0, top)
+        grown = hk.shape[0]
+    n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, px, py, pz, px, py, pz, hk, hv)
     ny0 = lvl_dims[0, 1]
     nz0 = lvl_dims[0, 2]
     UB = np.inf
     count = 0
-    overflow = False
     cap = cand_t.shape[0]
     LB = np.inf
     pops = 0
@@ -388,8 +426,11 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
         pops += 1
         if val >> 60 > 0:
             bound = min(UB, max_dist) + dmax
-            hk, hv, n = _push_children(val, lvl_dims, lvl_off, occ, origin, h, q, q,
-                                       hk, hv, n, bound * bound)
+            if n + 8 > hk.shape[0]:
+                hk, hv = _heap_grow(hk, hv, n, n + 8)
+                grown = hk.shape[0]
+            n = _push_children(val, lvl_dims, lvl_off, occ, origin, h, px, py, pz, px, py,
+                               pz, hk, hv, n, bound * bound)
             continue
         lev, i0, j0, k0 = _decode(val)
         lin = (i0 * ny0 + j0) * nz0 + k0
@@ -404,18 +445,14 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
                 UB = d + fdev[t]
             lbt = d - fdev[t]
             if lbt <= UB and lbt <= max_dist:
-                if count == cap:
-                    # full: the buffer grows (no candidate is ever dropped)
-                    overflow = True
-                    cand_t, cand_d, cand_s, cand_w = _grow(cand_t, cand_d, cand_s, cand_w,
-                                                           count)
-                    cap = cand_t.shape[0]
-                slot = count
-                count += 1
-                cand_t[slot] = t
-                cand_d[slot] = d
-                cand_s[slot] = s
-                cand_w[slot] = w
+                if count < cap:
+                    cand_t[count] = t
+                    cand_d[count] = d
+                    cand_s[count] = s
+                    cand_w[count] = w
+                count += 1  # beyond cap: only counted (the caller searches again)
+    if count > cap:
+        return count, UB, LB, pops, tested, grown
     # keep the candidates that can still win, nearest first (insertion sort: few)
     k = 0
     for i in range(count):
@@ -440,7 +477,43 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
         cand_w[j + 1] = ww
     for i in range(k):
         LB = min(LB, cand_d[i] - fdev[cand_t[i]])
-    return k, UB, max(0.0, LB), overflow, pops, tested, hk, hv, cand_t, cand_d, cand_s, cand_w
+    return k, UB, max(0.0, LB), pops, tested, grown
+
+
+@jit
+def search(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
+           sc, qid, max_dist):
+    """:func:`point_candidates` with the scratch ``sc`` = (stamp, hk, hv, ct, cd, cs,
+    cw) of :func:`candidate_scratch`, grown and searched again as it asks.  Returns
+    ``(count, UB, LB, overflow, pops, tested, sc)``: ``sc`` is the same tuple unless
+    it grew (then new owned arrays; ``overflow``: more candidates than fitted)."""
+    stamp, hk, hv, ct, cd, cs, cw = sc
+    k, UB, LB, pops, tested, heap = point_candidates(
+        px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
+        stamp, qid, hk, hv, ct, cd, cs, cw, max_dist)
+    ovf = False
+    need = heap
+    while k > ct.shape[0]:
+        ovf = True
+        m = max(k, 2 * ct.shape[0])
+        ct = np.empty(m, dtype=ct.dtype)
+        cd = np.empty(m)
+        cs = np.empty(m)
+        cw = np.empty(m)
+        if need > hk.shape[0]:
+            hk = np.empty(need)
+            hv = np.empty(need, dtype=np.int64)
+        qid = -2 - qid  # the first search's stamps are this query's: a new id
+        k, UB, LB, pops2, tested2, heap = point_candidates(
+            px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ, start, tris,
+            stamp, qid, hk, hv, ct, cd, cs, cw, max_dist)
+        pops += pops2
+        tested += tested2
+        need = max(need, heap)
+    if need > hk.shape[0]:
+        hk = np.empty(need)
+        hv = np.empty(need, dtype=np.int64)
+    return k, UB, LB, ovf, pops, tested, (stamp, hk, hv, ct, cd, cs, cw)
 
 
 @jit
@@ -456,11 +529,12 @@ def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, st
                           out_d, out_t, out_p, work):
     m = F.shape[0]
     zero = np.zeros(m)
-    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(m, 1)
+    sc = candidate_scratch(m, 1)
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
+        k, UB, LB, ovf, pops, tested, sc = search(
             P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,
-            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, np.inf)
+            occ, start, tris, sc, i, np.inf)
+        ct, cd, cs, cw = sc[3], sc[4], sc[5], sc[6]
         work[i, 0] = pops
         work[i, 1] = tested
         t = ct[0]
@@ -495,11 +569,20 @@ CANDIDATES_CHUNK = 64
 def _candidates_chunk(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
                       start, tris, max_dist, out_k, out_lb):
     """The candidate search of :func:`geomkit._kernels.project._project_chunk` alone (for profiling)."""
-    stamp, hk, hv, ct, cd, cs, cw = candidate_scratch(F.shape[0], 64)
+    _candidates_range(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+                      start, tris, max_dist, out_k, out_lb, candidate_scratch(F.shape[0], 64))
+
+
+@jit
+def _candidates_range(i0, i1, P, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
+                      start, tris, max_dist, out_k, out_lb, sc):
+    (P, V, F, fdev, origin, lvl_dims, lvl_off, occ, start, tris, out_k, out_lb, sc) = \
+        borrow_all((P, V, F, fdev, origin, lvl_dims, lvl_off, occ, start, tris, out_k,
+                    out_lb, sc))
     for i in range(i0, i1):
-        k, UB, LB, ovf, pops, tested, hk, hv, ct, cd, cs, cw = point_candidates(
+        k, UB, LB, ovf, pops, tested, sc = search(
             P[i, 0], P[i, 1], P[i, 2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
-            occ, start, tris, stamp, i, hk, hv, ct, cd, cs, cw, max_dist)
+            occ, start, tris, sc, i, max_dist)
         out_k[i] = k
         out_lb[i] = LB
 

@@ -9,7 +9,8 @@ import numpy as np
 
 from ._numba import jit, prun
 from .triangles import triangle_triangle_distance
-from .voxel import _decode, _heap_pop, _push_children, _seed_heap, _tri_aabb
+from .voxel import (_decode, _heap_grow, _heap_pop, _push_children, _seed_heap,
+                    _top_cells, _tri_aabb)
 
 CHUNK = 64
 
@@ -57,7 +58,10 @@ def _best_first_range(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ,
         for i in range(ia, ib):
             _load_tri(VA, FA, i, TA)
             _tri_aabb(VA, FA, i, qlo, qhi)
-            hk, hv, n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo, qhi, hk, hv)
+            if hk.shape[0] < _top_cells(lvl_dims) + 8:
+                hk, hv = _heap_grow(hk, hv, 0, _top_cells(lvl_dims) + 8)
+            n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo[0], qlo[1], qlo[2], qhi[0],
+                           qhi[1], qhi[2], hk, hv)
             best = np.inf
             bt = -1
             cnt = 0
@@ -70,8 +74,11 @@ def _best_first_range(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ,
                 cnt += 1
                 lev, a, b, c = _decode(val)
                 if lev > 0:
-                    hk, hv, n = _push_children(val, lvl_dims, lvl_off, occ, origin, h,
-                                               qlo, qhi, hk, hv, n, best * best)
+                    if n + 8 > hk.shape[0]:
+                        hk, hv = _heap_grow(hk, hv, n, n + 8)
+                    n = _push_children(val, lvl_dims, lvl_off, occ, origin, h, qlo[0],
+                                       qlo[1], qlo[2], qhi[0], qhi[1], qhi[2], hk, hv, n,
+                                       best * best)
                 else:
                     lin = (a * lvl_dims[0, 1] + b) * lvl_dims[0, 2] + c
                     best, bt = _test_voxel(lin, start, tris, VB, FB, TA, TB, stamp, i,
