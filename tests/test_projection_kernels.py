@@ -1,6 +1,8 @@
 """The fixed-order-2 derivative kernel and the candidate-buffer overflow accounting
 of the projection (issue 15)."""
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -169,3 +171,70 @@ def test_kernel_foot_class_equals_classify_uv():
         seen |= {(si, int(c)) for c in np.unique(ref)}
     assert {(0, geomkit.INSIDE), (0, geomkit.OUTSIDE), (1, geomkit.INSIDE),
             (1, geomkit.OUTSIDE)} <= seen
+
+
+def test_borrowed_views_count_nothing_and_free_nothing():
+    """borrow_all (geomkit._kernels._borrow): the views read and write the owners'
+    data, nested tuples included, and leave every allocation balanced (a borrowed
+    array passed through unborrowed inside a tuple freed its owner early: a crash in
+    the projection kernels)."""
+    from numba import njit
+    from numba.core.runtime import _nrt_python as nrt, rtsys
+
+    from geomkit._kernels._borrow import borrow_all
+
+    def body(n, flags, scr, a):
+        x, (y, z) = scr
+        tot = 0.0
+        for i in range(n):
+            if flags.shape[0] <= i % 70:  # rebound to an owned array (counted)
+                flags = np.zeros(2 * flags.shape[0], dtype=np.int8)
+            flags[i % 70] = 1
+            y[i % y.shape[0]] += 1.0
+            z[0] = i
+            tot += a[i % a.shape[0]] + flags.sum()
+        return tot + x.sum() + y.sum() + z[0]
+
+    jbody = njit(body)
+
+    @njit
+    def inner(n, flags, scr, a):
+        flags, scr, a = borrow_all((flags, scr, a))
+        return jbody(n, flags, scr, a)
+
+    @njit
+    def outer(n, a):
+        return inner(n, np.zeros(8, dtype=np.int8),
+                     (np.ones(3), (np.zeros(4), np.zeros(2))), a)
+
+    a = np.arange(5.0)
+    outer(10, a)
+    was = nrt.memsys_stats_enabled()
+    nrt.memsys_enable_stats()
+    try:
+        before = rtsys.get_allocation_stats()
+        for _ in range(200):
+            got = outer(100, a)
+        after = rtsys.get_allocation_stats()
+    finally:
+        if not was:
+            nrt.memsys_disable_stats()
+    assert after.alloc - before.alloc == after.free - before.free > 0
+    assert after.mi_alloc - before.mi_alloc == after.mi_free - before.mi_free
+    assert got == body(100, np.zeros(8, dtype=np.int8),
+                       (np.ones(3), (np.zeros(4), np.zeros(2))), a)
+    assert sys.getrefcount(a) == 2  # a is not counted twice, nor released
+
+
+def test_borrow_all_refuses_what_it_cannot_borrow():
+    from numba import njit
+    from numba.core.errors import TypingError
+
+    from geomkit._kernels._borrow import borrow_all
+
+    @njit
+    def f(lst):
+        return borrow_all((lst,))
+
+    with pytest.raises(TypingError):
+        f([np.zeros(2)])
