@@ -390,8 +390,8 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
         prun(kq.collide_many_kdops, n, max(4, -(-n // nt)), a.child, a.rng, a.K, a.T, a.order,
              b.child, b.rng, b.K, b.T, b.order, PA, PB, kb.KDOP_ORDER, first, col, cnt, tests)
     else:
-        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a.N, a.T, a.order, b.N, b.T, b.order,
-             PA, PB, first, col, cnt, tests)
+        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a._addr, b._addr, PA, PB, first, col,
+             cnt, tests)
     return Contacts(col, cnt, tests)
 
 
