@@ -164,8 +164,24 @@ def _leaf_pair(NA, TA, orderA, NB, TB, orderB, i, j, Rr, tr, first_only, out_pai
     for rb in range(rb1 - rb0):   # B's leaf triangles moved once per leaf pair
         _move(TB, rb0 + rb, Rr, tr, tbs[rb])
     for ra in range(ra0, ra1):
+        ta = TA[ra]
+        x0 = min(ta[0, 0], ta[1, 0], ta[2, 0])
+        x1 = max(ta[0, 0], ta[1, 0], ta[2, 0])
+        y0 = min(ta[0, 1], ta[1, 1], ta[2, 1])
+        y1 = max(ta[0, 1], ta[1, 1], ta[2, 1])
+        z0 = min(ta[0, 2], ta[1, 2], ta[2, 2])
+        z1 = max(ta[0, 2], ta[1, 2], ta[2, 2])
         for rb in range(rb0, rb1):
-            if _intersect_point(TA[ra], tbs[rb - rb0], hit):
+            tb = tbs[rb - rb0]
+            # the two triangles' bounding boxes (same coordinates as the exact test:
+            # boxes apart means triangles apart, touching boxes go on)
+            if min(tb[0, 0], tb[1, 0], tb[2, 0]) > x1 or max(tb[0, 0], tb[1, 0], tb[2, 0]) < x0 \
+                    or min(tb[0, 1], tb[1, 1], tb[2, 1]) > y1 \
+                    or max(tb[0, 1], tb[1, 1], tb[2, 1]) < y0 \
+                    or min(tb[0, 2], tb[1, 2], tb[2, 2]) > z1 \
+                    or max(tb[0, 2], tb[1, 2], tb[2, 2]) < z0:
+                continue
+            if _intersect_point(ta, tb, hit):
                 if npairs < cap:
                     out_pairs[npairs, 0] = orderA[ra]
                     out_pairs[npairs, 1] = orderB[rb]
