@@ -42,7 +42,7 @@ from numba.extending import intrinsic
 
 from ._numba import jit, jit_inline
 from .bvh import rigid_code
-from .bvh_query import LEAF_BUF, SAT_EPS, STACK, _move
+from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
 
 LEAF_CODE = 1 << 26
@@ -162,26 +162,31 @@ def _leaf_pair(NA, TA, orderA, NB, TB, orderB, i, j, Rr, tr, first_only, out_pai
     ra0, ra1 = _leaf_range(NA, i)
     rb0, rb1 = _leaf_range(NB, j)
     for rb in range(rb1 - rb0):   # B's leaf triangles moved once per leaf pair
-        _move(TB, rb0 + rb, Rr, tr, tbs[rb])
+        for v in range(3):
+            x, y, z = TB[rb0 + rb, v, 0], TB[rb0 + rb, v, 1], TB[rb0 + rb, v, 2]
+            for k in range(3):
+                tbs[rb, v, k] = Rr[k, 0] * x + Rr[k, 1] * y + Rr[k, 2] * z + tr[k]
     for ra in range(ra0, ra1):
-        ta = TA[ra]
-        x0 = min(ta[0, 0], ta[1, 0], ta[2, 0])
-        x1 = max(ta[0, 0], ta[1, 0], ta[2, 0])
-        y0 = min(ta[0, 1], ta[1, 1], ta[2, 1])
-        y1 = max(ta[0, 1], ta[1, 1], ta[2, 1])
-        z0 = min(ta[0, 2], ta[1, 2], ta[2, 2])
-        z1 = max(ta[0, 2], ta[1, 2], ta[2, 2])
+        # scalars and indices, no array views (a view of an array with a meminfo
+        # costs reference counting) until the exact test's call
+        x0 = min(TA[ra, 0, 0], TA[ra, 1, 0], TA[ra, 2, 0])
+        x1 = max(TA[ra, 0, 0], TA[ra, 1, 0], TA[ra, 2, 0])
+        y0 = min(TA[ra, 0, 1], TA[ra, 1, 1], TA[ra, 2, 1])
+        y1 = max(TA[ra, 0, 1], TA[ra, 1, 1], TA[ra, 2, 1])
+        z0 = min(TA[ra, 0, 2], TA[ra, 1, 2], TA[ra, 2, 2])
+        z1 = max(TA[ra, 0, 2], TA[ra, 1, 2], TA[ra, 2, 2])
         for rb in range(rb0, rb1):
-            tb = tbs[rb - rb0]
+            q = rb - rb0
             # the two triangles' bounding boxes (same coordinates as the exact test:
             # boxes apart means triangles apart, touching boxes go on)
-            if min(tb[0, 0], tb[1, 0], tb[2, 0]) > x1 or max(tb[0, 0], tb[1, 0], tb[2, 0]) < x0 \
-                    or min(tb[0, 1], tb[1, 1], tb[2, 1]) > y1 \
-                    or max(tb[0, 1], tb[1, 1], tb[2, 1]) < y0 \
-                    or min(tb[0, 2], tb[1, 2], tb[2, 2]) > z1 \
-                    or max(tb[0, 2], tb[1, 2], tb[2, 2]) < z0:
+            if min(tbs[q, 0, 0], tbs[q, 1, 0], tbs[q, 2, 0]) > x1 \
+                    or max(tbs[q, 0, 0], tbs[q, 1, 0], tbs[q, 2, 0]) < x0 \
+                    or min(tbs[q, 0, 1], tbs[q, 1, 1], tbs[q, 2, 1]) > y1 \
+                    or max(tbs[q, 0, 1], tbs[q, 1, 1], tbs[q, 2, 1]) < y0 \
+                    or min(tbs[q, 0, 2], tbs[q, 1, 2], tbs[q, 2, 2]) > z1 \
+                    or max(tbs[q, 0, 2], tbs[q, 1, 2], tbs[q, 2, 2]) < z0:
                 continue
-            if _intersect_point(ta, tb, hit):
+            if _intersect_point(TA[ra], tbs[q], hit):
                 if npairs < cap:
                     out_pairs[npairs, 0] = orderA[ra]
                     out_pairs[npairs, 1] = orderB[rb]
