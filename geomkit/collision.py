@@ -244,9 +244,10 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
         ha, hb = a._addr, b._addr
         if ha is not None and hb is not None:
             try:
-                W, w = _scratch.w
+                w = _scratch.w
             except AttributeError:     # per-thread scratch, reused (results copied out)
-                W, w = _scratch.w = _posed_scratch(_FAST_CAP)
+                _scratch.W, w = _posed_scratch(_FAST_CAP)
+                _scratch.w = w
             r = -3
             try:    # what the compiled entry point unboxes safely: float64 and 2
                 # dimensions checked here, any layout, an ndarray (numba checks that:
@@ -270,7 +271,7 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
                         if r < 8192:
                             _MISSES[r] = c
                     return c
-                return _hits(a, pose_a, b, pose_b, not all_pairs, W)
+                return _hits(a, pose_a, b, pose_b, not all_pairs, _scratch.W)
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
     Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")

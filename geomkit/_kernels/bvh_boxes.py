@@ -36,11 +36,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from llvmlite import ir
 from numba import carray
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-from ._numba import jit, jit_inline
+from ._numba import FASTMATH, _CachedDispatcher, jit, jit_inline
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
@@ -360,6 +361,57 @@ def _i64_at(typingctx, addr):
     return sig, codegen
 
 
+@intrinsic
+def _release_gil(typingctx):
+    """Release the GIL if this thread holds it (``PyEval_SaveThread``); returns the
+    thread state for :func:`_restore_gil` (0: the GIL was not held, e.g. a call
+    from another kernel)."""
+    sig = types.int64()
+
+    def codegen(context, builder, signature, args):
+        i64 = ir.IntType(64)
+        mod = builder.module
+        check = cgutils.get_or_insert_function(mod, ir.FunctionType(ir.IntType(32), []),
+                                               "PyGILState_Check")
+        save = cgutils.get_or_insert_function(mod, ir.FunctionType(cgutils.voidptr_t, []),
+                                              "PyEval_SaveThread")
+        out = cgutils.alloca_once_value(builder, ir.Constant(i64, 0))
+        held = builder.icmp_signed("!=", builder.call(check, []), ir.Constant(ir.IntType(32), 0))
+        with builder.if_then(held):
+            builder.store(builder.ptrtoint(builder.call(save, []), i64), out)
+        return builder.load(out)
+    return sig, codegen
+
+
+@intrinsic
+def _restore_gil(typingctx, state):
+    """Take the GIL back (``PyEval_RestoreThread``) if :func:`_release_gil` released
+    it (``state != 0``)."""
+    sig = types.none(types.int64)
+
+    def codegen(context, builder, signature, args):
+        mod = builder.module
+        restore = cgutils.get_or_insert_function(
+            mod, ir.FunctionType(ir.VoidType(), [cgutils.voidptr_t]), "PyEval_RestoreThread")
+        with builder.if_then(builder.icmp_signed("!=", args[0], ir.Constant(ir.IntType(64), 0))):
+            builder.call(restore, [builder.inttoptr(args[0], cgutils.voidptr_t)])
+        return context.get_dummy_value()
+    return sig, codegen
+
+
+def _jit_holding_gil(func):
+    """:data:`geomkit._kernels._numba.jit` except that the compiled entry point keeps
+    the GIL (``nogil=False``; cached likewise): for :func:`collide_packed`, which
+    releases it itself around the traversal, so that a call answered by the root
+    boxes (most poses of a sparse scene, ~0.1 µs of work) does not pay the release
+    and re-acquisition (~0.09 µs of a ~0.8 µs entry-point call, measured interleaved
+    with coal's calls)."""
+    disp = _CachedDispatcher(py_func=func, locals={}, targetoptions=dict(
+        nopython=True, nogil=False, fastmath=FASTMATH, error_model="numpy"))
+    disp.enable_caching()
+    return disp
+
+
 @jit_inline
 def _views(ba):
     """``N``, ``T``, ``order`` of the packed body at the address ``ba`` (views
@@ -374,7 +426,7 @@ def _views(ba):
     return N, T, order
 
 
-@jit
+@_jit_holding_gil
 def collide_packed(ba, bb, Pa, Pb, first_only, w):
     """:func:`collide_boxes` for two packed bodies (buffers at the addresses ``ba``,
     ``bb``, scratch ``W`` at ``w``; see the module docstring) under the poses
@@ -426,9 +478,11 @@ def collide_packed(ba, bb, Pa, Pb, first_only, w):
     seed = W[POSED_ANSWER + 2:POSED_ANSWER + 4]
     seed[0] = -1
     seed[1] = -1
+    gil = _release_gil()      # the traversal runs without the GIL
     n, tests = collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, pairs,
                              carray(_i64_at(w), (STACK, 2)), S[:4], S[4:4 + LEAF_BUF],
                              seed, True)
+    _restore_gil(gil)
     for k in range(min(n, cap)):
         tags[k, 0] = tagsA[pairs[k, 0]]
         tags[k, 1] = tagsB[pairs[k, 1]]
