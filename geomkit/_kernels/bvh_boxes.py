@@ -29,7 +29,13 @@ call, and returns one integer.  Its scratch ``W`` int64 (one per thread,
 bv_tests)``, the seed pair, ``W``'s own length, the float scratch
 (``POSED_FLOAT`` (3, 3) slabs viewed as float64; the last holds the relative
 translation in row 0 and the pose tolerance at ``[2, 2]``, set by the caller),
-then ``cap`` pairs and ``cap`` tag pairs.
+then ``cap`` pairs and ``cap`` tag pairs.  Its compiled entry keeps the GIL for the
+pose checks and the root test and releases it around the traversal
+(:func:`_release_gil`).
+
+The batch worker (:func:`collide_many_boxes`) reads the same buffers by address, and
+both kernels view every array they traverse through addresses: a view of an array
+without a meminfo costs no reference counting in the loops.
 """
 
 from __future__ import annotations
