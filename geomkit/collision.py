@@ -47,7 +47,7 @@ import threading
 import numba
 import numpy as np
 
-from ._collision_types import Body, Contact, Contacts, Distance, _contact
+from ._collision_types import Body, Contact, Contacts, Distance, _contact, _new
 from ._kernels import bvh as kb
 from ._kernels._numba import prun
 from ._kernels import bvh_boxes as kp
@@ -244,9 +244,10 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
         ha, hb = a._addr, b._addr
         if ha is not None and hb is not None:
             try:
-                W, w = _scratch.w
+                w = _scratch.w
             except AttributeError:     # per-thread scratch, reused (results copied out)
-                W, w = _scratch.w = _posed_scratch(_FAST_CAP)
+                _scratch.W, w = _posed_scratch(_FAST_CAP)
+                _scratch.w = w
             r = -3
             try:    # what the compiled entry point unboxes safely: float64 and 2
                 # dimensions checked here, any layout, an ndarray (numba checks that:
@@ -270,7 +271,7 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
                         if r < 8192:
                             _MISSES[r] = c
                     return c
-                return _hits(a, pose_a, b, pose_b, not all_pairs, W)
+                return _hits(a, pose_a, b, pose_b, not all_pairs, _scratch.W)
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
     Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")
@@ -373,11 +374,13 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
     """
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
+    ra, poses_a = _unbroadcast(poses_a)
+    rb, poses_b = _unbroadcast(poses_b)
     PA, PB = _poses(poses_a, "poses_a"), _poses(poses_b, "poses_b")
-    n = max(PA.shape[0], PB.shape[0])
-    if PA.shape[0] not in (1, n) or PB.shape[0] not in (1, n):
-        raise InvalidInputError(f"{PA.shape[0]} poses for a but {PB.shape[0]} for b",
-                                "poses_b")
+    na, nb = ra or PA.shape[0], rb or PB.shape[0]
+    n = max(na, nb)
+    if na not in (1, n) or nb not in (1, n):
+        raise InvalidInputError(f"{na} poses for a but {nb} for b", "poses_b")
     PA, PB = np.ascontiguousarray(PA), np.ascontiguousarray(PB)
     col = np.empty(n, dtype=np.bool_)
     cnt = np.empty(n, dtype=np.int64)
@@ -390,9 +393,20 @@ def collide_many(a, b, poses_a, poses_b, all_pairs=False) -> Contacts:
         prun(kq.collide_many_kdops, n, max(4, -(-n // nt)), a.child, a.rng, a.K, a.T, a.order,
              b.child, b.rng, b.K, b.T, b.order, PA, PB, kb.KDOP_ORDER, first, col, cnt, tests)
     else:
-        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a.N, a.T, a.order, b.N, b.T, b.order,
-             PA, PB, first, col, cnt, tests)
-    return Contacts(col, cnt, tests)
+        prun(kp.collide_many_boxes, n, _MANY_CHUNK, a._addr, b._addr, PA, PB, first, col,
+             cnt, tests)
+    c = _new(Contacts)          # the frozen dataclass __init__ costs ~2 µs
+    c.__dict__.update(colliding=col, n_pairs=cnt, bv_tests=tests)
+    return c
+
+
+def _unbroadcast(P):
+    """``(rows, P)``: a stack of one pose repeated with stride 0 (``np.broadcast_to``)
+    as that pose once (checked and passed once, broadcast by the kernel), else
+    ``(None, P)``."""
+    if isinstance(P, np.ndarray) and P.ndim == 3 and P.shape[0] > 1 and P.strides[0] == 0:
+        return P.shape[0], P[:1]
+    return None, P
 
 
 def min_distance(a, pose_a, b, pose_b, margin=0.0) -> Distance:

@@ -395,6 +395,58 @@ def test_single_call_kernel_equals_batch_rows():
     assert np.array_equal(again.pairs, c.pairs) and np.array_equal(again.tags, c.tags)
 
 
+def test_collide_many_broadcast_poses():
+    """A stride-0 stack of one pose (np.broadcast_to) is checked and passed once:
+    same rows as the materialised stack, its length counts, a bad pose is named."""
+    a, b = body("torus", "obb"), body("capsule", "obb")
+    Ps = random_poses(30, 5, spread=20.0)
+    E = np.broadcast_to(np.eye(4), Ps.shape)
+    for pa, pb in ((E, Ps), (Ps, E)):
+        m = collide_many(a, b, pa, pb)
+        ref = collide_many(a, b, np.ascontiguousarray(pa), np.ascontiguousarray(pb))
+        assert np.array_equal(m.colliding, ref.colliding)
+        assert np.array_equal(m.bv_tests, ref.bv_tests)
+    assert collide_many(a, b, E, E).colliding.shape == (30,)
+    with pytest.raises(InvalidInputError, match="3 poses for a but 30"):
+        collide_many(a, b, np.broadcast_to(np.eye(4), (3, 4, 4)), Ps)
+    bad = np.eye(4)
+    bad[3, 3] = 2.0
+    with pytest.raises(InvalidInputError, match=r"poses_a\[0\].*last row"):
+        collide_many(a, b, np.broadcast_to(bad, (30, 4, 4)), Ps)
+
+
+def test_single_collide_releases_the_gil_during_the_traversal():
+    """The single-call entry keeps the GIL for the pose checks and the root test
+    and releases it for the traversal: a Python thread keeps running during a long
+    call (all pairs of two coincident spheres, ~0.2 s).  With the GIL held its
+    longest pause would be one traversal's, about half of the call."""
+    import threading
+    import time
+
+    a = Body(trimesh.creation.icosphere(5, 1.0))
+    collide(a, np.eye(4), a, np.eye(4), all_pairs=True)
+    stop, gaps = [], []
+
+    def spin():
+        last = time.perf_counter()
+        while not stop:
+            now = time.perf_counter()
+            gaps.append(now - last)
+            last = now
+            time.sleep(0)
+
+    th = threading.Thread(target=spin)
+    th.start()
+    time.sleep(0.02)
+    t0 = time.perf_counter()
+    c = collide(a, np.eye(4), a, np.eye(4), all_pairs=True)
+    took = time.perf_counter() - t0
+    stop.append(1)
+    th.join()
+    assert c.colliding and len(c.pairs) > 100_000
+    assert max(gaps) < 0.25 * took, (max(gaps), took)   # two traversals (pairs > scratch)
+
+
 def test_packed_node_links():
     """Each box node's record carries its first child or its leaf's triangle range
     (children are numbered c, c + 1 by the builder)."""
