@@ -199,6 +199,18 @@ numba IR level, which removes the per-call reference counting of array arguments
 (measured: a heap push/pop with array arguments cost ~50 ns as a call)."""
 
 
+def jit_holding_gil(func):
+    """:data:`jit` except that the compiled entry point keeps the GIL
+    (``nogil=False``; cached likewise, never ahead-of-time): for a kernel that releases
+    it itself around its long part, so that a call answered at once does not pay the
+    release and re-acquisition (:func:`geomkit._kernels.bvh_boxes.collide_packed`:
+    ~0.09 us of a ~0.8 us call, measured interleaved with coal's calls)."""
+    disp = _CachedDispatcher(py_func=func, locals={}, targetoptions=dict(
+        nopython=True, nogil=False, fastmath=FASTMATH, error_model="numpy"))
+    disp.enable_caching()
+    return disp
+
+
 def pjit(func):
     """Decorator for batch kernels parallel over their outer ``prange`` loop."""
     return _decorator(dispatcher=_CachedDispatcher, parallel=True)(func)

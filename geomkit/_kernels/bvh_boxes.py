@@ -47,7 +47,7 @@ from numba import carray
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-from ._numba import FASTMATH, _CachedDispatcher, jit, jit_inline
+from ._numba import jit, jit_holding_gil, jit_inline
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
@@ -405,19 +405,6 @@ def _restore_gil(typingctx, state):
     return sig, codegen
 
 
-def _jit_holding_gil(func):
-    """:data:`geomkit._kernels._numba.jit` except that the compiled entry point keeps
-    the GIL (``nogil=False``; cached likewise): for :func:`collide_packed`, which
-    releases it itself around the traversal, so that a call answered by the root
-    boxes (most poses of a sparse scene, ~0.1 µs of work) does not pay the release
-    and re-acquisition (~0.09 µs of a ~0.8 µs entry-point call, measured interleaved
-    with coal's calls)."""
-    disp = _CachedDispatcher(py_func=func, locals={}, targetoptions=dict(
-        nopython=True, nogil=False, fastmath=FASTMATH, error_model="numpy"))
-    disp.enable_caching()
-    return disp
-
-
 @jit_inline
 def _views(ba):
     """``N``, ``T``, ``order`` of the packed body at the address ``ba`` (views
@@ -432,7 +419,7 @@ def _views(ba):
     return N, T, order
 
 
-@_jit_holding_gil
+@jit_holding_gil
 def collide_packed(ba, bb, Pa, Pb, first_only, w):
     """:func:`collide_boxes` for two packed bodies (buffers at the addresses ``ba``,
     ``bb``, scratch ``W`` at ``w``; see the module docstring) under the poses

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline
 from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
@@ -363,20 +364,29 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     original face indices (-1 if none) and the number of node bounds computed;
     the closest points go to ``out_p``, ``out_q`` in the common frame.
     """
-    hkey = np.empty(STACK)      # the heap of node pairs (i << 32 | j; it grows)
-    hval = np.empty(STACK, dtype=np.int64)
-    cb = np.empty(2)
-    Rab = np.empty((3, 3))
-    T = np.empty(3)
-    scr = np.empty((2, 3, 3))
-    sa = np.empty(4)
-    ta = np.empty((3, 3))
-    tbs = np.empty((LEAF_BUF, 3, 3))
-    sph = np.empty((LEAF_BUF, 4))
-    nb = np.empty((LEAF_BUF, 4, 3))
-    na = np.empty((4, 3))
-    p = np.empty(3)
-    q = np.empty(3)
+    # the heap of node pairs (i << 32 | j; it grows) and scratch, owned here: the
+    # search reads them, and the trees, through borrowed views (no atomic reference
+    # counting in its loop, geomkit._kernels._borrow)
+    return _distance_search(
+        kind, childA, rngA, CA, RA, EA, KA, TA, orderA, childB, rngB, CB, RB, EB, KB, TB,
+        orderB, Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q,
+        (np.empty(STACK), np.empty(STACK, dtype=np.int64)),
+        (np.empty(2), np.empty((3, 3)), np.empty(3), np.empty((2, 3, 3)), np.empty(4),
+         np.empty((3, 3)), np.empty((LEAF_BUF, 3, 3)), np.empty((LEAF_BUF, 4)),
+         np.empty((LEAF_BUF, 4, 3)), np.empty((4, 3)), np.empty(3), np.empty(3)))
+
+
+@jit
+def _distance_search(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
+                     childB, rngB, CB, RB, EB, KB, TB, orderB,
+                     Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q, heap, work):
+    """The search of :func:`distance_trees` over borrowed views of its arrays."""
+    (childA, rngA, CA, RA, EA, KA, TA, orderA, childB, rngB, CB, RB, EB, KB, TB, orderB,
+     Rr, tr, MA, mA, MB, mB, order, out_p, out_q, heap, work) = borrow_all((
+        childA, rngA, CA, RA, EA, KA, TA, orderA, childB, rngB, CB, RB, EB, KB, TB, orderB,
+        Rr, tr, MA, mA, MB, mB, order, out_p, out_q, heap, work))
+    hkey, hval = heap
+    cb, Rab, T, scr, sa, ta, tbs, sph, nb, na, p, q = work
     best = margin if margin > 0.0 else np.inf
     fa = -1
     fb = -1
