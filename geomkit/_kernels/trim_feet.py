@@ -7,12 +7,13 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
 from .project import MAX_ITER
-
-TRIM_FEET_CHUNK = 16
 from .project_bilinear import derivs2
 from .surface import D2, _binomial_table, derivs_scratch
+
+TRIM_FEET_CHUNK = 16
 
 
 @jit
@@ -149,14 +150,24 @@ def segment_newton(Pw, p, q, U, V, dom, Q, nd, t, x, step_tol, bin_, scr, SKL, B
 @jit
 def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t,
                      step_tol, out_uv, out_d, out_seg, out_t):
-    bin_ = _binomial_table(D2)
     pmax = seg.shape[1] - 1
-    scr = derivs_scratch(p, q, D2)
-    SKL = np.empty((3, 3, 3))
-    B = np.empty(pmax + 1)
-    B1 = np.empty(pmax + 1)
-    B2 = np.empty(pmax + 1)
-    Cd = np.empty((3, 2))
+    _trim_feet_loop(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t,
+                    step_tol, out_uv, out_d, out_seg, out_t, _binomial_table(D2),
+                    derivs_scratch(p, q, D2), np.empty((3, 3, 3)),
+                    (np.empty(pmax + 1), np.empty(pmax + 1), np.empty(pmax + 1),
+                     np.empty((3, 2))))
+
+
+@jit
+def _trim_feet_loop(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t,
+                    step_tol, out_uv, out_d, out_seg, out_t, bin_, scr, SKL, bern):
+    """The loop of :func:`_trim_feet_range` over borrowed views (no atomic reference
+    counting, :mod:`._borrow`)."""
+    (P, Pw, U, V, dom, seg, deg, near, samp_seg, samp_t, out_uv, out_d, out_seg, out_t,
+     bin_, scr, SKL, bern) = borrow_all((P, Pw, U, V, dom, seg, deg, near, samp_seg,
+                                         samp_t, out_uv, out_d, out_seg, out_t, bin_, scr,
+                                         SKL, bern))
+    B, B1, B2, Cd = bern
     for i in range(i0, i1):
         x = P[i]
         out_d[i] = np.inf
