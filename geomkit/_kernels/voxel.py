@@ -209,25 +209,12 @@ def bin_fill(V, F, origin, h, dims, offsets, cell, tri, flag):
 # ---------------------------------------------------------------- a small binary heap
 @jit_inline
 def _heap_push(hk, hv, n, key, val):
+    """Push (key, val), growing the arrays when full; returns ``(hk, hv, n + 1)``
+    (loops that push often use :func:`_heap_grow` and :func:`_heap_add` instead: see
+    the first)."""
     if n == hk.shape[0]:
-        nk = np.empty(2 * n, dtype=hk.dtype)
-        nv = np.empty(2 * n, dtype=hv.dtype)
-        for r in range(n):  # a loop, not a slice copy (no shape-check raise path)
-            nk[r] = hk[r]
-            nv[r] = hv[r]
-        hk = nk
-        hv = nv
-    i = n
-    while i > 0:
-        parent = (i - 1) // 2
-        if hk[parent] <= key:
-            break
-        hk[i] = hk[parent]
-        hv[i] = hv[parent]
-        i = parent
-    hk[i] = key
-    hv[i] = val
-    return hk, hv, n + 1
+        hk, hv = _heap_grow(hk, hv, n, n + 1)
+    return hk, hv, _heap_add(hk, hv, n, key, val)
 
 
 @jit_inline
@@ -292,7 +279,7 @@ def _heap_grow(hk, hv, n, need):
     copied).  Called only when they are full: the callers' loops reassign their heap
     arrays in that rare branch only (an array variable rebound on every push costs
     two atomic reference-count updates per array)."""
-    m = max(need, 2 * hk.shape[0])
+    m = max(need, 2 * hk.shape[0], 16)
     nk = np.empty(m, dtype=hk.dtype)
     nv = np.empty(m, dtype=hv.dtype)
     for r in range(n):
