@@ -112,3 +112,32 @@ def test_grid_on_a_tessellation_and_bad_input():
         g.nearest_triangles(mesh, stop="first_hit")
     with pytest.raises(InvalidInputError, match="outside"):
         g.voxel_triangles((10**6, 0, 0))
+
+
+def test_candidate_search_grows_its_scratch_and_keeps_every_candidate():
+    """The kernel search (geomkit._kernels.voxel.search) with a one-entry heap and
+    one-candidate arrays: the heap grows privately and is resized for the caller, the
+    candidates are searched again in larger arrays under a new query id, and the
+    answer equals the one with ample scratch."""
+    from geomkit._kernels.voxel import candidate_scratch, search
+
+    rng = np.random.default_rng(7)
+    V, F = random_mesh(rng, 300, scale=6.0, size=1.0)
+    g = VoxelGrid((V, F), voxel_size=0.3)
+    fdev = np.full(F.shape[0], 0.4)     # wide bounds: many candidates per point
+    args = (g.vertices, g.faces, fdev, 0.4, *g._args())
+    P = rng.uniform(-1, 7, (40, 3))
+    big = candidate_scratch(F.shape[0], 4096)
+    tiny = (np.full(F.shape[0], -1, dtype=np.int64), np.empty(1), np.empty(1, np.int64),
+            np.empty(1, np.int64), np.empty(1), np.empty(1), np.empty(1))
+    grew = 0
+    for i, p in enumerate(P):
+        kb, ubb, lbb, ovb, _, _, big = search(p[0], p[1], p[2], *args, big, i, np.inf)
+        cap = tiny[3].shape[0]
+        k, ub, lb, ov, _, _, tiny = search(p[0], p[1], p[2], *args, tiny, i, np.inf)
+        assert not ovb
+        assert ov == (kb > cap) and k == kb and (ub, lb) == (ubb, lbb)
+        assert np.array_equal(tiny[3][:k], big[3][:kb])   # same triangles, same order
+        assert np.array_equal(tiny[4][:k], big[4][:kb])
+        grew += ov
+    assert tiny[1].shape[0] > 1 and grew >= 1
