@@ -514,9 +514,18 @@ def candidate_scratch(m, cap):
 @jit
 def _nearest_points_range(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
                           out_d, out_t, out_p, work):
-    m = F.shape[0]
-    zero = np.zeros(m)
-    sc = candidate_scratch(m, 1)
+    _nearest_points_loop(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                         out_d, out_t, out_p, work, np.zeros(F.shape[0]),
+                         candidate_scratch(F.shape[0], 1))
+
+
+@jit
+def _nearest_points_loop(i0, i1, P, V, F, origin, h, lvl_dims, lvl_off, occ, start, tris,
+                         out_d, out_t, out_p, work, zero, sc):
+    """The loop of :func:`_nearest_points_range` over borrowed views."""
+    (P, V, F, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t, out_p, work, zero,
+     sc) = borrow_all((P, V, F, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t,
+                       out_p, work, zero, sc))
     for i in range(i0, i1):
         k, UB, LB, ovf, pops, tested, sc = search(
             P[i, 0], P[i, 1], P[i, 2], V, F, zero, 0.0, origin, h, lvl_dims, lvl_off,

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, prun
 from .triangles import triangle_triangle_distance
 from .voxel import (_decode, _heap_grow, _heap_pop, _push_children, _seed_heap,
@@ -44,51 +45,59 @@ def _test_voxel(lin, start, tris, VB, FB, TA, TB, stamp, qid, best, bt, pa, pb, 
 def _best_first_range(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start,
                       tris, out_d, out_t, out_pa, out_pb, visits):
     if ia < ib:
-        stamp = np.full(FB.shape[0], -1, dtype=np.int64)
-        hk = np.empty(256)
-        hv = np.empty(256, dtype=np.int64)
-        TA = np.empty((3, 3))
-        TB = np.empty((3, 3))
-        qlo = np.empty(3)
-        qhi = np.empty(3)
-        pa = np.empty(3)
-        pb = np.empty(3)
-        qa = np.empty(3)
-        qb = np.empty(3)
-        for i in range(ia, ib):
-            _load_tri(VA, FA, i, TA)
-            _tri_aabb(VA, FA, i, qlo, qhi)
-            if hk.shape[0] < _top_cells(lvl_dims) + 8:
-                hk, hv = _heap_grow(hk, hv, 0, _top_cells(lvl_dims) + 8)
-            n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo[0], qlo[1], qlo[2], qhi[0],
-                           qhi[1], qhi[2], hk, hv)
-            best = np.inf
-            bt = -1
-            cnt = 0
-            while n > 0:
-                key = hk[0]
-                val = hv[0]
-                if key >= best * best:
-                    break
-                n = _heap_pop(hk, hv, n)
-                cnt += 1
-                lev, a, b, c = _decode(val)
-                if lev > 0:
-                    if n + 8 > hk.shape[0]:
-                        hk, hv = _heap_grow(hk, hv, n, n + 8)
-                    n = _push_children(val, lvl_dims, lvl_off, occ, origin, h, qlo[0],
-                                       qlo[1], qlo[2], qhi[0], qhi[1], qhi[2], hk, hv, n,
-                                       best * best)
-                else:
-                    lin = (a * lvl_dims[0, 1] + b) * lvl_dims[0, 2] + c
-                    best, bt = _test_voxel(lin, start, tris, VB, FB, TA, TB, stamp, i,
-                                           best, bt, pa, pb, qa, qb)
-            out_d[i] = best
-            out_t[i] = bt
-            visits[i] = cnt
-            for c in range(3):
-                out_pa[i, c] = pa[c]
-                out_pb[i, c] = pb[c]
+        _best_first_loop(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start,
+                         tris, out_d, out_t, out_pa, out_pb, visits,
+                         np.full(FB.shape[0], -1, dtype=np.int64),
+                         (np.empty(256), np.empty(256, dtype=np.int64)),
+                         (np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(3),
+                          np.empty(3), np.empty(3), np.empty(3), np.empty(3)))
+
+
+@jit
+def _best_first_loop(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start,
+                     tris, out_d, out_t, out_pa, out_pb, visits, stamp, heap, work):
+    """The loop of :func:`_best_first_range` over borrowed views (no atomic reference
+    counting, :mod:`._borrow`; the scratch is owned by the caller)."""
+    (VA, FA, VB, FB, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t, out_pa,
+     out_pb, visits, stamp, heap, work) = borrow_all((
+        VA, FA, VB, FB, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t, out_pa,
+        out_pb, visits, stamp, heap, work))
+    hk, hv = heap
+    TA, TB, qlo, qhi, pa, pb, qa, qb = work
+    for i in range(ia, ib):
+        _load_tri(VA, FA, i, TA)
+        _tri_aabb(VA, FA, i, qlo, qhi)
+        if hk.shape[0] < _top_cells(lvl_dims) + 8:
+            hk, hv = _heap_grow(hk, hv, 0, _top_cells(lvl_dims) + 8)
+        n = _seed_heap(lvl_dims, lvl_off, occ, origin, h, qlo[0], qlo[1], qlo[2], qhi[0],
+                       qhi[1], qhi[2], hk, hv)
+        best = np.inf
+        bt = -1
+        cnt = 0
+        while n > 0:
+            key = hk[0]
+            val = hv[0]
+            if key >= best * best:
+                break
+            n = _heap_pop(hk, hv, n)
+            cnt += 1
+            lev, a, b, c = _decode(val)
+            if lev > 0:
+                if n + 8 > hk.shape[0]:
+                    hk, hv = _heap_grow(hk, hv, n, n + 8)
+                n = _push_children(val, lvl_dims, lvl_off, occ, origin, h, qlo[0],
+                                   qlo[1], qlo[2], qhi[0], qhi[1], qhi[2], hk, hv, n,
+                                   best * best)
+            else:
+                lin = (a * lvl_dims[0, 1] + b) * lvl_dims[0, 2] + c
+                best, bt = _test_voxel(lin, start, tris, VB, FB, TA, TB, stamp, i,
+                                       best, bt, pa, pb, qa, qb)
+        out_d[i] = best
+        out_t[i] = bt
+        visits[i] = cnt
+        for c in range(3):
+            out_pa[i, c] = pa[c]
+            out_pb[i, c] = pb[c]
 
 
 @jit
