@@ -403,7 +403,7 @@ def main(argv=None):
                   f"{tmean:.0f} | "
                   f"{tmed:.0f} |")
             dist_rows.append((na, nb, bv, dt, r.get("coal_dist", np.nan)))
-        if coal is not None:
+        if coal is not None and "agree_OBBRSS" in r:   # coal is timed with the obb rows
             print(f"|  | coal agrees on {r['agree_OBBRSS']}/{args.poses} (OBBRSS), "
                   f"{r['agree_OBB']}/{args.poses} (OBB) |||||||||||||| ")
     print("\n## min_distance (exact), 50 poses per pair, medians\n")
