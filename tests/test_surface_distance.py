@@ -244,3 +244,20 @@ def test_untrimmed_specialisation_matches_general_kernels(name, monkeypatch):
     np.testing.assert_array_equal(r1.point_b, r2.point_b)
     truth = samples.load_case(name).truth["min_distance"]
     assert _contains(r1, truth)
+
+
+def test_search_pools_grow_between_calls_of_the_borrowing_search():
+    """The search reads its pools through borrowed views and returns to have them
+    grown (geomkit._kernels.distance._search): a long search on a continuum of minima
+    grows the node and control-point pools many times and the heap past its initial
+    1024 entries, and still brackets the truth, as a short one does."""
+    cyl = samples.load("cylinder_quarter")[0]
+    big = Surface(cyl.degree_u, cyl.degree_v, cyl.knots_u, cyl.knots_v,
+                  cyl.control_points * np.array([1.5, 1.5, 1.0]), cyl.weights)
+    r = surface_distance(cyl, big, 1e-12, max_pairs=20_000)
+    assert r.stats["nodes"] > 1000 * r.stats["root_patches"]
+    assert r.stats["peak_heap"] > 1024
+    assert r.lower <= 5.0 + 1e-9 and r.upper >= 5.0 - 1e-9
+    assert abs(r.distance - 5.0) < 1e-9
+    short = surface_distance(cyl, big, 1e-3)
+    assert short.lower <= 5.0 + 1e-9 and short.upper >= 5.0 - 1e-9

@@ -36,6 +36,7 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit_plain as jit
 from .surface import D2, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH
@@ -43,6 +44,7 @@ from .voxel import _heap_pop, _heap_push
 from .distance_nodes import (  # noqa: F401  (layout re-exported for geomkit.distance)
     NF, NI, F_BOX, F_REP, F_REPUV, F_SIZE, F_U0, F_U1, F_V0, F_V1, I_C0, I_C1, I_DIR, I_OFF,
     I_P, I_Q, I_REPOK, I_SIDE, I_STATE, I_SURF, ST_INSIDE, ST_MIXED, ST_OUTSIDE, _box_trim_state,
+    borrow_opt,
     _grow1, _grow2, _max_loops, _node_box, _patch_eval, _split_dir, _split_into, _uv_inside,
     init_nodes, pair_lower_bound)
 from .distance_newton import alternate_feet, newton4
@@ -101,12 +103,8 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     best_b = -1
     bx = np.zeros(12)
     pruned_min = np.inf
-    final_min = np.inf
     pushed = 0
-    popped = 0
-    splits = 0
     newton_runs = 0
-    peak = 0
     pruned = 0
 
     # initial upper bound from representative points, then the root pairs
@@ -192,13 +190,80 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 continue
             hlb, hab, nh = _heap_push(hlb, hab, nh, lb, (a << 32) | b)
             pushed += 1
-    peak = nh
-    stop = STOP_CERTIFIED
     ctrl_top = np.int64(0)  # not a literal: one compile of _split_into
     for k in range(n_nodes):
         ctrl_top = max(ctrl_top, ni[k, I_OFF] + (ni[k, I_P] + 1) * (ni[k, I_Q] + 1) * 4)
+    mrow = np.int64(4)  # the largest control net (children keep their parent's degrees)
+    for k in range(n_nodes):
+        mrow = max(mrow, (ni[k, I_P] + 1) * (ni[k, I_Q] + 1) * 4)
     kids = np.empty(2, dtype=np.int64)
+    # the search's state between its calls: it returns whenever a pool (nodes, control
+    # points, heap) is too small for the next pair, and the pools grow here, so that
+    # it reads every array through a borrowed view (its own allocations could not be)
+    sti = np.zeros(12, dtype=np.int64)
+    sti[0] = nh
+    sti[1] = n_nodes
+    sti[2] = ctrl_top
+    sti[3] = bsa
+    sti[4] = bsb
+    sti[5] = pushed
+    sti[6] = pruned
+    sti[7] = newton_runs
+    sti[8] = nh
+    sti[11] = STOP_CERTIFIED
+    stf = np.array([upper, pruned_min, np.inf])
+    while not _search(ctrl, ni, nf, ph, hlb, hab, sti, stf, mrow, nsep,
+                      (Pw_all, U_all, V_all, meta, dom), seg_all,
+                      (seg_deg, seg_loop, seg_box, trim_meta),
+                      (bin_, scra, scrb, SA, SB, x4, alt, bx, kids, tmp, sep, Zs, Rs),
+                      (winding, stack, depths, tleft, tright), uv_tol, tol, min_size,
+                      max_pairs, max_newton, step_tol, out_f, out_i):
+        need = sti[1] + 2
+        if need > ni.shape[0]:
+            ni = _grow2(ni, need)
+            nf = _grow2(nf, need)
+            ph = _grow2(ph, ni.shape[0])
+        need = sti[2] + 2 * mrow
+        if need > ctrl.shape[0]:
+            ctrl = _grow1(ctrl, need)
+        need = sti[0] + 2
+        if need > hlb.shape[0]:
+            hlb = _grow1(hlb, need)
+            hab = _grow1(hab, need)
+    return ctrl, ni, nf
+
+
+@jit
+def _search(ctrl, ni, nf, ph, hlb, hab, sti, stf, mrow, nsep, surf, seg_all, trims, scr, tscr,
+            uv_tol, tol, min_size, max_pairs, max_newton, step_tol, out_f, out_i):
+    """The best-first loop of :func:`branch_and_bound` over borrowed views of every
+    array (no atomic reference counting, :mod:`geomkit._kernels._borrow`): the
+    arguments, the caller's scratch and the pools (``ctrl``, ``ni``, ``nf``, ``ph``,
+    the heap ``hlb``, ``hab``), which never grow here: before each pair, when one could
+    not take two more nodes (``mrow`` control-point values each) or two more heap
+    entries, the state goes back into ``sti`` / ``stf`` and the search returns False
+    for the caller to grow them and call again.  True when the search is over
+    (``out_f``, ``out_i`` filled).  ``seg_all`` is read through ``segb``
+    (:func:`~geomkit._kernels.distance_nodes.borrow_opt`)."""
+    Pw_all, U_all, V_all, meta, dom = borrow_all(surf)
+    seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)
+    segb = borrow_opt(seg_all)
+    bin_, scra, scrb, SA, SB, x4, alt, bx, kids, tmp, sep, Zs, Rs = borrow_all(scr)
+    winding, stack, depths, tleft, tright = borrow_all(tscr)
+    out_f, out_i = borrow_all((out_f, out_i))
+    ctrl, ni, nf, ph, hlb, hab, sti, stf = borrow_all((ctrl, ni, nf, ph, hlb, hab, sti, stf))
+    nh, n_nodes, ctrl_top, bsa, bsb = sti[0], sti[1], sti[2], sti[3], sti[4]
+    pushed, pruned, newton_runs, peak, popped = sti[5], sti[6], sti[7], sti[8], sti[9]
+    splits, stop = sti[10], sti[11]
+    upper, pruned_min, final_min = stf[0], stf[1], stf[2]
     while nh > 0:
+        if (n_nodes + 2 > ni.shape[0] or ctrl_top + 2 * mrow > ctrl.shape[0]
+                or nh + 2 > hlb.shape[0]):
+            sti[0], sti[1], sti[2], sti[3], sti[4] = nh, n_nodes, ctrl_top, bsa, bsb
+            sti[5], sti[6], sti[7], sti[8], sti[9] = pushed, pruned, newton_runs, peak, popped
+            sti[10], sti[11] = splits, stop
+            stf[0], stf[1], stf[2] = upper, pruned_min, final_min
+            return False
         lb = hlb[0]
         a = hab[0] >> 32
         b = hab[0] & 0xFFFFFFFF
@@ -240,10 +305,10 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                     ok = d < upper
                     if seg_all is not None:
                         if ok:
-                            ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sa, x4[0],
+                            ok = _uv_inside(segb, seg_deg, seg_loop, trim_meta, sa, x4[0],
                                             x4[1], uv_tol, winding, stack, depths, tleft,
                                             tright) \
-                                and _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, sb,
+                                and _uv_inside(segb, seg_deg, seg_loop, trim_meta, sb,
                                                x4[2], x4[3], uv_tol, winding, stack, depths,
                                                tleft, tright)
                     if ok:
@@ -262,7 +327,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                         x4[1] = nf[a, F_REPUV + 1]
                         x4[2] = nf[b, F_REPUV]
                         x4[3] = nf[b, F_REPUV + 1]
-                        d = alternate_feet(Pw_all, U_all, V_all, meta, dom, seg_all, seg_deg,
+                        d = alternate_feet(Pw_all, U_all, V_all, meta, dom, segb, seg_deg,
                                            seg_loop, trim_meta, sa, sb, x4, uv_tol, step_tol,
                                            bin_, scra, SA, winding, stack, depths, tleft,
                                            tright, alt)
@@ -292,16 +357,9 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
         other = b if k == a else a
         if ni[k, I_C0] < 0:
             # create the two children of k
-            need = n_nodes + 2
-            if need > ni.shape[0]:
-                ni = _grow2(ni, need)
-                nf = _grow2(nf, need)
-                ph = _grow2(ph, ni.shape[0])
             p = ni[k, I_P]
             q = ni[k, I_Q]
             m = (p + 1) * (q + 1) * 4
-            if ctrl_top + 2 * m > ctrl.shape[0]:
-                ctrl = _grow1(ctrl, ctrl_top + 2 * m)
             dirn = _split_dir(ctrl, ni[k, I_OFF], p, q)
             if nsep > 0 and ph[k, 2 * NSEP] >= 0.0:
                 dirn = np.int64(ph[k, 2 * NSEP])  # the separators ask for this one
@@ -343,7 +401,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 if seg_all is None:
                     pass
                 elif st == ST_MIXED:
-                    st = _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s,
+                    st = _box_trim_state(segb, seg_deg, seg_loop, seg_box, trim_meta, s,
                                          u0, u1, v0, v1, uv_tol, winding, stack, depths,
                                          tleft, tright)
                 ni[c, I_STATE] = st
@@ -354,7 +412,7 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
                 if seg_all is None:
                     pass
                 elif st == ST_MIXED:
-                    ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s,
+                    ok = _uv_inside(segb, seg_deg, seg_loop, trim_meta, s,
                                     nf[c, F_REPUV], nf[c, F_REPUV + 1], uv_tol, winding,
                                     stack, depths, tleft, tright)
                 ni[c, I_REPOK] = 1 if ok else 0
@@ -403,4 +461,4 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
     out_i[7] = stop
     out_i[8] = peak
     out_i[9] = pruned
-    return ctrl, ni, nf
+    return True

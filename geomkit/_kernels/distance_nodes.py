@@ -9,6 +9,10 @@ import math
 
 import numpy as np
 
+from numba import types
+from numba.extending import overload
+
+from ._borrow import borrow, borrow_all
 from ._numba import jit_plain as jit, jit_inline
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
@@ -259,6 +263,24 @@ def pair_lower_bound(ctrl, ni, nf, a, b):
     return lb
 
 
+def borrow_opt(x):
+    """:func:`~geomkit._kernels._borrow.borrow` of an array, ``None`` unchanged.
+
+    For kernels specialised on an optional array (``seg_all`` None: untrimmed): the
+    view takes a name of its own, as rebinding the argument would keep numba from
+    pruning the ``seg_all is None`` branches of the untrimmed specialisation."""
+    raise NotImplementedError("only callable from a kernel")
+
+
+@overload(borrow_opt)
+def _borrow_opt(x):
+    if isinstance(x, types.NoneType):
+        return lambda x: x
+    if isinstance(x, types.Array):
+        return lambda x: borrow(x)
+    return None
+
+
 @jit
 def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, uv_tol):
     """Fill boxes, trim states and representative points of the root nodes ``0..n-1``
@@ -272,6 +294,19 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
     depths = np.empty(MAX_DEPTH + 2, dtype=np.int64)
     tleft = np.empty((pmax1, 3))
     tright = np.empty((pmax1, 3))
+    _init_nodes_loop(ctrl, ni, nf, n, seg_all, (seg_deg, seg_loop, seg_box, trim_meta), uv_tol,
+                     (winding, stack, depths, tleft, tright))
+
+
+@jit
+def _init_nodes_loop(ctrl, ni, nf, n, seg_all, trims, uv_tol, tscr):
+    """The loop of :func:`init_nodes` over borrowed views of its arrays and the
+    caller's scratch (no atomic reference counting, :mod:`._borrow`; ``seg_all`` is
+    read through ``segb``, see :func:`borrow_opt`)."""
+    ctrl, ni, nf = borrow_all((ctrl, ni, nf))
+    segb = borrow_opt(seg_all)
+    seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)
+    winding, stack, depths, tleft, tright = borrow_all(tscr)
     for k in range(n):
         p = ni[k, I_P]
         q = ni[k, I_Q]
@@ -284,7 +319,7 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
         v1 = nf[k, F_V1]
         st = ST_INSIDE
         if seg_all is not None:
-            st = _box_trim_state(seg_all, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1,
+            st = _box_trim_state(segb, seg_deg, seg_loop, seg_box, trim_meta, s, u0, u1,
                                  v0, v1, uv_tol, winding, stack, depths, tleft, tright)
         ni[k, I_STATE] = st
         ni[k, I_C0] = -1
@@ -296,6 +331,6 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
         if seg_all is None:
             pass
         elif st == ST_MIXED:
-            ok = _uv_inside(seg_all, seg_deg, seg_loop, trim_meta, s, nf[k, F_REPUV],
+            ok = _uv_inside(segb, seg_deg, seg_loop, trim_meta, s, nf[k, F_REPUV],
                             nf[k, F_REPUV + 1], uv_tol, winding, stack, depths, tleft, tright)
         ni[k, I_REPOK] = 1 if ok else 0

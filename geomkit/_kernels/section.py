@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline
 from .surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
 
@@ -274,6 +275,15 @@ def plane_values(Pw, p, q, U, V, plane, uv, out):
     right = np.empty(mm)
     tmp = np.empty(4)
     X = np.empty(3)
+    _plane_values_loop(Pw, p, q, U, V, plane, uv, out, (Nu, Nv, left, right, tmp, X))
+
+
+@jit
+def _plane_values_loop(Pw, p, q, U, V, plane, uv, out, scratch):
+    """The loop of :func:`plane_values` over borrowed views of its arrays and the
+    caller's scratch (no atomic reference counting, :mod:`._borrow`)."""
+    Pw, U, V, plane, uv, out, (Nu, Nv, left, right, tmp, X) = borrow_all((
+        Pw, U, V, plane, uv, out, scratch))
     for i in range(uv.shape[0]):
         out[i] = _f_at(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, X)
 
@@ -294,6 +304,15 @@ def edge_roots(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out):
     right = np.empty(mm)
     tmp = np.empty(4)
     X = np.empty(3)
+    _edge_roots_loop(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out,
+                     (Nu, Nv, left, right, tmp, X))
+
+
+@jit
+def _edge_roots_loop(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out, scratch):
+    """The loop of :func:`edge_roots` over borrowed views (:mod:`._borrow`)."""
+    Pw, U, V, plane, a, b, fa, fb, out, (Nu, Nv, left, right, tmp, X) = borrow_all((
+        Pw, U, V, plane, a, b, fa, fb, out, scratch))
     for i in range(a.shape[0]):
         lo = 0.0
         hi = 1.0
@@ -342,7 +361,16 @@ def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f)
     """
     bin_ = _binomial_table(D1)
     scr = derivs_scratch(p, q, D1)
-    SKL = np.empty((2, 2, 3))
+    _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
+                  bin_, scr, np.empty((2, 2, 3)))
+
+
+@jit
+def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
+                  bin_, scr, SKL):
+    """The loop of :func:`project` over borrowed views (:mod:`._borrow`)."""
+    Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL = borrow_all((
+        Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL))
     for i in range(uv.shape[0]):
         u = uv[i, 0]
         v = uv[i, 1]
@@ -388,7 +416,16 @@ def critical_points(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f):
     """
     bin_ = _binomial_table(D2)
     scr = derivs_scratch(p, q, D2)
-    SKL = np.empty((3, 3, 3))
+    _critical_points_loop(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f, bin_, scr,
+                          np.empty((3, 3, 3)))
+
+
+@jit
+def _critical_points_loop(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f, bin_, scr,
+                          SKL):
+    """The loop of :func:`critical_points` over borrowed views (:mod:`._borrow`)."""
+    Pw, U, V, plane, boxes, out_uv, out_f, bin_, scr, SKL = borrow_all((
+        Pw, U, V, plane, boxes, out_uv, out_f, bin_, scr, SKL))
     for i in range(boxes.shape[0]):
         u0 = boxes[i, 0]
         u1 = boxes[i, 1]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
@@ -69,6 +70,14 @@ def _surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
     left = np.empty(m)
     right = np.empty(m)
     tmp = np.empty(4)
+    _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, (Nu, Nv, left, right, tmp))
+
+
+@jit
+def _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, scratch):
+    """The loop of :func:`_surface_points_range` over borrowed views (no atomic
+    reference counting, :mod:`._borrow`)."""
+    Pw, U, V, uv, out, (Nu, Nv, left, right, tmp) = borrow_all((Pw, U, V, uv, out, scratch))
     for i in range(i0, i1):
         surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, out[i])
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, find_span
 from .surface import surface_point
@@ -95,6 +96,16 @@ def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
     Bu = np.empty((m, p + 1))
     Bv = np.empty((m, q + 1))
     H = np.empty((q + 1, 4))
+    _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out,
+                      (Nu, Nv, left, right, tmp, G, Nrm, Bu, Bv, H))
+
+
+@jit
+def _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out, scratch):
+    """The loop of :func:`_cell_errors_range` over borrowed views of its arrays and
+    the caller's scratch (no atomic reference counting, :mod:`._borrow`)."""
+    Pw, U, V, cells, out, (Nu, Nv, left, right, tmp, G, Nrm, Bu, Bv, H) = borrow_all((
+        Pw, U, V, cells, out, scratch))
     for c in range(i0, i1):
         _cell_grid(Pw, p, q, U, V, cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3], m - 1,
                    Nu, Nv, left, right, Bu, Bv, H, G)
@@ -382,7 +393,17 @@ def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, 
                               vmax, exact_above, out):
     G = np.empty((1, 1, 3))
     gc = np.full(6, -1, dtype=np.int64)   # no grid: evaluate every sample
-    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
+    _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin,
+                             vmax, exact_above, out, G, gc, _dev_scratch(p, q))
+
+
+@jit
+def _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin,
+                             vmax, exact_above, out, G, gc, scratch):
+    """The loop of :func:`_triangle_deviation_range` over borrowed views (no atomic
+    reference counting, :mod:`._borrow`)."""
+    Pw, U, V, tri_uv, tri_xyz, out, G, gc, (Nu, Nv, left, right, tmp, P, Q, SKL) = borrow_all((
+        Pw, U, V, tri_uv, tri_xyz, out, G, gc, scratch))
     tiny_u = 1e-9 * (umax - umin)
     tiny_v = 1e-9 * (vmax - vmin)
     for t in range(i0, i1):
@@ -476,6 +497,19 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
     UVc = np.empty((4, 2))
     X = np.empty((4, 3))
     T = np.empty((3, 3))
+    _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
+                         exact_above, target, out,
+                         (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T))
+
+
+@jit
+def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
+                         exact_above, target, out, scratch):
+    """The loop of :func:`_cell_deviation_range` over borrowed views (no atomic
+    reference counting, :mod:`._borrow`)."""
+    (Pw, U, V, cells, first, out,
+     (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T)) = borrow_all((
+         Pw, U, V, cells, first, out, scratch))
     for c in range(i0, i1):
         UVc[0, 0] = cells[c, 0]
         UVc[0, 1] = cells[c, 2]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._borrow import borrow_all
 from ._numba import jit, jit_inline
 
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
@@ -38,6 +39,9 @@ def _range(keys, major, lo, hi, key):
 def edge_counts(hkeys, vkeys, key, cells, out):
     """Numbers of lattice points strictly inside the bottom, right, top and left edges
     of each cell (``out`` (N, 4)); ``hkeys`` / ``vkeys`` as in :func:`fill_rings`."""
+    # borrowed views of the arguments (the caller holds them): the inlined _range
+    # rebinds its array, an atomic reference count per call otherwise (:mod:`._borrow`)
+    hkeys, vkeys, cells, out = borrow_all((hkeys, vkeys, cells, out))
     for c in range(cells.shape[0]):
         a, b = _range(hkeys, cells[c, 2], cells[c, 0], cells[c, 1], key)
         out[c, 0] = b - a
@@ -56,6 +60,7 @@ def fill_rings(hkeys, vkeys, key, cells, starts, out):
     ``hkeys`` are sorted ``gv * key + gu`` of all lattice points, ``vkeys`` sorted
     ``gu * key + gv``; ``starts`` (N+1,) are the ring offsets into ``out`` (K, 2).
     """
+    hkeys, vkeys, cells, starts, out = borrow_all((hkeys, vkeys, cells, starts, out))
     for c in range(cells.shape[0]):
         iu0 = cells[c, 0]
         iu1 = cells[c, 1]
@@ -153,8 +158,18 @@ def cell_triangles(hkeys, vkeys, key, cells, counts, diag, starts, out, kind):
         for e in range(counts.shape[1]):
             cmax = max(cmax, counts[c, e])
     buf = np.empty((cmax + 2, 2), dtype=np.int64)
-    buf2 = np.empty_like(buf)
-    corners = np.empty((4, 2), dtype=np.int64)
+    _cell_triangles_loop(hkeys, vkeys, key, cells, diag, starts, out, kind, buf,
+                         np.empty_like(buf), np.empty((4, 2), dtype=np.int64))
+
+
+@jit
+def _cell_triangles_loop(hkeys, vkeys, key, cells, diag, starts, out, kind, buf, buf2,
+                         corners):
+    """The loop of :func:`cell_triangles` over borrowed views of its arrays and the
+    caller's scratch ``buf``, ``buf2``, ``corners`` (no atomic reference counting,
+    :mod:`._borrow`)."""
+    hkeys, vkeys, cells, diag, starts, out, kind, buf, buf2, corners = borrow_all((
+        hkeys, vkeys, cells, diag, starts, out, kind, buf, buf2, corners))
     for c in range(cells.shape[0]):
         iu0 = cells[c, 0]
         iu1 = cells[c, 1]
