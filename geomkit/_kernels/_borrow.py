@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from numba import types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 
 @intrinsic
@@ -76,3 +76,21 @@ def borrow_all(typingctx, tup):
     def codegen(context, builder, signature, args):
         return _borrow_value(context, builder, signature.args[0], args[0])
     return sig, codegen
+
+
+def borrow_opt(x):
+    """:func:`borrow` of an array, ``None`` unchanged.
+
+    For kernels specialised on an optional array (``seg_all`` None: untrimmed): the
+    view takes a name of its own, as rebinding the argument would keep numba from
+    pruning the ``seg_all is None`` branches of the untrimmed specialisation."""
+    raise NotImplementedError("only callable from a kernel")
+
+
+@overload(borrow_opt)
+def _borrow_opt(x):
+    if isinstance(x, types.NoneType):
+        return lambda x: x
+    if isinstance(x, types.Array):
+        return lambda x: borrow(x)
+    return None

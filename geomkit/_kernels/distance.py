@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
+from ._borrow import borrow_all, borrow_opt
 from ._numba import jit_plain as jit
 from .surface import D2, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH
@@ -44,7 +44,6 @@ from .voxel import _heap_pop, _heap_push
 from .distance_nodes import (  # noqa: F401  (layout re-exported for geomkit.distance)
     NF, NI, F_BOX, F_REP, F_REPUV, F_SIZE, F_U0, F_U1, F_V0, F_V1, I_C0, I_C1, I_DIR, I_OFF,
     I_P, I_Q, I_REPOK, I_SIDE, I_STATE, I_SURF, ST_INSIDE, ST_MIXED, ST_OUTSIDE, _box_trim_state,
-    borrow_opt,
     _grow1, _grow2, _max_loops, _node_box, _patch_eval, _split_dir, _split_into, _uv_inside,
     init_nodes, pair_lower_bound)
 from .distance_newton import alternate_feet, newton4
@@ -244,7 +243,7 @@ def _search(ctrl, ni, nf, ph, hlb, hab, sti, stf, mrow, nsep, surf, seg_all, tri
     entries, the state goes back into ``sti`` / ``stf`` and the search returns False
     for the caller to grow them and call again.  True when the search is over
     (``out_f``, ``out_i`` filled).  ``seg_all`` is read through ``segb``
-    (:func:`~geomkit._kernels.distance_nodes.borrow_opt`)."""
+    (:func:`~geomkit._kernels._borrow.borrow_opt`)."""
     Pw_all, U_all, V_all, meta, dom = borrow_all(surf)
     seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)
     segb = borrow_opt(seg_all)

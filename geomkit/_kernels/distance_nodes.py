@@ -9,10 +9,7 @@ import math
 
 import numpy as np
 
-from numba import types
-from numba.extending import overload
-
-from ._borrow import borrow, borrow_all
+from ._borrow import borrow_all, borrow_opt
 from ._numba import jit_plain as jit, jit_inline
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
@@ -263,24 +260,6 @@ def pair_lower_bound(ctrl, ni, nf, a, b):
     return lb
 
 
-def borrow_opt(x):
-    """:func:`~geomkit._kernels._borrow.borrow` of an array, ``None`` unchanged.
-
-    For kernels specialised on an optional array (``seg_all`` None: untrimmed): the
-    view takes a name of its own, as rebinding the argument would keep numba from
-    pruning the ``seg_all is None`` branches of the untrimmed specialisation."""
-    raise NotImplementedError("only callable from a kernel")
-
-
-@overload(borrow_opt)
-def _borrow_opt(x):
-    if isinstance(x, types.NoneType):
-        return lambda x: x
-    if isinstance(x, types.Array):
-        return lambda x: borrow(x)
-    return None
-
-
 @jit
 def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, uv_tol):
     """Fill boxes, trim states and representative points of the root nodes ``0..n-1``
@@ -302,7 +281,7 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
 def _init_nodes_loop(ctrl, ni, nf, n, seg_all, trims, uv_tol, tscr):
     """The loop of :func:`init_nodes` over borrowed views of its arrays and the
     caller's scratch (no atomic reference counting, :mod:`._borrow`; ``seg_all`` is
-    read through ``segb``, see :func:`borrow_opt`)."""
+    read through ``segb``, see :func:`~geomkit._kernels._borrow.borrow_opt`)."""
     ctrl, ni, nf = borrow_all((ctrl, ni, nf))
     segb = borrow_opt(seg_all)
     seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)
