@@ -30,9 +30,11 @@ def borrow(typingctx, arr):
         return None
     sig = arr(arr)
 
-    def codegen(context, builder, signature, args):
-        return _borrow_value(context, builder, signature.args[0], args[0])
-    return sig, codegen
+    return sig, _codegen
+
+
+def _codegen(context, builder, signature, args):
+    return _borrow_value(context, builder, signature.args[0], args[0])
 
 
 def _borrowable(ty):
@@ -73,9 +75,7 @@ def borrow_all(typingctx, tup):
         return None
     sig = tup(tup)
 
-    def codegen(context, builder, signature, args):
-        return _borrow_value(context, builder, signature.args[0], args[0])
-    return sig, codegen
+    return sig, _codegen
 
 
 def borrow_opt(x):
