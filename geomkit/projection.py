@@ -12,7 +12,7 @@ Method (Paper 1's mesh + voxel grid for candidates, the exact surface for the an
    upper bound, then the nearest foot inside its face: untrimmed, or classified
    inside the trim loops in the kernel) a
    safeguarded Newton iteration on the exact surface finds the foot
-   (:func:`geomkit._kernels.project.foot_newton`: exact Hessian or Gauss–Newton,
+   (:func:`geomkit._kernels.project_newton.foot_newton`: exact Hessian or Gauss–Newton,
    active set on the domain box, backtracking);
 4. on trimmed surfaces a foot outside the face is replaced by the nearest point of
    the trim boundary (1-D Newton on the exact trim curve mapped onto the surface),

@@ -10,7 +10,8 @@ import numpy as np
 
 from ._numba import jit_plain as jit
 from .distance_nodes import _uv_inside
-from .project import _surface, foot_newton
+from .project import _surface
+from .project_newton import foot_newton
 from .trim_feet import _trim_point, segment_newton
 from .surface import D2, surface_derivs
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
-from .project import MAX_ITER
+from .project_newton import MAX_ITER
 from .project_bilinear import derivs2
 from .surface import D2, _binomial_table, derivs_scratch
 
