@@ -52,6 +52,7 @@ from ._kernels import bvh as kb
 from ._kernels._numba import prun
 from ._kernels import bvh_boxes as kp
 from ._kernels import bvh_query as kq
+from ._kernels._pyobj import array_fields_ok, object_ref
 from ._validate import as_float_array, as_int, as_mesh_arrays
 from .errors import InvalidInputError
 
@@ -144,9 +145,10 @@ def _body(x, field):
 
 
 def _as_poses(value, field, single):
-    if isinstance(value, np.ndarray) and value.dtype == np.float64 and \
+    if type(value) is np.ndarray and value.dtype == np.float64 and \
             value.flags.c_contiguous:
         P = value           # fast path: no copy, the kernel checks finiteness
+        # (not for subclasses: np.matrix cannot be reshaped to (1, 4, 4))
     else:
         try:
             P = np.ascontiguousarray(value, dtype=np.float64)
@@ -238,40 +240,32 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
         ``colliding`` is exact up to the orientation predicates of the triangle
         test (closed triangles: touching counts); ``pairs`` (k, 2) sorted.
     """
-    if type(a) is Body and type(b) is Body:
+    if type(a) is Body and type(b) is Body and _BY_REF:
         # box trees: one kernel call (pose checks, relative motion, root test,
-        # traversal, tags) with the bodies' buffers and the scratch by address
-        ha, hb = a._addr, b._addr
-        if ha is not None and hb is not None:
-            try:
-                w = _scratch.w
-            except AttributeError:     # per-thread scratch, reused (results copied out)
-                _scratch.W, w = _posed_scratch(_FAST_CAP)
-                _scratch.w = w
-            r = -3
-            try:    # what the compiled entry point unboxes safely: float64 and 2
-                # dimensions checked here, any layout, an ndarray (numba checks that:
-                # TypeError otherwise); the kernel checks the shape and rigidity
-                if pose_a.dtype is _F64 and pose_b.dtype is _F64 and pose_a.ndim == 2 \
-                        and pose_b.ndim == 2:
-                    r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
-            except (AttributeError, TypeError):
-                pass
-            if r == -3:     # another type: checked, converted
-                pose_a = np.array(validate_pose(pose_a, "pose_a"), dtype=np.float64)
-                pose_b = np.array(validate_pose(pose_b, "pose_b"), dtype=np.float64)
-                r = (_posed or _posed_load())(ha, hb, pose_a, pose_b, not all_pairs, w)
-            if r == 2:                  # root boxes disjoint
-                return _MISS1
-            if r >= 0:
-                if not r & 1:
-                    c = _MISSES.get(r)
-                    if c is None:
-                        c = _contact(False, _NO_PAIRS, _NO_PAIRS, r >> 1)
-                        if r < 8192:
-                            _MISSES[r] = c
-                    return c
-                return _hits(a, pose_a, b, pose_b, not all_pairs, _scratch.W)
+        # traversal, tags) given the bodies' buffers, the poses and the scratch as
+        # the Python objects (geomkit._kernels._pyobj: nothing converted)
+        try:
+            W = _scratch.W
+        except AttributeError:      # per-thread scratch, reused (results copied out)
+            W = _single_scratch()
+        first = not all_pairs
+        r = _posed(a._pf, b._pf, pose_a, pose_b, first, W)
+        if r == 2:                  # root boxes disjoint
+            return _MISS1
+        if r == -3:     # other types: checked, converted, written to the scratch
+            P = _scratch.P
+            P[0] = validate_pose(pose_a, "pose_a")
+            P[1] = validate_pose(pose_b, "pose_b")
+            r = _posed(a._pf, b._pf, None, None, first, W)
+        if r >= 0:
+            if not r & 1:
+                c = _MISSES.get(r)
+                if c is None:
+                    c = _contact(False, _NO_PAIRS, _NO_PAIRS, r >> 1)
+                    if r < 8192:
+                        _MISSES[r] = c
+                return c
+            return _hits(r, a._pf, b._pf, first)
     a, b = _body(a, "a"), _body(b, "b")
     _same_kind(a, b)
     Pa, Pb = validate_pose(pose_a, "pose_a"), validate_pose(pose_b, "pose_b")
@@ -290,47 +284,69 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
     return Contact(bool(n > 0), pairs, tags.reshape(-1, 2), int(tests))
 
 
-def _hits(a, Pa, b, Pb, first_only, W):
-    """The :class:`Contact` of a hit found by the single-call kernel (pairs and tags
-    copied out of the scratch ``W``, sorted)."""
-    n, tests = W[kp.POSED_ANSWER:kp.POSED_ANSWER + 2].tolist()
-    cap = (W.shape[0] - kp.POSED_FIXED) // 4
-    if n > cap:                 # more pairs than the buffer: once more, larger
-        W, w = _posed_scratch(n)
-        _posed(a._addr, b._addr, Pa, Pb, first_only, w)
-        cap = n
-    o = kp.POSED_FIXED
-    pairs = W[o:o + 2 * n].reshape(n, 2).copy()
-    tags = W[o + 2 * cap:o + 2 * cap + 2 * n].reshape(n, 2).copy()
+def _hits(r, pfa, pfb, first_only):
+    """The :class:`Contact` of a hit found by the single-call kernel (answer ``r``;
+    pairs and tags copied out of this thread's scratch, sorted)."""
+    sc = _scratch
+    n = 1 if first_only else sc.W.item(kp.POSED_ANSWER)
+    if n > sc.cap:              # more pairs than the buffer: once more, larger (the
+        W = _posed_scratch(n)   # kernel left both poses in the scratch)
+        W[kp.POSED_POSES:kp.POSED_POSES + 32] = sc.W[kp.POSED_POSES:kp.POSED_POSES + 32]
+        _posed(pfa, pfb, None, None, first_only, W)
+        o = kp.POSED_FIXED
+        pairs = W[o:o + 2 * n].reshape(n, 2)
+        tags = W[o + 2 * n:o + 4 * n].reshape(n, 2)
+    elif n == 1:                # views made once per scratch: a copy each
+        return _contact(True, sc.pairs1.copy(), sc.tags1.copy(), r >> 1)
+    else:
+        pairs, tags = sc.pairs[:n].copy(), sc.tags[:n].copy()
     if n > 1:
         k = np.lexsort((pairs[:, 1], pairs[:, 0]))
         pairs, tags = pairs[k], tags[k]
-    return _contact(True, pairs, tags, tests)
+    return _contact(True, pairs, tags, r >> 1)
 
 
 def _posed_scratch(cap):
-    """A scratch ``W`` of the single-call kernel for ``cap`` pairs, and its address."""
+    """A scratch ``W`` of the single-call kernel for ``cap`` pairs."""
     W = np.zeros(kp.posed_scratch_size(cap), dtype=np.int64)
     W[kp.POSED_LENGTH] = W.shape[0]
-    W[kp.POSED_FIXED - 1:kp.POSED_FIXED].view(np.float64)[0] = POSE_TOL
-    return W, W.ctypes.data
+    W[kp.POSED_REFS:kp.POSED_REFS + 4] = id(np.ndarray), id(_F64), id(True), id(None)
+    W[kp.POSED_TOL:kp.POSED_TOL + 1].view(np.float64)[0] = POSE_TOL
+    return W
+
+
+def _single_scratch():
+    """This thread's scratch of the single-call kernel (``_scratch``: ``W``, ``P``
+    the two poses' slots, ``pairs`` / ``tags`` views of ``cap`` rows, ``pairs1`` /
+    ``tags1`` of one), made once per thread; loads the kernel's entry point on first
+    use."""
+    _posed_load()
+    sc = _scratch
+    sc.cap = _FAST_CAP
+    W = _posed_scratch(_FAST_CAP)
+    o = kp.POSED_FIXED
+    sc.P = W[kp.POSED_POSES:kp.POSED_POSES + 32].view(np.float64).reshape(2, 4, 4)
+    sc.pairs = W[o:o + 2 * _FAST_CAP].reshape(_FAST_CAP, 2)
+    sc.tags = W[o + 2 * _FAST_CAP:o + 4 * _FAST_CAP].reshape(_FAST_CAP, 2)
+    sc.pairs1, sc.tags1 = sc.pairs[:1], sc.tags[:1]
+    sc.W = W
+    return W
 
 
 def _posed_load():
-    """The compiled entry point of the single-call kernel for its one signature
-    (addresses, two float64 2-D poses of any layout, a bool), compiled or loaded
-    from the cache once; calling it directly skips the dispatcher's type matching
-    (~0.15 µs per argument).  The caller passes only those types (see
-    :func:`collide`)."""
+    """The compiled entry point of the single-call kernel for its one signature (six
+    objects by reference), compiled or loaded from the cache once; calling it
+    directly skips the dispatcher's type matching."""
     global _posed
-    pose = numba.types.Array(numba.float64, 2, "A")
-    _posed = kp.collide_packed.compile((numba.int64, numba.int64, pose, pose,
-                                        numba.boolean, numba.int64))
+    if _posed is None:
+        _posed = kp.collide_packed.compile((object_ref,) * 6)
     return _posed
 
 
+_BY_REF = array_fields_ok()
+"""Can the single-call kernel read the arrays it is given (CPython, NumPy's layout)?
+If not, :func:`collide` takes the generic path (same answers, slower)."""
 _posed = None
-_ND = np.ndarray
 _MISSES = {}
 """Non-colliding :class:`Contact` results by ``2 * bv_tests`` (immutable: shared)."""
 

@@ -555,3 +555,59 @@ def test_triangle_prism_bound_is_a_lower_bound():
     flat = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
     _prism_vs_exact(flat, flat + [0.1, 0.1, 0.25], out[:1])
     assert abs(out[0, 0] - 0.25) < 1e-12 and abs(out[0, 1] - 0.25) < 1e-12
+
+
+def test_object_refs_read_exact_float64_arrays_only():
+    """The single-call kernel takes its arguments as the Python objects
+    (geomkit._kernels._pyobj): it reads an array only if it is exactly an ndarray of
+    the expected dtype and ndim; any other object gives 0 and is not read."""
+    import ctypes
+
+    import numba
+    from geomkit._kernels._pyobj import address, array_data, array_fields_ok, object_ref
+    assert array_fields_ok()        # CPython + NumPy here: the fast path is the one tested
+
+    @numba.njit
+    def probe(x, nd, f8):
+        return array_data(address(x), nd, f8, 2)
+
+    entry = probe.compile((object_ref, numba.int64, numba.int64))
+    refs = id(np.ndarray), id(np.dtype(np.float64))
+    x = np.arange(16.0).reshape(4, 4)[::-1, ::2]
+    data, dims, strides = entry(x, *refs)
+
+    def i64(addr, k):
+        return ctypes.c_int64.from_address(addr + 8 * k).value
+    assert data == x.__array_interface__["data"][0]
+    assert [i64(dims, 0), i64(dims, 1)] == list(x.shape)
+    assert [i64(strides, 0), i64(strides, 1)] == list(x.strides)
+    with pytest.warns(PendingDeprecationWarning):
+        m = np.asmatrix(np.eye(4))
+    for other in (np.eye(4, dtype=np.float32), np.eye(4).astype(">f8"), np.ones((1, 4, 4)),
+                  np.ones(16), m, [[1.0] * 4] * 4, None, 3.0, "pose"):
+        assert entry(other, *refs) == (0, 0, 0), type(other)
+
+
+@pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")   # np.matrix
+def test_validate_pose_converts_subclasses():
+    P = geomkit.collision.validate_pose(np.asmatrix(np.eye(4)))
+    assert type(P) is np.ndarray and P.shape == (4, 4)
+
+
+def test_single_collide_from_threads():
+    """Each thread has its own scratch for the single-call kernel: concurrent calls
+    (long ones release the GIL mid-traversal) give the serial answers."""
+    from concurrent.futures import ThreadPoolExecutor
+    a, b = body("torus", "obb"), body("capsule", "obb")
+    Ps = random_poses(200, 8, spread=12.0)
+    ref = [collide(a, np.eye(4), b, P) for P in Ps]
+    assert 20 < sum(c.colliding for c in ref) < 180
+
+    def run(k0):
+        return [collide(a, np.eye(4), b, Ps[k]) for k in range(k0, 200, 4)]
+    with ThreadPoolExecutor(4) as ex:
+        out = list(ex.map(run, range(4)))
+    for k0, cs in enumerate(out):
+        for c, k in zip(cs, range(k0, 200, 4)):
+            assert c.colliding == ref[k].colliding and c.bv_tests == ref[k].bv_tests
+            assert np.array_equal(c.pairs, ref[k].pairs) and np.array_equal(c.tags, ref[k].tags)

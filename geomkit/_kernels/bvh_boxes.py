@@ -21,17 +21,21 @@ records keep their offsets modulo 128 bytes, and it sits next to the root record
 a root-only query reads the start of each buffer and nothing else).  The kernel
 takes the two buffers and its scratch by **address** (int64, the owner keeps them
 alive and unchanged during the call: :class:`geomkit.Body` holds its buffer, the
-caller's thread holds the scratch), the two poses as float64 2-D arrays of any
-layout (the caller checks dtype and ndim, the kernel the shape), allocates
-nothing, answers a pose whose root boxes are disjoint without the traversal's
-call, and returns one integer.  Its scratch ``W`` int64 (one per thread,
-:func:`posed_scratch_size`): the node stack (``2 STACK``), the answer ``(n_pairs,
-bv_tests)``, the seed pair, ``W``'s own length, the float scratch
-(``POSED_FLOAT`` (3, 3) slabs viewed as float64; the last holds the relative
-translation in row 0 and the pose tolerance at ``[2, 2]``, set by the caller),
-then ``cap`` pairs and ``cap`` tag pairs.  Its compiled entry keeps the GIL for the
-pose checks and the root test and releases it around the traversal
-(:func:`_release_gil`).
+caller's thread holds the scratch), the two poses by the **addresses of the
+caller's objects** (``id(pose)``: unboxing an array costs numba a meminfo, and the
+caller's dtype and ndim checks cost as much again; :func:`_pose_from_object` reads
+an exact float64 2-D ``ndarray`` through NumPy's array struct, any other object is
+left to the caller, which converts it and writes it into ``W``), allocates nothing,
+answers a pose whose root boxes are disjoint without the traversal's call, and
+returns one integer.  Its scratch ``W`` int64 (one per thread,
+:func:`posed_scratch_size`): the answer ``(n_pairs, bv_tests)``, the seed pair,
+``W``'s own length, the addresses of ``numpy.ndarray`` and of the float64 dtype,
+six (3, 3) float slabs (relative motion, pose tolerance set by the caller, SAT
+scratch), the two poses (4, 4), the moved leaf triangles, the node stack, then
+``cap`` pairs and ``cap`` tag pairs (``POSED_*`` below: what a root-only query
+touches comes first).  Its compiled entry keeps the GIL for the pose checks, the
+root test and the first ``GIL_AFTER`` node tests, and the traversal releases it for
+the rest (:func:`_release_gil`).
 
 The batch worker (:func:`collide_many_boxes`) reads the same buffers by address, and
 both kernels view every array they traverse through addresses: a view of an array
@@ -48,6 +52,7 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 from ._numba import jit, jit_holding_gil, jit_inline
+from ._pyobj import ARRAY_FIELDS, address, array_data, f64_load, f64_ptr, i64_ptr
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
@@ -55,18 +60,33 @@ from .triangles import _intersect_point
 LEAF_CODE = 1 << 26
 """Leaf links: ``lo + hi * LEAF_CODE`` (exact in float64 up to 2**26 triangles)."""
 MAX_TRIANGLES = LEAF_CODE - 1
-POSED_FLOAT = 4 + LEAF_BUF + 2
-"""(3, 3) slabs of float scratch: 4 of SAT scratch, ``LEAF_BUF`` moved leaf
-triangles, the relative rotation, the relative translation and tolerance."""
-POSED_ANSWER = 2 * STACK
-"""Index in ``W`` of ``n_pairs`` (``bv_tests`` follows, then the seed pair and the
-length of ``W``)."""
+POSED_ANSWER = 0
+"""Index in the single-call scratch ``W`` of ``n_pairs`` (``bv_tests`` follows, then
+the seed pair and the length of ``W``).  ``W`` is laid out so that a query whose root
+boxes are disjoint reads and writes only its first ~100 slots."""
 POSED_LENGTH = POSED_ANSWER + 4
-POSED_FLOATS = 2 * STACK + 6
-"""Index in ``W`` of the float scratch."""
-POSED_FIXED = POSED_FLOATS + 9 * POSED_FLOAT
+POSED_REFS = POSED_ANSWER + 5
+"""Index in ``W`` of the addresses of ``numpy.ndarray``, of the float64 dtype, of
+``True`` and of ``None`` (set by the caller; :func:`collide_packed`)."""
+POSED_FLOATS = 10
+"""Index in ``W`` of six (3, 3) float64 slabs: the relative rotation, the relative
+translation (row 0) with the pose tolerance at ``[2, 2]`` (set by the caller), and
+four of SAT scratch."""
+POSED_TOL = POSED_FLOATS + 17
+POSED_POSES = POSED_FLOATS + 54
+"""Index in ``W`` of the two poses (4, 4) float64 the kernel works on (copied from
+the callers' arrays, or written there by the caller)."""
+POSED_LEAF = POSED_POSES + 32
+"""Index in ``W`` of ``LEAF_BUF`` (3, 3) float64 slabs: a leaf's moved triangles."""
+POSED_STACK = POSED_LEAF + 9 * LEAF_BUF
+"""Index in ``W`` of the node stack (``STACK`` rows of 2)."""
+POSED_FIXED = POSED_STACK + 2 * STACK
 """Index in ``W`` of the pairs (``cap`` rows of 2, then ``cap`` tag rows of 2)."""
 
+
+GIL_AFTER = 64
+"""Node tests a single call makes holding the GIL before it releases it (~2-4 µs;
+releasing and taking it back costs ~0.1 µs, a tenth of a short query)."""
 
 HEADER = 16
 """Slots (float64) of a packed body buffer before its node records."""
@@ -205,7 +225,7 @@ def _leaf_pair(NA, TA, orderA, NB, TB, orderB, i, j, Rr, tr, first_only, out_pai
 
 @jit
 def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
-                  st, scr, tbs, seed, root_overlaps=False):
+                  st, scr, tbs, seed, root_overlaps=False, gil_after=-1):
     """:func:`geomkit._kernels.bvh_query.collide_trees` for packed box trees in A's
     frame, B moved by ``(Rr, tr)``; scratch passed in (``st`` (STACK, 2) int64,
     ``scr`` (4, 3, 3), ``tbs`` (LEAF_BUF, 3, 3)) so that a batch allocates it once.
@@ -220,7 +240,10 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
     as without it (the seed pair's tests are counted in ``bv_tests``).  On return
     ``seed`` holds the leaf pair of the first hit found (unchanged if none).
     ``root_overlaps``: the caller has tested the root pair and found it overlapping
-    (not tested again; still counted in ``bv_tests``).
+    (not tested again; still counted in ``bv_tests``).  ``gil_after`` >= 0: release
+    the GIL, if this thread holds it, once that many node tests are made, and take it
+    back before returning (a short traversal, the common case of a single call, does
+    not pay the release; a long one does not block other Python threads).
     Returns ``(n_pairs, bv_tests)`` as ``collide_trees``.
     """
     Rab = scr[0]
@@ -237,10 +260,13 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
         st[1, 0] = seed[0]
         st[1, 1] = seed[1]
         top = 2
+    gil = 0
     while top > 0:
         top -= 1
         i = st[top, 0]
         j = st[top, 1]
+        if tests == gil_after:
+            gil = _release_gil()
         tests += 1
         if not (root_overlaps and i == 0 and j == 0) and \
                 _boxes_disjoint(NA, i, NB, j, Rr, tr, Rab, T, M, Ab):
@@ -256,7 +282,7 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
                     seed[0] = i
                     seed[1] = j
                 if first_only:
-                    return npairs, tests
+                    break
             continue
         if lb or (not la and _extent(NA, i) >= _extent(NB, j)):
             c0 = np.int64(NA[i, 15])
@@ -279,6 +305,7 @@ def collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, out_pairs,
             st[top + 1, 0] = i
             st[top + 1, 1] = c0
         top += 2
+    _restore_gil(gil)
     return npairs, tests
 
 
@@ -322,16 +349,16 @@ def collide_many_boxes(i0, i1, ba, bb, PA, PB, first_only, colliding, npairs, te
     NB, TB, orderB = _views(bb)
     ma = PA.shape[0] > 1
     mb = PB.shape[0] > 1
-    PAv = carray(_f64_at(PA.ctypes.data), (PA.shape[0], 4, 4))
-    PBv = carray(_f64_at(PB.ctypes.data), (PB.shape[0], 4, 4))
+    PAv = carray(f64_ptr(PA.ctypes.data), (PA.shape[0], 4, 4))
+    PBv = carray(f64_ptr(PB.ctypes.data), (PB.shape[0], 4, 4))
     fs = np.empty(9 * (4 + LEAF_BUF + 1) + 3)      # scratch, kept alive to the end
     ist = np.empty(2 * STACK + 2, dtype=np.int64)
-    S = carray(_f64_at(fs.ctypes.data), 9 * (4 + LEAF_BUF + 1) + 3)
+    S = carray(f64_ptr(fs.ctypes.data), 9 * (4 + LEAF_BUF + 1) + 3)
     scr = S[:36].reshape((4, 3, 3))
     tbs = S[36:36 + 9 * LEAF_BUF].reshape((LEAF_BUF, 3, 3))
     Rr = S[36 + 9 * LEAF_BUF:45 + 9 * LEAF_BUF].reshape((3, 3))
     tr = S[45 + 9 * LEAF_BUF:]
-    I = carray(_i64_at(ist.ctypes.data), 2 * STACK + 2)
+    I = carray(i64_ptr(ist.ctypes.data), 2 * STACK + 2)
     st = I[:2 * STACK].reshape((STACK, 2))
     seed = I[2 * STACK:]
     seed[0] = -1
@@ -345,26 +372,6 @@ def collide_many_boxes(i0, i1, ba, bb, PA, PB, first_only, colliding, npairs, te
         npairs[k] = c
         tests[k] = t
     return fs[0] + ist[0]       # the owners of S and I live until here
-
-
-@intrinsic
-def _f64_at(typingctx, addr):
-    """The float64 pointer at the int64 address ``addr``."""
-    sig = types.CPointer(types.float64)(types.int64)
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
-    return sig, codegen
-
-
-@intrinsic
-def _i64_at(typingctx, addr):
-    """The int64 pointer at the int64 address ``addr``."""
-    sig = types.CPointer(types.int64)(types.int64)
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
-    return sig, codegen
 
 
 @intrinsic
@@ -409,73 +416,113 @@ def _restore_gil(typingctx, state):
 def _views(ba):
     """``N``, ``T``, ``order`` of the packed body at the address ``ba`` (views
     without a meminfo)."""
-    h = carray(_i64_at(ba), 2)
+    h = carray(i64_ptr(ba), 2)
     n = h[0]
     m = h[1]
     f = HEADER + 16 * n
-    N = carray(_f64_at(ba + 8 * HEADER), (n, 16))
-    T = carray(_f64_at(ba + 8 * f), (m, 3, 3))
-    order = carray(_i64_at(ba + 8 * (f + 9 * m)), m)
+    N = carray(f64_ptr(ba + 8 * HEADER), (n, 16))
+    T = carray(f64_ptr(ba + 8 * f), (m, 3, 3))
+    order = carray(i64_ptr(ba + 8 * (f + 9 * m)), m)
     return N, T, order
 
 
-@jit_holding_gil
-def collide_packed(ba, bb, Pa, Pb, first_only, w):
-    """:func:`collide_boxes` for two packed bodies (buffers at the addresses ``ba``,
-    ``bb``, scratch ``W`` at ``w``; see the module docstring) under the poses
-    ``Pa``, ``Pb`` (float64 2-D, any layout), first checked to be rigid (4, 4)
-    transforms within the tolerance in ``W`` (the caller sets it).
+@jit_inline
+def _pose_from_object(obj, ndarray, float64, P):
+    """Copy the pose object at the address ``obj`` into ``P`` (4, 4) if it is exactly
+    a float64 2-D ``numpy.ndarray`` (any strides): 0; 1 if it is one of another
+    shape; 2 if it is any other object."""
+    data, dims, strides = array_data(obj, ndarray, float64, 2)
+    if data == 0:
+        return 2
+    d = carray(i64_ptr(dims), 2)
+    if d[0] != 4 or d[1] != 4:
+        return 1
+    st = carray(i64_ptr(strides), 2)
+    for r in range(4):
+        for c in range(4):
+            P[r, c] = f64_load(data + r * st[0] + c * st[1])
+    return 0
 
-    Returns ``2 * bv_tests + (n_pairs > 0)``, or -1 / -2 for the first pose that is
-    not a rigid (4, 4) transform (nothing traversed).  The pairs (original face
-    indices, ``(cap, 2)`` from ``W[POSED_FIXED]``), their face tags (the next ``2
-    cap``) and ``(n_pairs, bv_tests)`` (``W[POSED_ANSWER]``) are written to ``W``;
-    ``n_pairs > cap`` means the buffer was too small (call again with a larger
-    one)."""
-    W = carray(_i64_at(w), POSED_FIXED)
-    S = carray(_f64_at(w + 8 * POSED_FLOATS), (POSED_FLOAT, 3, 3))
-    tol = S[POSED_FLOAT - 1, 2, 2]
-    if Pa.shape[0] != 4 or Pa.shape[1] != 4 or rigid_code(Pa, tol)[0] != 0:
+
+@jit_holding_gil
+def collide_packed(body_a, body_b, pose_a, pose_b, first_only, scratch):
+    """:func:`collide_boxes` for two packed bodies under two poses; every argument is
+    the caller's Python object, passed by address (:data:`geomkit._kernels._pyobj.object_ref`):
+    ``body_a``, ``body_b`` the bodies' packed buffers (float64 1-D ndarrays, see the
+    module docstring), ``pose_a``, ``pose_b`` float64 2-D ndarrays of any layout
+    (copied to ``W``) or ``None`` (the caller wrote that pose to ``W``),
+    ``first_only`` ``True`` or ``False``, ``scratch`` the thread's scratch ``W``
+    (int64 1-D ndarray; the addresses of ``numpy.ndarray``, the float64 dtype,
+    ``True`` and ``None`` at ``W[POSED_REFS]``, set by the caller with the pose
+    tolerance).  The poses are first checked to be rigid (4, 4) transforms.
+
+    Returns ``2 * bv_tests + (n_pairs > 0)``; -1 / -2 for the first pose that is not
+    a rigid (4, 4) transform, -3 when a pose is not a float64 2-D ndarray, -4 when a
+    body buffer is not a float64 ndarray (nothing traversed in these cases).  The
+    pairs (original face indices, ``(cap, 2)`` from ``W[POSED_FIXED]``), their face
+    tags (the next ``2 cap``) and ``(n_pairs, bv_tests)`` (``W[POSED_ANSWER]``) are
+    written to ``W``; ``n_pairs > cap`` means the buffer was too small (call again
+    with a larger one)."""
+    w = carray(i64_ptr(address(scratch) + ARRAY_FIELDS[0]), 1)[0]
+    W = carray(i64_ptr(w), POSED_FIXED)
+    nd = W[POSED_REFS]
+    f8 = W[POSED_REFS + 1]
+    ba = array_data(address(body_a), nd, f8, 1)[0]
+    bb = array_data(address(body_b), nd, f8, 1)[0]
+    if ba == 0 or bb == 0:
+        return -4
+    S = carray(f64_ptr(w + 8 * POSED_FLOATS), (6, 3, 3))
+    Pa = carray(f64_ptr(w + 8 * POSED_POSES), (4, 4))
+    Pb = carray(f64_ptr(w + 8 * (POSED_POSES + 16)), (4, 4))
+    none = W[POSED_REFS + 3]
+    ida = address(pose_a)
+    idb = address(pose_b)
+    ka = _pose_from_object(ida, nd, f8, Pa) if ida != none else 0
+    kb = _pose_from_object(idb, nd, f8, Pb) if idb != none else 0
+    if ka == 2 or kb == 2:
+        return -3
+    tol = S[1, 2, 2]
+    if ka != 0 or rigid_code(Pa, tol)[0] != 0:
         return -1
-    if Pb.shape[0] != 4 or Pb.shape[1] != 4 or rigid_code(Pb, tol)[0] != 0:
+    if kb != 0 or rigid_code(Pb, tol)[0] != 0:
         return -2
-    hA = carray(_i64_at(ba), 2)
-    hB = carray(_i64_at(bb), 2)
+    first = address(first_only) == W[POSED_REFS + 2]
+    hA = carray(i64_ptr(ba), 2)
+    hB = carray(i64_ptr(bb), 2)
     na = hA[0]
     ma = hA[1]
     nb = hB[0]
     mb = hB[1]
-    NA = carray(_f64_at(ba + 8 * HEADER), (na, 16))
-    NB = carray(_f64_at(bb + 8 * HEADER), (nb, 16))
-    Rr = S[POSED_FLOAT - 2]
-    tr = S[POSED_FLOAT - 1, 0]
+    NA = carray(f64_ptr(ba + 8 * HEADER), (na, 16))
+    NB = carray(f64_ptr(bb + 8 * HEADER), (nb, 16))
+    Rr = S[0]
+    tr = S[1, 0]
     _relative(Pa, Pb, Rr, tr)
-    if _boxes_disjoint(NA, 0, NB, 0, Rr, tr, S[0], S[3, 0], S[1], S[2]):
+    if _boxes_disjoint(NA, 0, NB, 0, Rr, tr, S[2], S[5, 0], S[3], S[4]):
         W[POSED_ANSWER] = 0     # root boxes disjoint (most poses of a sparse scene):
         W[POSED_ANSWER + 1] = 1     # answered without the traversal's call
         return 2
     fa = HEADER + na * 16
     fb = HEADER + nb * 16
-    TA = carray(_f64_at(ba + 8 * fa), (ma, 3, 3))
-    TB = carray(_f64_at(bb + 8 * fb), (mb, 3, 3))
+    TA = carray(f64_ptr(ba + 8 * fa), (ma, 3, 3))
+    TB = carray(f64_ptr(bb + 8 * fb), (mb, 3, 3))
     fa += 9 * ma
     fb += 9 * mb
-    orderA = carray(_i64_at(ba + 8 * fa), ma)
-    orderB = carray(_i64_at(bb + 8 * fb), mb)
-    tagsA = carray(_i64_at(ba + 8 * (fa + ma)), ma)
-    tagsB = carray(_i64_at(bb + 8 * (fb + mb)), mb)
+    orderA = carray(i64_ptr(ba + 8 * fa), ma)
+    orderB = carray(i64_ptr(bb + 8 * fb), mb)
+    tagsA = carray(i64_ptr(ba + 8 * (fa + ma)), ma)
+    tagsB = carray(i64_ptr(bb + 8 * (fb + mb)), mb)
     cap = (W[POSED_LENGTH] - POSED_FIXED) // 4
     # views made from addresses (a slice's .reshape calls numba's reshape helper)
-    pairs = carray(_i64_at(w + 8 * POSED_FIXED), (cap, 2))
-    tags = carray(_i64_at(w + 8 * (POSED_FIXED + 2 * cap)), (cap, 2))
+    pairs = carray(i64_ptr(w + 8 * POSED_FIXED), (cap, 2))
+    tags = carray(i64_ptr(w + 8 * (POSED_FIXED + 2 * cap)), (cap, 2))
     seed = W[POSED_ANSWER + 2:POSED_ANSWER + 4]
     seed[0] = -1
     seed[1] = -1
-    gil = _release_gil()      # the traversal runs without the GIL
-    n, tests = collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first_only, pairs,
-                             carray(_i64_at(w), (STACK, 2)), S[:4], S[4:4 + LEAF_BUF],
-                             seed, True)
-    _restore_gil(gil)
+    n, tests = collide_boxes(NA, TA, orderA, NB, TB, orderB, Rr, tr, first, pairs,
+                             carray(i64_ptr(w + 8 * POSED_STACK), (STACK, 2)), S[2:],
+                             carray(f64_ptr(w + 8 * POSED_LEAF), (LEAF_BUF, 3, 3)), seed,
+                             True, GIL_AFTER)
     for k in range(min(n, cap)):
         tags[k, 0] = tagsA[pairs[k, 0]]
         tags[k, 1] = tagsB[pairs[k, 1]]
