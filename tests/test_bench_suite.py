@@ -28,9 +28,9 @@ def test_schema_and_measured_errors(tiny):
     res, _ = tiny
     rows = res["rows"]
     assert {r["engine"] for r in rows} == {"evaluation", "distance", "collision"}
-    # 1 evaluation row, 2 distance rows, collide (median and mean) + collide_many +
-    # min_distance for the one tolerance
-    assert len(rows) == 1 + 2 + 4
+    # 1 evaluation row, 2 distance rows, collide (median, mean, per pose) +
+    # collide_many + min_distance for the one tolerance
+    assert len(rows) == 1 + 2 + 5
     for r in rows:
         assert tuple(r) == FIELDS
         assert r["geomkit_seconds"] > 0 and math.isfinite(r["geomkit_seconds"])
@@ -175,6 +175,21 @@ def test_collide_mean_row_is_the_mean_of_the_same_calls(tiny):
     rows = {r["case"]: r for r in tiny[0]["rows"] if r["engine"] == "collision"}
     med, mean = rows["sphere-sphere collide"], rows["sphere-sphere collide mean"]
     assert mean["geomkit_error"] == med["geomkit_error"]
+    assert rows["sphere-sphere collide per pose"]["geomkit_error"] == med["geomkit_error"]
     assert 0 < mean["geomkit_seconds"] < 1.0 and 0 < med["geomkit_seconds"] < 1.0
     if med["reference_seconds"] is not None:
         assert mean["reference_seconds"] > 0
+
+
+def test_collide_per_pose_row_is_a_geometric_mean_of_pose_medians():
+    """The per-pose row: each pose's median over the passes, geometric mean over
+    the poses (so the ratio of two such rows is the geometric mean of the per-pose
+    ratios)."""
+    import numpy as np
+
+    from geomkit.bench.collision import _per_pose
+    t = np.array([[1.0, 4.0, 9.0], [3.0, 4.0, 1.0], [2.0, 100.0, 9.0]])   # 3 passes x 3 poses
+    assert np.isclose(_per_pose(t.ravel().tolist(), 3, 3), (2.0 * 4.0 * 9.0) ** (1 / 3))
+    c = np.array([2.0, 8.0, 18.0])        # twice each pose: the ratio is exactly 2
+    assert np.isclose(_per_pose(np.tile(c, 3).tolist(), 3, 3) / _per_pose(
+        np.tile(c / 2, 3).tolist(), 3, 3), 2.0)
