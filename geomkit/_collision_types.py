@@ -51,10 +51,12 @@ class Body:
 
     def __setstate__(self, state):
         # a copy (pickle, copy.deepcopy) holds its packed buffer at another address:
-        # the single-call kernel's handle on it must follow
+        # the batch kernel's handle on it must follow, and the arrays stored in it
+        # become views of it again
         self.__dict__.update(state)
         if state.get("_pf") is not None:
-            self._addr = self._pf.ctypes.data
+            from .collision import _share_packed
+            _share_packed(self)
 
     def __repr__(self) -> str:
         return (f"<Body {self.faces.shape[0]} faces, bv={self.bv!r}, "

@@ -131,7 +131,20 @@ def _pack(body, N):
     bi[nf:nf + m] = body.order
     bi[nf + m:nf + 2 * m] = body.face_tags
     body._pf = buf
-    body._addr = buf.ctypes.data     # the kernel's handle on it (the body keeps buf)
+    _share_packed(body)
+
+
+def _share_packed(body):
+    """Make the packed buffer ``body._pf`` read-only (the traversal trusts its
+    links) and the body's ``N``, ``T``, ``order``, ``face_tags`` read-only views into
+    it; also after unpickling, which gives each array its own copy."""
+    buf = body._pf
+    buf.flags.writeable = False
+    n, m = buf[:2].view(np.int64).tolist()
+    h = kp.HEADER
+    nf = h + 16 * n + 9 * m
+    bi = buf.view(np.int64)
+    body._addr = buf.ctypes.data     # the batch kernel's handle on it (the body keeps buf)
     body.N = buf[h:h + 16 * n].reshape(n, 16)
     body.T = buf[h + 16 * n:nf].reshape(m, 3, 3)
     body.order = bi[nf:nf + m]

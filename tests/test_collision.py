@@ -12,6 +12,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 import trimesh
@@ -480,7 +482,6 @@ def test_collide_other_pose_types_and_copied_bodies():
     other dtypes, byte orders and ndarray subclasses are converted; a copied body
     (pickle, deepcopy) holds its own buffer, and the kernel's handle follows it."""
     import copy
-    import pickle
     a, b = body("freeform", "obb"), body("icosphere", "obb")
     poses = random_poses(20, 23, spread=6.0).reshape(10, 2, 4, 4)
     for Pa, Pb in poses:
@@ -569,7 +570,7 @@ def test_object_refs_read_exact_float64_arrays_only():
 
     @numba.njit
     def probe(x, nd, f8):
-        return array_data(address(x), nd, f8, 2)
+        return array_data(address(x), nd, f8, 12, 2)
 
     entry = probe.compile((object_ref, numba.int64, numba.int64))
     refs = id(np.ndarray), id(np.dtype(np.float64))
@@ -584,8 +585,38 @@ def test_object_refs_read_exact_float64_arrays_only():
     with pytest.warns(PendingDeprecationWarning):
         m = np.asmatrix(np.eye(4))
     for other in (np.eye(4, dtype=np.float32), np.eye(4).astype(">f8"), np.ones((1, 4, 4)),
-                  np.ones(16), m, [[1.0] * 4] * 4, None, 3.0, "pose"):
+                  np.ones(16), m, [[1.0] * 4] * 4, None, 3.0, "pose",
+                  np.zeros((4, 4), dtype=[("x", "f8")]), np.eye(4).astype(object)):
         assert entry(other, *refs) == (0, 0, 0), type(other)
+    # float64 with another descriptor object (unpickled arrays have their own): read
+    for same in (pickle.loads(pickle.dumps(x)),
+                 x.astype(np.dtype(np.float64, metadata={"k": 1}))):
+        assert same.dtype is not np.dtype(np.float64)
+        assert entry(same, *refs)[0] == same.__array_interface__["data"][0]
+
+
+def test_unpickled_and_damaged_bodies():
+    """An unpickled body keeps the single-call kernel (its buffer's dtype is another
+    descriptor object); the packed buffer and its views are read-only; a buffer whose
+    length does not match its header is refused by the kernel (the generic path
+    answers)."""
+    a, b = body("icosphere", "obb"), body("capsule", "obb")
+    W = geomkit.collision._single_scratch()
+    P = np.eye(4)
+    Q = random_poses(1, 3, spread=2.0)[0]
+    ref = collide(a, P, b, Q)
+    a2 = pickle.loads(pickle.dumps(a))
+    assert a2._pf.dtype is not np.dtype(np.float64)
+    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) >= 0
+    for arr in (a.N, a.T, a.order, a.face_tags, a2.N, a2._pf):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = 0
+    a2._pf = a2._pf[:-1]                 # damaged: the kernel refuses it
+    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) == -4
+    a2._pf = np.repeat(a._pf, 2)[::2]    # strided: refused
+    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) == -4
+    c = collide(a2, P, b, Q)             # the generic path (the body's own arrays)
+    assert np.array_equal(c.pairs, ref.pairs) and c.bv_tests == ref.bv_tests
 
 
 @pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")   # np.matrix

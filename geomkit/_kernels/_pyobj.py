@@ -14,9 +14,10 @@ checks the object's type itself: :func:`array_data` accepts only an exact
 ``numpy.ndarray`` of a given dtype (any other object, a subclass or another dtype
 gives 0, and nothing of it is read past its type).
 
-The layouts are CPython's object header and NumPy's ``PyArrayObject_fields``
-(unchanged from NumPy 1.7 to 2.x); :func:`array_fields_ok` checks them against a
-live array, and a caller uses ``object_ref`` entry points only when it holds.
+The layouts are CPython's object header, NumPy's ``PyArrayObject_fields``
+(unchanged from NumPy 1.7 to 2.x) and the dtype descriptor's codes;
+:func:`array_fields_ok` checks them against a live array, and a caller uses
+``object_ref`` entry points only when it holds.
 """
 
 from __future__ import annotations
@@ -31,9 +32,14 @@ from ._numba import jit_inline
 
 OB_TYPE = 8
 """Byte offset of an object's type pointer (CPython's ``PyObject`` header)."""
-ARRAY_FIELDS = (16, 24, 32, 40, 56)
+DATA, NDIM, DIMS, STRIDES, DESCR = 16, 24, 32, 40, 56
 """Byte offsets in an ``ndarray`` object of NumPy's ``data``, ``nd`` (C int),
-``dimensions``, ``strides`` and ``descr``."""
+``dimensions``, ``strides`` and ``descr`` (``PyArrayObject_fields``)."""
+DESCR_CODES = 24
+"""Byte offset in a dtype descriptor of ``kind``, ``type``, ``byteorder`` (+2) and,
+from +4, ``type_num`` (C int): the same in NumPy 1.x and 2.x."""
+NPY_DOUBLE = 12
+"""NumPy's ``type_num`` of float64."""
 
 
 class ObjectRef(types.Type):
@@ -93,37 +99,44 @@ def f64_load(typingctx, addr):
 
 
 @jit_inline
-def array_data(obj, ndarray, descr, ndim):
+def array_data(obj, ndarray, descr, type_num, ndim):
     """``(data, dims, strides)`` addresses of the object at the address ``obj`` if it
-    is exactly a ``numpy.ndarray`` (type object at the address ``ndarray``) with the
-    dtype whose descriptor is at ``descr`` and ``ndim`` dimensions, else ``(0, 0,
-    0)``."""
+    is exactly a ``numpy.ndarray`` (type object at the address ``ndarray``) with
+    ``ndim`` dimensions and a native-order dtype of ``type_num`` (the descriptor at
+    ``descr``, the usual one, or any other with that number: e.g. an unpickled
+    array's own copy), else ``(0, 0, 0)``."""
     if obj == 0 or i64_ptr(obj + OB_TYPE)[0] != ndarray:
         return 0, 0, 0
-    h = carray(i64_ptr(obj + 16), 6)     # data, nd, dimensions, strides, base, descr
-    if h[5] != descr or (h[1] & 0xFFFFFFFF) != ndim:
+    if (i64_ptr(obj + NDIM)[0] & 0xFFFFFFFF) != ndim:
         return 0, 0, 0
-    return h[0], h[2], h[3]
+    d = i64_ptr(obj + DESCR)[0]
+    if d != descr:
+        codes = i64_ptr(d + DESCR_CODES)[0]
+        if (codes >> 32) & 0xFFFFFFFF != type_num or (codes >> 16) & 0xFF == 62:  # '>'
+            return 0, 0, 0
+    return i64_ptr(obj + DATA)[0], i64_ptr(obj + DIMS)[0], i64_ptr(obj + STRIDES)[0]
 
 
 def array_fields_ok():
-    """Do a live array's type, data, ndim, shape, strides and dtype sit at the offsets
-    the kernels read (:data:`OB_TYPE`, :data:`ARRAY_FIELDS`)?  False on another
-    Python implementation or an incompatible NumPy."""
+    """Do a live array's type, data, ndim, shape, strides and dtype codes sit at the
+    offsets the kernels read (:data:`OB_TYPE`, :data:`DATA` ... :data:`DESCR_CODES`)?
+    False on another Python implementation or an incompatible NumPy.  (Each address
+    read is one the layout being checked has already been found right about.)"""
     import ctypes
     import platform
     if platform.python_implementation() != "CPython":
         return False
-    x = np.arange(16.0).reshape(4, 4)[:, ::-1]
-    od, on, odim, ost, odt = ARRAY_FIELDS
+    x = np.arange(16.0).astype(np.dtype(np.float64, metadata={"k": 0}))
+    x = x.reshape(4, 4)[:, ::-1]
     at = id(x)
 
     def i64(addr):
         return ctypes.c_int64.from_address(addr).value
-    try:
-        return (i64(at + OB_TYPE) == id(np.ndarray) and i64(at + od) == x.ctypes.data
-                and i64(at + on) & 0xFFFFFFFF == 2 and i64(at + odt) == id(x.dtype)
-                and [i64(i64(at + odim) + 8 * k) for k in range(2)] == [4, 4]
-                and [i64(i64(at + ost) + 8 * k) for k in range(2)] == list(x.strides))
-    except (ValueError, OSError):
+    if i64(at + OB_TYPE) != id(np.ndarray) or i64(at + DATA) != x.ctypes.data \
+            or i64(at + NDIM) & 0xFFFFFFFF != 2 or i64(at + DESCR) != id(x.dtype):
         return False
+    codes = i64(id(x.dtype) + DESCR_CODES)
+    return ((codes >> 32) & 0xFFFFFFFF == NPY_DOUBLE == x.dtype.num
+            and chr((codes >> 16) & 0xFF) == x.dtype.byteorder
+            and [i64(i64(at + DIMS) + 8 * k) for k in range(2)] == [4, 4]
+            and [i64(i64(at + STRIDES) + 8 * k) for k in range(2)] == list(x.strides))

@@ -19,13 +19,13 @@ int64 ``order`` (m,) and ``face_tags`` (m,); the body's ``N``, ``T``, ``order``,
 ``face_tags`` are views into it; the header is one record long so that the node
 records keep their offsets modulo 128 bytes, and it sits next to the root record:
 a root-only query reads the start of each buffer and nothing else).  The kernel
-takes the two buffers and its scratch by **address** (int64, the owner keeps them
-alive and unchanged during the call: :class:`geomkit.Body` holds its buffer, the
-caller's thread holds the scratch), the two poses by the **addresses of the
-caller's objects** (``id(pose)``: unboxing an array costs numba a meminfo, and the
-caller's dtype and ndim checks cost as much again; :func:`_pose_from_object` reads
-an exact float64 2-D ``ndarray`` through NumPy's array struct, any other object is
-left to the caller, which converts it and writes it into ``W``), allocates nothing,
+takes its six arguments as the caller's Python objects, unconverted
+(:mod:`geomkit._kernels._pyobj`: numba's conversion of two arrays and four
+addresses was most of a root-only call): the two bodies' buffers (read-only
+float64 arrays, their length checked against their header), the two poses (an exact
+float64 2-D ``ndarray`` of any layout is read through NumPy's array struct by
+:func:`_pose_from_object`; any other object is left to the caller, which converts
+it and writes it into ``W``), ``first_only`` and the thread's scratch; allocates nothing,
 answers a pose whose root boxes are disjoint without the traversal's call, and
 returns one integer.  Its scratch ``W`` int64 (one per thread,
 :func:`posed_scratch_size`): the answer ``(n_pairs, bv_tests)``, the seed pair,
@@ -52,7 +52,7 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 from ._numba import jit, jit_holding_gil, jit_inline
-from ._pyobj import ARRAY_FIELDS, address, array_data, f64_load, f64_ptr, i64_ptr
+from ._pyobj import DATA, NPY_DOUBLE, address, array_data, f64_load, f64_ptr, i64_ptr
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
@@ -431,7 +431,7 @@ def _pose_from_object(obj, ndarray, float64, P):
     """Copy the pose object at the address ``obj`` into ``P`` (4, 4) if it is exactly
     a float64 2-D ``numpy.ndarray`` (any strides): 0; 1 if it is one of another
     shape; 2 if it is any other object."""
-    data, dims, strides = array_data(obj, ndarray, float64, 2)
+    data, dims, strides = array_data(obj, ndarray, float64, NPY_DOUBLE, 2)
     if data == 0:
         return 2
     d = carray(i64_ptr(dims), 2)
@@ -442,6 +442,20 @@ def _pose_from_object(obj, ndarray, float64, P):
         for c in range(4):
             P[r, c] = f64_load(data + r * st[0] + c * st[1])
     return 0
+
+
+@jit_inline
+def _packed_body(obj, ndarray, float64):
+    """Data address of the packed body buffer at the object address ``obj`` (a
+    contiguous float64 1-D ndarray whose length matches its header's node and
+    triangle counts), else 0."""
+    data, dims, strides = array_data(obj, ndarray, float64, NPY_DOUBLE, 1)
+    if data == 0 or i64_ptr(strides)[0] != 8:
+        return 0
+    h = carray(i64_ptr(data), 2)
+    if h[0] < 1 or h[1] < 1 or i64_ptr(dims)[0] != HEADER + 16 * h[0] + 11 * h[1]:
+        return 0
+    return data
 
 
 @jit_holding_gil
@@ -463,12 +477,12 @@ def collide_packed(body_a, body_b, pose_a, pose_b, first_only, scratch):
     tags (the next ``2 cap``) and ``(n_pairs, bv_tests)`` (``W[POSED_ANSWER]``) are
     written to ``W``; ``n_pairs > cap`` means the buffer was too small (call again
     with a larger one)."""
-    w = carray(i64_ptr(address(scratch) + ARRAY_FIELDS[0]), 1)[0]
+    w = i64_ptr(address(scratch) + DATA)[0]
     W = carray(i64_ptr(w), POSED_FIXED)
     nd = W[POSED_REFS]
     f8 = W[POSED_REFS + 1]
-    ba = array_data(address(body_a), nd, f8, 1)[0]
-    bb = array_data(address(body_b), nd, f8, 1)[0]
+    ba = _packed_body(address(body_a), nd, f8)
+    bb = _packed_body(address(body_b), nd, f8)
     if ba == 0 or bb == 0:
         return -4
     S = carray(f64_ptr(w + 8 * POSED_FLOATS), (6, 3, 3))
