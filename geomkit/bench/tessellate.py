@@ -172,7 +172,8 @@ def sweep(cases=SWEEP_CASES, tols=(1e-1, 3e-2, 1e-2), repeat=3, angle=0.5, budge
     (:func:`sampled_deviation`), exact for cases with an analytic truth.  Timed
     ``repeat`` times, fewer once geomkit's runs exceed ``budget`` seconds (OCC gets
     as many runs as geomkit; its time is ``BRepMesh_IncrementalMesh`` alone, without
-    reading the triangulation back into Python)."""
+    reading the triangulation back into Python).  The two are timed alternately, run
+    by run, so that a change in the machine's load hits both alike."""
     from ._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
 
     occ = occ_or_none()
@@ -184,15 +185,20 @@ def sweep(cases=SWEEP_CASES, tols=(1e-1, 3e-2, 1e-2), repeat=3, angle=0.5, budge
         exact = _truth(name)
         face = occ_face(occ, s) if occ is not None else None
         for tol in tols:
-            t_gk, m, n_gk = median_time(lambda: tessellate(s, tol), repeat, budget)
+            tg, ts = [], []
+            for _ in range(max(1, int(repeat))):       # alternately, as many runs each
+                t_gk, m, _ = median_time(lambda: tessellate(s, tol), 1)
+                tg.append(t_gk)
+                if face is not None:
+                    oV, oF, oUV, odt = occ.mesh(face, tol, angle=angle)
+                    ts.append(odt)
+                if budget is not None and sum(tg) > budget:
+                    break
+            t_gk, n_gk = float(np.median(tg)), len(tg)
             dev = sampled_deviation(s, m.vertices, m.faces, m.face_uv, distance=exact)
             note = f"{len(m.faces)} triangles"
             ref = {}
             if face is not None:
-                ts = []
-                for _ in range(n_gk):                  # as many runs as geomkit had
-                    oV, oF, oUV, odt = occ.mesh(face, tol, angle=angle)
-                    ts.append(odt)
                 odev = sampled_deviation(s, oV, oF, oUV[oF], distance=exact)
                 ref = dict(reference_name="OCC BRepMesh_IncrementalMesh",
                            reference_seconds=float(np.median(ts)), reference_error=odev)
