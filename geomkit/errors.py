@@ -16,6 +16,7 @@ __all__ = [
     "DegenerateGeometryError",
     "FileFormatError",
     "MissingDependencyError",
+    "ToleranceNotMetWarning",
 ]
 
 
@@ -55,3 +56,8 @@ class FileFormatError(GeomkitError, ValueError):
 
 class MissingDependencyError(GeomkitError, ImportError):
     """An optional dependency needed for this operation is not installed."""
+
+
+class ToleranceNotMetWarning(UserWarning):
+    """A result could not be brought within the requested tolerance; the value it
+    states (e.g. ``Mesh.max_deviation``) is the measured one, above the request."""

@@ -41,6 +41,7 @@ Method (Paper 1 step 1, then beyond it):
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
@@ -50,7 +51,7 @@ from ._kernels.tess import triangle_deviation
 from ._kernels.tess_lattice import cell_triangles
 from ._tess_trim import TrimPolylines, affine_map, planar_trimmed
 from ._validate import as_int
-from .errors import InvalidInputError
+from .errors import InvalidInputError, ToleranceNotMetWarning
 from .types import Mesh, Surface
 
 __all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET"]
@@ -75,6 +76,9 @@ SERIAL_POINTS = 2048
 """Surface points evaluated in the calling thread up to this count (a thread-pool
 dispatch costs ~0.1 ms on an idle machine, milliseconds on a busy one; 2,048 points
 cost ~0.2 ms)."""
+MAX_ROUNDS = 60
+"""Rounds of measure-and-split; a mesh that still has a triangle above ``tol`` after
+them warns (:class:`~geomkit.errors.ToleranceNotMetWarning`).  Typical: 1-5."""
 WELD_REL = 1e-10
 """Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
@@ -404,7 +408,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     fan_ll = np.empty(0, dtype=np.int64)  # their lower-left corners (a quick pre-test)
     measured = _Measured()
     rounds = 0
-    for rounds in range(1, 40):
+    bad = np.zeros(0, dtype=bool)
+    for rounds in range(1, MAX_ROUNDS + 1):
         cells, E, M = qt.refine(s, lat, cells, CELL_TARGET * tol, m, k,
                                 CELL_TARGET * EXACT_ABOVE * tol, max_edge, max_angle, active,
                                 force, known)
@@ -447,6 +452,11 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             else:
                 force[ci] = True
         fan_ll = np.array([a * qt.KEY + c for a, _, c, _ in fanned], dtype=np.int64)
+    if bad.any():  # never silently: the mesh states the measured values
+        warnings.warn(f"tessellate: {int(np.count_nonzero(bad))} triangle(s) still above "
+                      f"tol = {tol:.4g} after {rounds} rounds (largest "
+                      f"{float(dev.max()):.4g}); face_deviation states them",
+                      ToleranceNotMetWarning, stacklevel=3)
     V, F, UV, good = _weld(s, tri_uv, size, near_uv=bool(np.any(state == 2)))
     stats = {"cells": int(len(cells)), "cut_cells": int(np.count_nonzero(state == 2)),
              "rounds": rounds, "collapsed_dropped": int(np.count_nonzero(~good)),

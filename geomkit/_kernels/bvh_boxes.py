@@ -52,7 +52,8 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 from ._numba import jit, jit_holding_gil, jit_inline
-from ._pyobj import DATA, NPY_DOUBLE, address, array_data, f64_load, f64_ptr, i64_ptr
+from ._pyobj import (DATA, DIMS, NPY_DOUBLE, OB_TYPE, address, array_data, f64_load, f64_ptr,
+                     i64_ptr)
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
 from .triangles import _intersect_point
@@ -472,14 +473,23 @@ def collide_packed(body_a, body_b, pose_a, pose_b, first_only, scratch):
 
     Returns ``2 * bv_tests + (n_pairs > 0)``; -1 / -2 for the first pose that is not
     a rigid (4, 4) transform, -3 when a pose is not a float64 2-D ndarray, -4 when a
-    body buffer is not a float64 ndarray (nothing traversed in these cases).  The
+    body buffer is not a float64 ndarray, -5 when the scratch is not an ndarray as
+    long as its recorded length (nothing traversed in these cases).  The
     pairs (original face indices, ``(cap, 2)`` from ``W[POSED_FIXED]``), their face
     tags (the next ``2 cap``) and ``(n_pairs, bv_tests)`` (``W[POSED_ANSWER]``) are
     written to ``W``; ``n_pairs > cap`` means the buffer was too small (call again
     with a larger one)."""
-    w = i64_ptr(address(scratch) + DATA)[0]
+    sa = address(scratch)
+    # the scratch's own length bounds every view made of it below (its fixed part
+    # first: W[POSED_LENGTH] is read from the buffer)
+    length = i64_ptr(i64_ptr(sa + DIMS)[0])[0]
+    if length < POSED_FIXED:
+        return -5
+    w = i64_ptr(sa + DATA)[0]
     W = carray(i64_ptr(w), POSED_FIXED)
     nd = W[POSED_REFS]
+    if i64_ptr(sa + OB_TYPE)[0] != nd or W[POSED_LENGTH] > length:
+        return -5
     f8 = W[POSED_REFS + 1]
     ba = _packed_body(address(body_a), nd, f8)
     bb = _packed_body(address(body_b), nd, f8)

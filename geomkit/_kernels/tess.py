@@ -16,7 +16,7 @@ import numpy as np
 from ._borrow import borrow_all
 from ._numba import jit, jit_inline, prun
 from .basis import basis_funs, find_span
-from .surface import surface_point
+from .surface import _binomial_table, derivs_scratch, surface_derivs, surface_point
 
 CELL_CHUNK = 32
 """Cells per parallel task range step (:func:`prun`).  A call of at most one chunk runs
@@ -285,9 +285,66 @@ def point_triangle_closest(px, py, pz, V, a, b, c):
                                V[b, 2], V[c, 0], V[c, 1], V[c, 2])
 
 
+FOOT_STEPS = 12
+"""Largest number of Gauss-Newton steps toward the foot of a triangle point in
+:func:`_foot_descent` (each halved up to :data:`FOOT_HALVINGS` times)."""
+FOOT_HALVINGS = 8
+
+
+@jit
+def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin, umax,
+                  vmin, vmax, Nu, Nv, left, right, tmp, Q, SKL, bin_, dscr):
+    """An upper bound of the distance from X = (x, y, z) to the surface, from
+    ``d = |X - S(uu, vv)|`` down: damped Gauss-Newton steps on ``|X - S(uv)|^2`` with
+    the exact first derivatives (``SKL`` (2, 2, 3) receives them; ``bin_``, ``dscr``:
+    :func:`~geomkit._kernels.surface.surface_derivs` scratch).  Every value returned
+    is ``|X - S(uv')|`` for a surface point, so it bounds the distance from above
+    whatever the steering; a step that does not lower it is halved.  Stops at
+    ``d <= d_stop`` or ``d <= exact_above`` (the caller's result cannot fall
+    further) or after :data:`FOOT_STEPS` steps.  On a heavily weighted surface the
+    foot of a sliver triangle's point can lie far from ``(uu, vv)`` along the sliver,
+    and difference quotients over the sample spacing steer wrongly: hence exact
+    derivatives and several steps."""
+    for it in range(FOOT_STEPS):
+        if d <= d_stop or d <= exact_above:
+            break
+        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
+        r0 = x - SKL[0, 0, 0]
+        r1 = y - SKL[0, 0, 1]
+        r2 = z - SKL[0, 0, 2]
+        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
+        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
+        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
+               + SKL[1, 0, 2] * SKL[0, 1, 2])
+        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
+        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
+        det = a11 * a22 - a12 * a12
+        if not det > 0.0:
+            break
+        du = (a22 * b1 - a12 * b2) / det
+        dv = (a11 * b2 - a12 * b1) / det
+        moved = False
+        for _ in range(FOOT_HALVINGS + 1):
+            nu_ = min(umax, max(umin, uu + du))
+            nv_ = min(vmax, max(vmin, vv + dv))
+            surface_point(Pw, p, q, U, V, nu_, nv_, Nu, Nv, left, right, tmp, Q)
+            dn = _dist3(x, y, z, Q[0], Q[1], Q[2])
+            if dn < d:
+                moved = True
+                break
+            du *= 0.5
+            dv *= 0.5
+        if not moved:
+            break
+        d = dn
+        uu = nu_
+        vv = nv_
+    return d
+
+
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, hu, hv, floor):
+             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, floor):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
@@ -325,55 +382,9 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
             gap = _dist3(x, y, z, P[0], P[1], P[2])
             if gap > exact_above and gap > worst:
                 d_st = point_triangle_distance(P[0], P[1], P[2], T)
-                d_ts = gap
-                uu = u
-                vv = v
-                if gc[0] >= 0:
-                    # grid: a difference Jacobian (any step direction keeps
-                    # |X - S(uv')| an upper bound; the steps just need to be good)
-                    ga = max(gu - 1, 0)
-                    gb = min(gu + 1, k)
-                    ha = max(gv - 1, 0)
-                    hb = min(gv + 1, k)
-                    for r in range(3):
-                        SKL[0, 0, r] = P[r]
-                        SKL[1, 0, r] = (G[gb, gv, r] - G[ga, gv, r]) / ((gb - ga) * hu)
-                        SKL[0, 1, r] = (G[gu, hb, r] - G[gu, ha, r]) / ((hb - ha) * hv)
-                else:
-                    # forward differences at one sample spacing (hu, hv), stepping
-                    # inward at the domain's upper ends (no derivative kernel: it cost
-                    # ~4 s of this group's first-run compile, for steering only)
-                    su = hu if uu + hu <= umax else -hu
-                    sv = hv if vv + hv <= vmax else -hv
-                    surface_point(Pw, p, q, U, V, uu + su, vv, Nu, Nv, left, right, tmp, Q)
-                    for r in range(3):
-                        SKL[0, 0, r] = P[r]
-                        SKL[1, 0, r] = (Q[r] - P[r]) / su
-                    surface_point(Pw, p, q, U, V, uu, vv + sv, Nu, Nv, left, right, tmp, Q)
-                    for r in range(3):
-                        SKL[0, 1, r] = (Q[r] - P[r]) / sv
-                for it in range(2):
-                    r0 = x - SKL[0, 0, 0]
-                    r1 = y - SKL[0, 0, 1]
-                    r2 = z - SKL[0, 0, 2]
-                    a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
-                    a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
-                    a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
-                           + SKL[1, 0, 2] * SKL[0, 1, 2])
-                    b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
-                    b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
-                    det = a11 * a22 - a12 * a12
-                    if not det > 0.0:
-                        break
-                    uu = min(umax, max(umin, uu + (a22 * b1 - a12 * b2) / det))
-                    vv = min(vmax, max(vmin, vv + (a11 * b2 - a12 * b1) / det))
-                    surface_point(Pw, p, q, U, V, uu, vv, Nu, Nv, left, right, tmp, Q)
-                    d_ts = min(d_ts, _dist3(x, y, z, Q[0], Q[1], Q[2]))
-                    if d_ts <= d_st or d_ts <= exact_above:
-                        break  # max(d_st, d_ts) cannot fall further, or passes
-                    # chord step next: keep the Jacobian, move the residual's base point
-                    for r in range(3):
-                        SKL[0, 0, r] = Q[r]
+                d_ts = _foot_descent(Pw, p, q, U, V, x, y, z, u, v, gap, d_st, exact_above,
+                                     umin, umax, vmin, vmax, Nu, Nv, left, right, tmp, Q,
+                                     SKL, bin_, dscr)
                 # never more than the gap, which bounds both distances (a near-degenerate
                 # triangle at a pole can make the closest-point rounding exceed it)
                 gap = min(gap, max(d_st, d_ts))
@@ -385,7 +396,8 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
 def _dev_scratch(p, q):
     mm = max(p, q) + 1
     return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
-            np.empty(3), np.empty(3), np.empty((2, 2, 3)))
+            np.empty(3), np.empty(3), np.empty((2, 2, 3)), _binomial_table(1),
+            derivs_scratch(p, q, 1))
 
 
 @jit
@@ -402,20 +414,13 @@ def _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, u
                              vmax, exact_above, out, G, gc, scratch):
     """The loop of :func:`_triangle_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`._borrow`)."""
-    Pw, U, V, tri_uv, tri_xyz, out, G, gc, (Nu, Nv, left, right, tmp, P, Q, SKL) = borrow_all((
-        Pw, U, V, tri_uv, tri_xyz, out, G, gc, scratch))
-    tiny_u = 1e-9 * (umax - umin)
-    tiny_v = 1e-9 * (vmax - vmin)
+    (Pw, U, V, tri_uv, tri_xyz, out, G, gc,
+     (Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr)) = borrow_all((
+         Pw, U, V, tri_uv, tri_xyz, out, G, gc, scratch))
     for t in range(i0, i1):
-        # difference steps: the triangle's UV extent over k (the sample spacing)
-        hu = (max(tri_uv[t, 0, 0], max(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))
-              - min(tri_uv[t, 0, 0], min(tri_uv[t, 1, 0], tri_uv[t, 2, 0]))) / k
-        hv = (max(tri_uv[t, 0, 1], max(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))
-              - min(tri_uv[t, 0, 1], min(tri_uv[t, 1, 1], tri_uv[t, 2, 1]))) / k
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, max(hu, tiny_u),
-                          max(hv, tiny_v), 0.0)
+                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, 0.0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -428,13 +433,13 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     * the parametric gap ``|P - X|`` bounds the distance both ways;
     * where it exceeds ``exact_above``, the two one-sided distances are measured
       instead: ``dist(P, triangle)`` exactly, and ``dist(X, surface)`` from above by
-      ``|X - S(uv')|`` after two Gauss–Newton (chord) steps ``uv -> uv'`` toward the
-      foot of ``X``, both with the Jacobian at ``uv`` (forward differences at one
-      sample spacing here, grid differences in :func:`cell_deviation`; any surface
-      point bounds the distance from above, so the Jacobian only steers), stopping
-      once ``|X - S(uv')|`` is at
-      most ``dist(P, triangle)`` or ``exact_above``; the sample's value is
-      the larger of the two (and never more than the gap).
+      ``|X - S(uv')|`` after damped Gauss–Newton steps ``uv -> uv'`` toward the
+      foot of ``X`` (:func:`_foot_descent`; the first Jacobian from grid differences
+      in :func:`cell_deviation`, forward differences at one sample spacing otherwise;
+      any surface point bounds the distance from above, so the Jacobian only
+      steers), stopping once ``|X - S(uv')|`` is at most ``dist(P, triangle)`` or
+      ``exact_above``; the sample's value is the larger of the two (and never more
+      than the gap).
 
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
     value of triangle t.
@@ -488,7 +493,7 @@ def _cell_grid(Pw, p, q, U, V, u0, u1, v0, v1, k, Nu, Nv, left, right, Bu, Bv, H
 @jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                           exact_above, target, out):
-    Nu, Nv, left, right, tmp, P, Q, SKL = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr = _dev_scratch(p, q)
     G = np.empty((k + 1, k + 1, 3))
     Bu = np.empty((k + 1, p + 1))
     Bv = np.empty((k + 1, q + 1))
@@ -499,7 +504,8 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
     T = np.empty((3, 3))
     _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                          exact_above, target, out,
-                         (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T))
+                         (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T,
+                          bin_, dscr))
 
 
 @jit
@@ -508,7 +514,8 @@ def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vm
     """The loop of :func:`_cell_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`._borrow`)."""
     (Pw, U, V, cells, first, out,
-     (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T)) = borrow_all((
+     (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T, bin_,
+      dscr)) = borrow_all((
          Pw, U, V, cells, first, out, scratch))
     for c in range(i0, i1):
         UVc[0, 0] = cells[c, 0]
@@ -551,9 +558,8 @@ def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vm
                 gc[5] = k if cc >= 2 else 0
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
                                             umin, umax, vmin, vmax, exact_above, Nu, Nv,
-                                            left, right, tmp, P, Q, SKL, G, gc,
-                                            (cells[c, 1] - cells[c, 0]) / k,
-                                            (cells[c, 3] - cells[c, 2]) / k, worst))
+                                            left, right, tmp, P, Q, SKL, G, gc, bin_,
+                                            dscr, worst))
             out[c, diag] = worst
 
 

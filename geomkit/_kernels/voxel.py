@@ -241,20 +241,33 @@ def _heap_pop(hk, hv, n):
     return n
 
 
-AXIS_BITS = 20  # heap values: level << 60 | i << 40 | j << 20 | k
+AXIS_BITS = 19
+"""Bits per cell index in a heap value: ``((i << 19 | j) << 19 | k) << 5 | level``.
+The level sits in the low :data:`LEVEL_BITS` bits, so every value is a non-negative
+int64 (62 bits used) whatever the number of levels."""
+LEVEL_BITS = 5
+LEVEL_MASK = (1 << LEVEL_BITS) - 1
 AXIS_MASK = (1 << AXIS_BITS) - 1
 MAX_AXIS = 1 << AXIS_BITS
-"""Largest number of voxels along one axis."""
+"""Largest number of voxels along one axis (a pyramid over it has at most 20 levels,
+well within :data:`LEVEL_BITS`)."""
 
 
 @jit_inline
 def _encode(lev, i, j, k):
-    return (lev << 60) | (i << 40) | (j << 20) | k
+    return (((((i << AXIS_BITS) | j) << AXIS_BITS) | k) << LEVEL_BITS) | lev
+
+
+@jit_inline
+def _level(val):
+    return val & LEVEL_MASK
 
 
 @jit_inline
 def _decode(val):
-    return val >> 60, (val >> 40) & AXIS_MASK, (val >> 20) & AXIS_MASK, val & AXIS_MASK
+    c = val >> LEVEL_BITS
+    return (val & LEVEL_MASK, (c >> (2 * AXIS_BITS)) & AXIS_MASK, (c >> AXIS_BITS) & AXIS_MASK,
+            c & AXIS_MASK)
 
 
 @jit_inline
@@ -411,7 +424,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
             break
         n = _heap_pop(hk, hv, n)
         pops += 1
-        if val >> 60 > 0:
+        if _level(val) > 0:
             bound = min(UB, max_dist) + dmax
             if n + 8 > hk.shape[0]:
                 hk, hv = _heap_grow(hk, hv, n, n + 8)
