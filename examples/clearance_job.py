@@ -12,7 +12,7 @@ import tempfile
 import numpy as np
 
 from geomkit import Stylus, probe_clearance, samples
-from geomkit.report import plot_clearance, prepare_outputs, write_clearance_csv
+from geomkit.report.files import plot_clearance, prepare_outputs, write_clearance_csv
 
 OUT = sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="geomkit-clearance-")
 

@@ -6,9 +6,9 @@ import sys
 import tempfile
 
 from geomkit import samples
-from geomkit.demo import synthetic_scan
-from geomkit.deviation import deviation
-from geomkit.report import (plot_deviation_map, plot_histogram, prepare_outputs,
+from geomkit.cli.demo import synthetic_scan
+from geomkit.jobs.deviation import deviation
+from geomkit.report.files import (plot_deviation_map, plot_histogram, prepare_outputs,
                             write_deviation_csv, write_json)
 
 OUT = sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="geomkit-deviation-")

@@ -7,8 +7,8 @@ import numpy as np
 from pyiges import examples
 
 import geomkit
-from geomkit.deviation import deviation
-from geomkit.iges import read_iges
+from geomkit.jobs.deviation import deviation
+from geomkit.cad.iges.reader import read_iges
 
 res = read_iges(examples.impeller)
 print(f"{len(res.surfaces)} faces read, {len(res.skipped)} skipped "

@@ -8,7 +8,7 @@ import tempfile
 import numpy as np
 
 from geomkit import plane_section, samples
-from geomkit.report import plot_section, prepare_outputs, write_section
+from geomkit.report.files import plot_section, prepare_outputs, write_section
 
 OUT = sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="geomkit-section-")
 

@@ -22,33 +22,38 @@ Public API (users' scripts depend on these names):
 * :mod:`geomkit.errors` — the :class:`GeomkitError` hierarchy.
 """
 
-from . import errors, samples, tolerances
-from .bezier import bezier_patches
-from . import report
-from .collision import Body, Contact, Contacts, Distance, collide, collide_many, min_distance
-from .errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
-                     InvalidInputError, InvalidSurfaceError, InvalidTrimError,
-                     MissingDependencyError)
-from .deviation import DeviationReport, align_rigid, deviation
-from .distance import surface_distance
-from .evaluation import derivatives, evaluate, normals
-from .iges import IgesResult, read_iges
-from .clearance import Clearance, Stylus, probe_clearance
-from .motion import FirstContact, ProbePath, first_contact, probe_path
-from .io import Case, load, load_case, save
-from .points_io import PointSet, read_points
-from .projection import Projector, project_points
-from .results import MeshNearest, Projection, SurfaceDistance
-from .scene import (CoherentPair, Scene, SceneCollisions, SceneDistances, SweepAndPrune,
-                    fit_exclusions)
-from .section import Section, plane_section
-from .step import read_step
-from .tessellate import tessellate
-from .trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
-from .types import BezierPatches, Mesh, Surface, TrimCurve, TrimLoop
-from .voxel import VoxelGrid, nearest_triangles
+from geomkit import errors, samples, tolerances
+from geomkit.nurbs.bezier import bezier_patches
+from geomkit import report
+from geomkit.collision.collide import (Body, Contact, Contacts, Distance, collide, collide_many,
+                                       min_distance)
+from geomkit.errors import (DegenerateGeometryError, FileFormatError, GeomkitError,
+                            InvalidInputError, InvalidSurfaceError, InvalidTrimError,
+                            MissingDependencyError)
+from geomkit.jobs.deviation import DeviationReport, align_rigid, deviation
+from geomkit.query.distance import surface_distance
+from geomkit.nurbs.evaluation import derivatives, evaluate, normals
+from geomkit.cad.iges.reader import IgesResult, read_iges
+from geomkit.jobs.clearance import Clearance, Stylus, probe_clearance
+from geomkit.collision.motion import FirstContact, ProbePath, first_contact, probe_path
+from geomkit.exchange.cases import Case, load, load_case, save
+from geomkit.exchange.points import PointSet, read_points
+from geomkit.query.projection import Projector, project_points
+from geomkit.query.results import MeshNearest, Projection, SurfaceDistance
+from geomkit.collision.scene import (CoherentPair, Scene, SceneCollisions, SceneDistances,
+                                     SweepAndPrune, fit_exclusions)
+from geomkit.section.plane import Section, plane_section
+from geomkit.cad.step import read_step
+from geomkit.mesh.tessellate import tessellate
+from geomkit.nurbs.trimming import INSIDE, ON_BOUNDARY, OUTSIDE, classify_uv
+from geomkit.nurbs.surface import BezierPatches, Surface, TrimCurve, TrimLoop
+from geomkit.mesh.mesh import Mesh
+from geomkit.query.voxel import VoxelGrid, nearest_triangles
 
-__version__ = "0.1.0"
+from geomkit.version import __version__  # noqa: F401 (public)
+from geomkit import _moved
+
+_moved.install()
 
 __all__ = [
     "Surface", "TrimCurve", "TrimLoop", "BezierPatches", "Case", "Mesh", "tessellate",

@@ -15,7 +15,7 @@ unitless drawings (``$INSUNITS = 0``).
 
 from __future__ import annotations
 
-from .errors import InvalidInputError
+from geomkit.errors import InvalidInputError
 
 __all__ = ["UNITS", "canonical_units", "unit_label", "dxf_insunits"]
 

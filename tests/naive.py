@@ -251,7 +251,7 @@ def trim_boundary_polylines(surface, per_span=4000):
     Returns (list of (k, 3) arrays, sag); every polyline vertex lies on the trimmed
     surface's boundary, and the exact boundary curves are within ``sag`` of the
     polylines (estimated at the segment midpoints, doubled)."""
-    from geomkit.trimming import evaluate_trim_curve
+    from geomkit.nurbs.trimming import evaluate_trim_curve
 
     lines = []
     sag = 0.0

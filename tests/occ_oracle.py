@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 
 import geomkit
-from geomkit.section import EDGE_REACH
+from geomkit.section.plane import EDGE_REACH
 
 
 def _occ_faces(shape):
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles.occ import _cast
+    from geomkit.bench.oracles.occ import _cast
 
     ex, out = TopExp_Explorer(shape, TopAbs_FACE), []
     while ex.More():
@@ -103,7 +103,7 @@ def _occ_section(shape, axis, c):
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles.occ import _cast
+    from geomkit.bench.oracles.occ import _cast
 
     n = np.zeros(3)
     n[axis] = 1
@@ -141,7 +141,7 @@ def _occ_wires(occ_edges, keep, join):
     from OCP.TopExp import TopExp_Explorer
     from scipy.spatial import cKDTree
 
-    from geomkit.oracles.occ import _cast
+    from geomkit.bench.oracles.occ import _cast
 
     seq = HSequence_TopoDS_Shape()
     for i in keep:

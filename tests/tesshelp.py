@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from geomkit import Surface, samples
-from geomkit.tessellate import tessellate
+from geomkit.mesh.tessellate import tessellate
 
 NAMES = samples.names()
 REL = 1 + 1e-9                       # rounding slack on "<= tol"

@@ -164,7 +164,7 @@ def _jobs():
 def test_the_demo_runs_only_ahead_of_time_code(tmp_path):
     """Every kernel call the demo makes from Python has its exported types (a call
     sent to the JIT would compile on a fresh install: a cold demo's whole point)."""
-    from geomkit.demo import run_demo
+    from geomkit.cli.demo import run_demo
 
     jit0 = {id(r): r.jit_calls for r in _aot.routers}
     aot0 = sum(r.aot_calls for r in _aot.routers)

@@ -1,4 +1,4 @@
-"""Tests of geomkit.bezier.bezier_patches (Bézier extraction, The NURBS Book A5.6).
+"""Tests of geomkit.nurbs.bezier.bezier_patches (Bézier extraction, The NURBS Book A5.6).
 
 Oracle: each patch is evaluated as a rational tensor-product Bézier patch with
 explicit Bernstein polynomials (``tests/naive.py``) and compared with
@@ -267,7 +267,7 @@ def test_bounds_are_tight_at_patch_corners():
 def test_surface_keeps_its_patches():
     """``Surface.bezier_patches()`` extracts once (repeated distance queries against
     one part) and returns read-only arrays equal to a fresh extraction."""
-    from geomkit.bezier import bezier_patches
+    from geomkit.nurbs.bezier import bezier_patches
     from geomkit.samples import load
 
     s = load("freeform_1")[0]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from geomkit.cad.loops import Unsupported, chain, close_gaps
-from geomkit.types import TrimCurve
+from geomkit.nurbs.surface import TrimCurve
 
 TWO_PI = 2 * np.pi
 

@@ -30,13 +30,13 @@ import pytest
 import geomkit
 from geomkit.cad import analytic
 from geomkit.errors import FileFormatError, InvalidInputError
-from geomkit.oracles.occ import HAVE_OCP
-from geomkit.types import Surface
+from geomkit.bench.oracles.occ import HAVE_OCP
+from geomkit.nurbs.surface import Surface
 
 pyiges = pytest.importorskip("pyiges")
 from pyiges import examples  # noqa: E402
 
-from geomkit.iges import read_iges  # noqa: E402
+from geomkit.cad.iges.reader import read_iges  # noqa: E402
 from occ_oracle import (SECTION_PLANES, STEP_PLANES, _check_section,  # noqa: E402
                         _occ_distances, _occ_faces, _occ_section)
 
@@ -62,8 +62,8 @@ def test_arc_parameter_maps_are_inverse_and_exact():
         s = analytic.angle_to_param(th, t0, t1)
         assert np.abs(analytic.param_to_angle(s, t0, t1) - th).max() < 1e-13
         p, U, Pw = analytic.arc_curve([1, 2, 3], [1, 0, 0], [0, 1, 0], 2.0, t0, t1)
-        from geomkit.types import TrimCurve
-        from geomkit.trimming import evaluate_trim_curve
+        from geomkit.nurbs.surface import TrimCurve
+        from geomkit.nurbs.trimming import evaluate_trim_curve
         c = TrimCurve.create(p, U, Pw[:, :2] / Pw[:, 3:], Pw[:, 3])
         X = evaluate_trim_curve(c, s)[:, 0, :]
         assert np.abs(X - np.column_stack([1 + 2 * np.cos(th), 2 + 2 * np.sin(th)])).max() < 1e-13
@@ -114,7 +114,7 @@ def impeller():
 def test_impeller_revolutions_hold_their_closed_form(impeller):
     """Each 120 face: S(t, s) is the generatrix line point at t rotated by the angle
     param_to_angle(s) about the axis (Rodrigues), to 1e-12 x size."""
-    from geomkit.iges import _Reader
+    from geomkit.cad.iges.reader import _Reader
 
     with open(IMPELLER):
         pass
@@ -146,7 +146,7 @@ def test_sample_igs_has_no_surface_and_says_so():
 
 
 def test_empty_files_are_a_clear_error(tmp_path):
-    from geomkit.step import read_step
+    from geomkit.cad.step import read_step
 
     for name, fn in (("e.igs", read_iges), ("e.step", read_step)):
         f = tmp_path / name
@@ -158,7 +158,7 @@ def test_empty_files_are_a_clear_error(tmp_path):
 def test_unsupported_entities_are_an_error_unless_skipped(tmp_path):
     """An IGES file with a standalone 192 (an unbounded right circular cylindrical
     surface, no face to read) next to the impeller's faces."""
-    from geomkit.iges import Skipped
+    from geomkit.cad.iges.reader import Skipped
 
     lines = IMPELLER.read_text(encoding="latin-1").splitlines()
     d = [ln for ln in lines if ln[72:73] == "D"]
@@ -270,7 +270,7 @@ def impeller_step(occ_impeller, tmp_path_factory):
     """The impeller written to STEP by OCC's STEPControl_Writer, read by geomkit."""
     from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
-    from geomkit.step import read_step
+    from geomkit.cad.step import read_step
 
     f = tmp_path_factory.mktemp("step") / "impeller.step"
     w = STEPControl_Writer()
@@ -301,8 +301,8 @@ def test_step_round_trip_of_occ_primitives(tmp_path):
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles.occ import _cast
-    from geomkit.step import read_step
+    from geomkit.bench.oracles.occ import _cast
+    from geomkit.cad.step import read_step
 
     box = BRepPrimAPI_MakeBox(10, 20, 30).Shape()
     fil = BRepFilletAPI_MakeFillet(box)
@@ -373,7 +373,7 @@ def test_impeller_step_sections_match_open_cascade(impeller_step, occ_impeller):
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles.occ import _cast
+    from geomkit.bench.oracles.occ import _cast
 
     # OCC's pcurves in the STEP file follow its tolerant edges: the faces' boundaries
     # are up to ~0.12 apart there, as OCC's own edge tolerances (up to 0.16) say
@@ -414,7 +414,7 @@ def test_impeller_collide_single_call_against_generic_path_and_coal(impeller):
 
     from scipy.spatial.transform import Rotation
 
-    from geomkit import collision as gc
+    from geomkit.collision import collide as gc
     m = geomkit.tessellate(impeller.surfaces, 0.1)
     V, F = np.ascontiguousarray(m.vertices), np.ascontiguousarray(m.faces, np.int64)
     a = gc.Body((V, F))

@@ -13,7 +13,7 @@ import pytest
 
 import geomkit
 from geomkit import InvalidInputError, Stylus, probe_clearance
-from geomkit.clearance import _frame_with_z, read_path
+from geomkit.jobs.clearance import _frame_with_z, read_path
 
 
 @pytest.fixture(scope="module")

@@ -110,7 +110,7 @@ pyiges = pytest.importorskip("pyiges")
 def test_cli_clearance_on_the_impeller(tmp_path):
     from pyiges import examples
 
-    from geomkit.iges import read_iges
+    from geomkit.cad.iges.reader import read_iges
 
     surfaces = read_iges(examples.impeller, skip_invalid=True).surfaces
     lo = np.min([s.bounds[0] for s in surfaces], axis=0)

@@ -9,7 +9,7 @@ import json
 import pytest
 
 from geomkit.cli import _common, clearance, jobs, main
-from geomkit.iges import Skipped
+from geomkit.cad.iges.reader import Skipped
 
 
 @pytest.fixture
@@ -28,7 +28,7 @@ def partial(monkeypatch):
 
 
 def test_model_info_whole_and_partial():
-    from geomkit.io import Case
+    from geomkit.exchange.cases import Case
 
     info, note = _common._model_info(Case("a", [object()] * 3))
     assert info == {"faces": 3, "faces_left_out": 0, "complete": True} and note is None

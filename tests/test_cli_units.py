@@ -12,7 +12,7 @@ import pytest
 
 from geomkit import FileFormatError, samples
 from geomkit.cli import main
-from geomkit.io import load_case, save
+from geomkit.exchange.cases import load_case, save
 from geomkit.units import canonical_units, dxf_insunits
 
 ezdxf = pytest.importorskip("ezdxf")
@@ -100,7 +100,7 @@ def test_deviation_distance_clearance_state_units(tmp_path, capsys, plate_mm):
 
 def test_iges_and_step_reader_units_reach_the_case(monkeypatch, tmp_path):
     """The CLI takes the units the IGES / STEP readers report."""
-    import geomkit.iges
+    import geomkit.cad.iges.reader
     from geomkit.cli._common import _load_input
 
     class Res:
@@ -108,7 +108,7 @@ def test_iges_and_step_reader_units_reach_the_case(monkeypatch, tmp_path):
         skipped = []
         units = "INCH"
 
-    monkeypatch.setattr(geomkit.iges, "read_iges", lambda *a, **k: Res())
+    monkeypatch.setattr(geomkit.cad.iges.reader, "read_iges", lambda *a, **k: Res())
     p = tmp_path / "part.igs"
     p.write_text("")
     assert _load_input(str(p)).units == "in"

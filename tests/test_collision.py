@@ -25,7 +25,7 @@ import geomkit
 from geomkit._kernels._numba import jit
 from geomkit._kernels.bvh_query import PLANE_SLACK, _prism_gap, _unit_normal
 from geomkit._kernels.triangles import triangle_triangle_distance, triangles_intersect
-from geomkit.collision import Body, collide, collide_many, min_distance
+from geomkit.collision.collide import Body, collide, collide_many, min_distance
 from geomkit.errors import InvalidInputError
 
 BVS = ("obb", "aabb", "kdop14")
@@ -601,27 +601,27 @@ def test_unpickled_and_damaged_bodies():
     length does not match its header is refused by the kernel (the generic path
     answers)."""
     a, b = body("icosphere", "obb"), body("capsule", "obb")
-    W = geomkit.collision._single_scratch()
+    W = geomkit.collision.collide._single_scratch()
     P = np.eye(4)
     Q = random_poses(1, 3, spread=2.0)[0]
     ref = collide(a, P, b, Q)
     a2 = pickle.loads(pickle.dumps(a))
     assert a2._pf.dtype is not np.dtype(np.float64)
-    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) >= 0
+    assert geomkit.collision.collide._posed(a2._pf, b._pf, P, Q, False, W) >= 0
     for arr in (a.N, a.T, a.order, a.face_tags, a2.N, a2._pf):
         with pytest.raises(ValueError, match="read-only"):
             arr[0] = 0
     a2._pf = a2._pf[:-1]                 # damaged: the kernel refuses it
-    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) == -4
+    assert geomkit.collision.collide._posed(a2._pf, b._pf, P, Q, False, W) == -4
     a2._pf = np.repeat(a._pf, 2)[::2]    # strided: refused
-    assert geomkit.collision._posed(a2._pf, b._pf, P, Q, False, W) == -4
+    assert geomkit.collision.collide._posed(a2._pf, b._pf, P, Q, False, W) == -4
     c = collide(a2, P, b, Q)             # the generic path (the body's own arrays)
     assert np.array_equal(c.pairs, ref.pairs) and c.bv_tests == ref.bv_tests
 
 
 @pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")   # np.matrix
 def test_validate_pose_converts_subclasses():
-    P = geomkit.collision.validate_pose(np.asmatrix(np.eye(4)))
+    P = geomkit.collision.collide.validate_pose(np.asmatrix(np.eye(4)))
     assert type(P) is np.ndarray and P.shape == (4, 4)
 
 

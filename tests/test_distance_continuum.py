@@ -16,8 +16,8 @@ import pytest
 
 from geomkit import samples
 from geomkit.bench.distance import _moved, _scaled, continuum_cases
-from geomkit.distance import surface_distance
-from geomkit.types import Surface
+from geomkit.query.distance import surface_distance
+from geomkit.nurbs.surface import Surface
 
 CASES = {c[0]: c[1:] for c in continuum_cases()}
 

@@ -1,4 +1,4 @@
-"""Tests of geomkit.evaluation: points, partial derivatives and unit normals.
+"""Tests of geomkit.nurbs.evaluation: points, partial derivatives and unit normals.
 
 Oracles: geomdl (same algorithms, independent pure-Python code), a Cox–de Boor
 reference in ``tests/naive.py``, the analytic truths of the bundled cases and
@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 
 import geomkit
 from geomkit import InvalidInputError, samples
-from geomkit.evaluation import NORMAL_LIMIT, NORMAL_REGULAR, NORMAL_UNDEFINED
+from geomkit.nurbs.evaluation import NORMAL_LIMIT, NORMAL_REGULAR, NORMAL_UNDEFINED
 
 import naive
 from conftest import (all_surfaces, distinct_knots, geomdl_derivs, geomdl_eval,

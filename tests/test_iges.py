@@ -16,8 +16,8 @@ from geomkit import samples
 pyiges = pytest.importorskip("pyiges")
 from pyiges import examples  # noqa: E402
 
-from geomkit.iges import read_iges  # noqa: E402
-from geomkit.oracles.occ import HAVE_OCP  # noqa: E402
+from geomkit.cad.iges.reader import read_iges  # noqa: E402
+from geomkit.bench.oracles.occ import HAVE_OCP  # noqa: E402
 
 from clihelp import cli  # noqa: E402
 
@@ -49,7 +49,7 @@ def test_impeller_surfaces_match_open_cascade(impeller):
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles import occ
+    from geomkit.bench.oracles import occ
 
     rd = IGESControl_Reader()
     rd.ReadFile(str(IMPELLER))
@@ -136,8 +136,8 @@ def test_bad_iges_files(tmp_path):
 def test_step_round_trip(tmp_path, name):
     from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
-    from geomkit.oracles import occ
-    from geomkit.step import read_step
+    from geomkit.bench.oracles import occ
+    from geomkit.cad.step import read_step
 
     s = samples.load(name)[0]
     face = occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,

@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 
 from geomkit.errors import FileFormatError
-from geomkit.evaluation import evaluate
-from geomkit.iges import read_iges
+from geomkit.nurbs.evaluation import evaluate
+from geomkit.cad.iges.reader import read_iges
 from igeswrite import de, write_iges
 
 
@@ -96,9 +96,9 @@ def test_conic_holds_its_closed_form(tmp_path, name, phi):
     assert np.abs(X[0, :2] - ends[0]).max() <= 1e-12 * size
     assert np.abs(X[-1, :2] - ends[1]).max() <= 1e-12 * size
     # the entity parameter t maps to the NURBS parameter: the closed form at t
-    from geomkit.cad._iges_entities import curve3d
+    from geomkit.cad.iges.entities import curve3d
     from geomkit.cad.brep import _eval
-    from geomkit.iges import _Reader
+    from geomkit.cad.iges.reader import _Reader
 
     curve, fmap, (a, b) = curve3d(_Reader(path), de(0))
     assert (a, b) == pytest.approx((t0, t1) if name != "hyperbola-left" else (-t0, -t1))

@@ -19,7 +19,7 @@ import pytest
 pytest.importorskip("OCP", reason="Open CASCADE (OCP) writes the test file")
 
 import geomkit  # noqa: E402
-from geomkit.iges import read_iges  # noqa: E402
+from geomkit.cad.iges.reader import read_iges  # noqa: E402
 from igeswrite import write_iges  # noqa: E402
 
 
@@ -30,7 +30,7 @@ def _holed_face():
     from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface
     from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
 
-    from geomkit.oracles.occ import _ocp_array
+    from geomkit.bench.oracles.occ import _ocp_array
 
     A = _ocp_array("Array2_gp_Pnt")(1, 8, 1, 8)
     for i in range(8):
@@ -45,7 +45,7 @@ def _holed_face():
 def _strip_pcurves(src: Path, dst: Path) -> int:
     """Rewrite ``src`` with every 508 edge's pcurve count K set to 0; returns how many
     pcurves were dropped."""
-    from geomkit.cad._iges_file import directory, param_records
+    from geomkit.cad.iges.file import directory, param_records
 
     recs, _ = param_records(src)
     ents, dropped = [], 0
@@ -113,7 +113,7 @@ def test_510_edge_off_the_surface_is_listed(tmp_path):
     src, dst = tmp_path / "holed.igs", tmp_path / "holed_off.igs"
     assert w.Write(str(src))
     _strip_pcurves(src, dst)
-    from geomkit.cad._iges_file import directory, param_records
+    from geomkit.cad.iges.file import directory, param_records
 
     recs, _ = param_records(dst)
     d = directory(dst)

@@ -19,8 +19,8 @@ import pytest
 pytest.importorskip("pyiges")
 pytest.importorskip("OCP", reason="Open CASCADE (OCP) writes the test files")
 
-from geomkit.evaluation import evaluate  # noqa: E402
-from geomkit.iges import read_iges  # noqa: E402
+from geomkit.nurbs.evaluation import evaluate  # noqa: E402
+from geomkit.cad.iges.reader import read_iges  # noqa: E402
 
 AX_O = np.array([1.0, 2.0, 3.0])
 AX_D = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0])
@@ -178,7 +178,7 @@ def test_brep_surfaces_hold_the_files_closed_form(files, name):
     import pyiges
 
     from geomkit.cad.brep import analytic
-    from geomkit.iges import _Reader
+    from geomkit.cad.iges.reader import _Reader
 
     path = files[name, 1]
     rd = _Reader(path, pyiges.read(str(path)))
@@ -211,7 +211,7 @@ def test_area_and_distances_equal_occs(files, shapes, name, mode):
     own reading of a faces-mode file is off by up to 4.7e-6 near the cone's rim, where
     geomkit agrees with the written shape to 1e-10)."""
     import geomkit
-    from geomkit.oracles.occ import area, distance_shapes  # noqa: F401
+    from geomkit.bench.oracles.occ import area, distance_shapes  # noqa: F401
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
     from OCP.gp import gp_Pnt

@@ -17,8 +17,8 @@ import pytest
 
 import geomkit
 from geomkit.errors import FileFormatError
-from geomkit.evaluation import evaluate
-from geomkit.iges import read_iges
+from geomkit.nurbs.evaluation import evaluate
+from geomkit.cad.iges.reader import read_iges
 from igeswrite import de, write_iges
 
 

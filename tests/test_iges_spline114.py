@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from geomkit.errors import FileFormatError
-from geomkit.evaluation import evaluate
-from geomkit.iges import read_iges
+from geomkit.nurbs.evaluation import evaluate
+from geomkit.cad.iges.reader import read_iges
 from igeswrite import de, write_iges
 
 TU, TV = [0.0, 0.7, 1.5], [-1.0, 0.0, 0.4, 1.2]

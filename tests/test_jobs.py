@@ -17,8 +17,8 @@ import pytest
 
 import geomkit
 from geomkit import samples
-from geomkit.deviation import _rodrigues, align_rigid, deviation
-from geomkit.points_io import read_points
+from geomkit.jobs.deviation import _rodrigues, align_rigid, deviation
+from geomkit.exchange.points import read_points
 
 from clihelp import assert_one_line_error, cli, digest  # noqa: E402
 
@@ -46,7 +46,7 @@ def write_xyz(path, P, N=None):
 def test_torus_offsets_are_recovered_exactly():
     tor, S, N, off = torus_points()
     rep = deviation(tor, S + off[:, None] * N, tolerance=(-1, 1))
-    assert np.all(rep.status == geomkit.results.INTERIOR)
+    assert np.all(rep.status == geomkit.query.results.INTERIOR)
     assert np.max(np.abs(rep.deviation - off)) < 1e-9
     assert rep.stats["within"] == int(np.count_nonzero(np.abs(off) <= 1))
     assert rep.stats["over"] == int(np.count_nonzero(off > 1))
@@ -118,7 +118,7 @@ def test_edges_and_max_distance_are_flagged():
     rep = deviation(ff, pts, max_distance=10.0)
     assert rep.deviation[0] == pytest.approx(0.1, abs=1e-12)
     assert rep.edge[1] and not rep.edge[0]
-    assert np.isnan(rep.deviation[2]) and rep.status[2] == geomkit.results.BEYOND
+    assert np.isnan(rep.deviation[2]) and rep.status[2] == geomkit.query.results.BEYOND
     assert rep.stats["valid"] == 2 and rep.stats["beyond"] == 1 and rep.stats["edge"] == 1
 
 
@@ -228,7 +228,7 @@ def test_cli_distance_and_section(tmp_path, torus_scan):
     for k, row in enumerate(s["planes"]):
         assert row["curves"] == 2 and row["closed"] == 2   # two circles at each height
         assert row["plane"][3] == pytest.approx(-2.0 * k)
-    from geomkit._section_export import read_csv
+    from geomkit.section.export import read_csv
     curves, _ = read_csv(tmp_path / "cuts" / "section_001.csv")
     rad = sorted(float(np.mean(np.hypot(c[:, 0], c[:, 1]))) for c in curves)
     h = np.sqrt(25 - 4.0)

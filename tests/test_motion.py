@@ -1,13 +1,13 @@
-"""First contact and probe paths (geomkit.motion) against analytic truths, an
+"""First contact and probe paths (geomkit.collision.motion) against analytic truths, an
 independent conservative-advancement oracle on min_distance, and python-fcl."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from geomkit.collision import Body, collide, min_distance
+from geomkit.collision.collide import Body, collide, min_distance
 from geomkit.errors import InvalidInputError
-from geomkit.motion import first_contact, probe_path
+from geomkit.collision.motion import first_contact, probe_path
 
 KINDS = ["obb", "aabb", "kdop14"]
 
@@ -210,7 +210,7 @@ def test_probe_path_with_rotation_is_certified():
     tol = 1e-4
     r = probe_path(probe, P, part, tol=tol)
     # dense sampling of the same interpolation is never below clearance - tol
-    from geomkit.motion import _rot_exp, _rot_log
+    from geomkit.collision.motion import _rot_exp, _rot_log
     rv = _rot_log(P[0, :3, :3].T @ P[1, :3, :3])
     ds = []
     for s in np.linspace(0, 1, 801):

@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import minimize
 
 import geomkit
-from geomkit import results as R
+from geomkit.query import results as R
 from geomkit.errors import InvalidInputError
 
 N_RANDOM = 100_000

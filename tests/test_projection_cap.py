@@ -23,7 +23,7 @@ from geomkit import samples
 pyiges = pytest.importorskip("pyiges")
 from pyiges import examples  # noqa: E402
 
-from geomkit.iges import read_iges  # noqa: E402
+from geomkit.cad.iges.reader import read_iges  # noqa: E402
 
 REPRODUCER = [6.459662482705476, 16.341363609619997, -5.890492561420567]
 # points that got a farther face before the fix (bench.projection_mesh points, seed 0)
@@ -128,7 +128,7 @@ def test_rerun_continues_the_first_pass(impeller, monkeypatch, outside_rule):
     With the outside rule (``geomkit._kernels.project_outside``) few box points reach
     the default cap: a first-pass cap of 4 then, so the rerun path still runs (and
     the rule with the earlier pass's OUTSIDE feet)."""
-    import geomkit.projection as gp
+    import geomkit.query.projection as gp
 
     rng = np.random.default_rng(3)
     lo = np.min([s.bounds[0] for s in impeller], axis=0)

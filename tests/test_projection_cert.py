@@ -7,7 +7,7 @@ import pytest
 
 import geomkit
 from geomkit import samples
-from geomkit.projection_cert import sub_span_bounds
+from geomkit.query.projection_cert import sub_span_bounds
 
 
 def _scan_points(surfaces, n, rng, offset=0.01):
@@ -130,8 +130,8 @@ def _boundary_arcs_hold(pr, max_refused):
     lies in the certificate box of that edge's triangle, unless the box is NaN
     (refused: at most ``max_refused`` of the boundary triangles)."""
     from geomkit._kernels import trim_feet as tf
-    from geomkit.projection_trim import _boundary_edges
-    from geomkit.trimming import _segments
+    from geomkit.query.projection_trim import _boundary_edges
+    from geomkit.nurbs.trimming import _segments
 
     box = pr.cert_pack[0]
     bedge = _boundary_edges(pr.mesh, pr.trimmed)
@@ -191,7 +191,7 @@ def test_trim_boundary_boxes_hold_the_arcs_impeller(impeller):
 def test_trim_boundary_box_refuses_a_vertex_off_the_curve():
     """A boundary vertex moved off the exact trim curve (1e-6 in parameters): its
     triangles get no box (NaN: never settled); the others are unchanged."""
-    from geomkit.projection_trim import _boundary_edges, cert_boxes
+    from geomkit.query.projection_trim import _boundary_edges, cert_boxes
 
     pr = geomkit.Projector(samples.load("plate_with_hole"))
     mesh = pr.mesh
@@ -260,7 +260,7 @@ def test_deep_triangles_are_inside_their_faces(impeller):
                        box[t, 2, None] + r[..., 1] * (box[t, 3] - box[t, 2])[:, None]],
                       axis=-1).reshape(-1, 2)
         assert np.all(S[si].classify_uv(uv) == geomkit.INSIDE), si
-    from geomkit.projection_trim import DEEP_GRID
+    from geomkit.query.projection_trim import DEEP_GRID
     gdeep, goff = pr.cert_pack[1], pr.cert_pack[2]
     ncells = 0
     for si in np.flatnonzero(goff[:, 1]):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import geomkit
-from geomkit import results as R
-from geomkit.types import Surface
+from geomkit.query import results as R
+from geomkit.nurbs.surface import Surface
 
 
 def _half_plane(x0, x1, degree=1):

@@ -99,7 +99,7 @@ def test_candidate_overflow_never_drops_a_candidate():
     overflow never passes silently), the second pass tries up to RERUN_STARTS_MAX of
     them and a last pass every candidate, so even this point is proven (its answer
     and lower bound hold)."""
-    from geomkit.projection import RERUN_STARTS_MAX
+    from geomkit.query.projection import RERUN_STARTS_MAX
 
     sphere = samples.load("sphere")[0]
     P = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 12.0], [3.0, 1.0, 2.0]])
@@ -130,11 +130,11 @@ def test_scan_points_are_proven():
 def test_kernel_foot_class_equals_classify_uv():
     """The batch kernel classifies every Newton foot against its face's trim loops
     (a foot inside its face prunes candidates; the trim and finish stages reuse the
-    class): the classes equal :func:`geomkit.trimming.classify_uv` on the same (u, v),
+    class): the classes equal :func:`geomkit.nurbs.trimming.classify_uv` on the same (u, v),
     here for feet inside the plate, outside it over the hole and on the hole's edge
     band, and on a second trimmed face with another degree of trim curve."""
     from geomkit._kernels import project as pk
-    from geomkit.projection import STEP_TOL
+    from geomkit.query.projection import STEP_TOL
 
     plate = samples.load("plate_with_hole")[0]
     P0 = np.zeros((2, 2, 3))

@@ -80,7 +80,7 @@ def impeller():
     pytest.importorskip("pyiges")
     from pyiges import examples
 
-    from geomkit.iges import read_iges
+    from geomkit.cad.iges.reader import read_iges
 
     return read_iges(examples.impeller).surfaces
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import geomkit
-import geomkit.projection_trim as gpt
+import geomkit.query.projection_trim as gpt
 from geomkit import samples
 from geomkit.bench.projection_mesh import case_points
-from geomkit.voxel import sliver_voxel_size
+from geomkit.query.voxel import sliver_voxel_size
 
 
 def _median_edge(mesh):

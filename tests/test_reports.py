@@ -22,15 +22,15 @@ import numpy as np
 import pytest
 
 import geomkit
-from geomkit import _report_common as rc
+from geomkit.report import common as rc
 from geomkit import samples
-from geomkit.clearance import Stylus, probe_clearance
-from geomkit.deviation import deviation
-from geomkit.io import _atomic_write
-from geomkit.report import (clearance_counts, clearance_title, section_figure, write_json,
+from geomkit.jobs.clearance import Stylus, probe_clearance
+from geomkit.jobs.deviation import deviation
+from geomkit.exchange.cases import _atomic_write
+from geomkit.report.files import (clearance_counts, clearance_title, section_figure, write_json,
                             write_deviation_csv)
-from geomkit.report_jobs import parse_kinds, report_files, write_reports
-from geomkit.section import plane_section
+from geomkit.report.jobs import parse_kinds, report_files, write_reports
+from geomkit.section.plane import plane_section
 
 from browser import chromium, console_errors, external_refs, open_report
 from clihelp import ROOT, cli
@@ -95,7 +95,7 @@ def test_atomic_write_honours_the_umask(tmp_path):
 
 
 def test_report_files_are_0644_and_not_replaced_without_overwrite(jobs):
-    from geomkit.io import _umask
+    from geomkit.exchange.cases import _umask
 
     for p in jobs["targets"].values():  # written under this process' umask
         assert (p.stat().st_mode & 0o777) == 0o666 & ~_umask(), p
@@ -306,7 +306,7 @@ def test_cli_report_option_rejects_an_unknown_kind(tmp_path, capsys):
 
 
 def test_section_whiskers_against_known_offsets(jobs):
-    from geomkit.report_html import _whiskers
+    from geomkit.report.html import _whiskers
 
     P, d = jobs["P"], jobs["truth"]
     inplane = np.abs(P[:, 2]) < 1e-12                   # the b = 0 and b = pi rows

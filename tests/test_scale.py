@@ -14,11 +14,11 @@ import pytest
 import geomkit
 from clihelp import assert_one_line_error, cli
 from geomkit import samples
-from geomkit.deviation import deviation
-from geomkit.dev_stats import PERCENTILE_REL_ERROR, DeviationStats
-from geomkit.points_io import read_points
-from geomkit.scan_io import iter_scan, scan_length
-from geomkit.stream import COLUMNS, stream_deviation
+from geomkit.jobs.deviation import deviation
+from geomkit.jobs.stats import PERCENTILE_REL_ERROR, DeviationStats
+from geomkit.exchange.points import read_points
+from geomkit.exchange.scans import iter_scan, scan_length
+from geomkit.jobs.stream import COLUMNS, stream_deviation
 
 
 # ------------------------------------------------------------------ issue 18 item 5
@@ -178,7 +178,7 @@ def test_stats_chunked_equal_and_percentiles_bounded():
     rng.shuffle(v)
     d = v.copy()
     d[::97] = np.nan
-    status = np.where(np.isfinite(d), 0, geomkit.results.BEYOND).astype(np.int8)
+    status = np.where(np.isfinite(d), 0, geomkit.query.results.BEYOND).astype(np.int8)
     edge = np.zeros(d.size, bool)
     one = DeviationStats((-0.04, 0.05))
     one.update(d, status, edge)
@@ -205,7 +205,7 @@ def test_stats_chunked_equal_and_percentiles_bounded():
 
 def test_stats_no_valid_point_is_an_error():
     acc = DeviationStats()
-    acc.update(np.full(4, np.nan), np.full(4, geomkit.results.BEYOND, np.int8),
+    acc.update(np.full(4, np.nan), np.full(4, geomkit.query.results.BEYOND, np.int8),
                np.zeros(4, bool))
     with pytest.raises(geomkit.InvalidInputError, match="no valid point"):
         acc.result(require_valid=True)
@@ -240,7 +240,7 @@ def test_stream_equals_in_memory_bit_for_bit(torus_scan):
     for c, w in want.items():
         a = np.where(np.isnan(col[c].astype(float)), np.nan, col[c].astype(float))
         assert np.array_equal(a, np.asarray(w, float), equal_nan=True), c
-    names = geomkit.results.STATUS_NAMES
+    names = geomkit.query.results.STATUS_NAMES
     assert list(col["status"]) == [names[int(s)] for s in rep.status]
     assert 0 < st["valid"] < st["points"] == len(P)
     for k in ("valid", "beyond", "edge", "min", "max", "mean", "rms", "within",
@@ -263,8 +263,8 @@ def test_stream_csv_round_trips(torus_scan):
 
 
 def test_csv_writer_without_pyarrow_same_values(torus_scan):
-    from geomkit.projection import Projector
-    from geomkit.stream import CSVWriter, deviation_chunk
+    from geomkit.query.projection import Projector
+    from geomkit.jobs.stream import CSVWriter, deviation_chunk
 
     d, P, N = torus_scan
     cols = deviation_chunk(Projector(samples.load("torus")), P[:200], None, None, 0.0,
@@ -292,11 +292,11 @@ def test_stream_align_on_subsample(tmp_path):
     g = np.linspace(0.05, 0.95, 60)
     uv = np.stack(np.meshgrid(u0 + g * (u1 - u0), v0 + g * (v1 - v0)), -1).reshape(-1, 2)
     S = geomkit.evaluate(s, uv)
-    from geomkit.deviation import _rodrigues
+    from geomkit.jobs.deviation import _rodrigues
     R = _rodrigues(np.array([0.004, -0.003, 0.002]))
     t = np.array([0.05, -0.02, 0.03])
     np.save(tmp_path / "s.npy", S @ R.T + t)
-    import geomkit.stream as St
+    import geomkit.jobs.stream as St
     old = St.ALIGN_SAMPLE
     St.ALIGN_SAMPLE = 500
     try:
@@ -370,7 +370,7 @@ def test_cli_folder_batch(tmp_path):
 def test_workers_without_the_extra(monkeypatch):
     import sys
 
-    from geomkit.distributed import make_client
+    from geomkit.jobs.distributed import make_client
     monkeypatch.setitem(sys.modules, "distributed", None)
     with pytest.raises(geomkit.errors.MissingDependencyError,
                        match=r"pip install geomkit\[scale\]"):

@@ -15,12 +15,12 @@ distributed = pytest.importorskip("distributed", reason="needs geomkit[scale] (d
 
 from clihelp import cli  # noqa: E402
 from geomkit import samples  # noqa: E402
-from geomkit.stream import stream_deviation  # noqa: E402
+from geomkit.jobs.stream import stream_deviation  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def client():
-    from geomkit.distributed import make_client
+    from geomkit.jobs.distributed import make_client
 
     c, cluster = make_client(2)
     yield c
@@ -79,7 +79,7 @@ def test_dask_worker_killed_mid_run(client, scan):
 
 def test_cli_scheduler(client, tmp_path, scan):
     # the CLI on the running cluster (--workers N builds the same Client through
-    # geomkit.distributed.make_client, as the fixture does)
+    # geomkit.jobs.distributed.make_client, as the fixture does)
     out = tmp_path / "rep"
     r = cli("deviation", "sphere", scan, "-o", out, "--scheduler",
             client.scheduler.address, "--chunk-size", "1000", "--tolerance", "0.04",

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from geomkit.collision import Body, collide, min_distance
+from geomkit.collision.collide import Body, collide, min_distance
 from geomkit.errors import InvalidInputError
-from geomkit.scene import Scene, SweepAndPrune, fit_exclusions
+from geomkit.collision.scene import Scene, SweepAndPrune, fit_exclusions
 
 
 def _brute(lo, hi, group, static, margin=0.0):
@@ -180,7 +180,7 @@ def test_fit_exclusions_table():
 
 @pytest.mark.parametrize("bv", ["aabb", "obb", "kdop14"])
 def test_coherent_pair_equals_collide_over_a_motion(bv):
-    from geomkit.scene import CoherentPair
+    from geomkit.collision.scene import CoherentPair
     from scipy.spatial.transform import Rotation
     a = Body(trimesh.creation.icosphere(3, 1.0), bv=bv)
     b = Body(trimesh.creation.capsule(height=2.0, radius=0.5, count=[24, 24]), bv=bv)

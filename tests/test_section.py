@@ -10,7 +10,7 @@ import pytest
 import geomkit
 from geomkit import samples
 from geomkit.errors import InvalidInputError
-from geomkit.section import plane_section
+from geomkit.section.plane import plane_section
 
 
 def _sphere():
@@ -224,7 +224,7 @@ def test_fit_within_tol_and_exports_round_trip(tmp_path):
     Y = fits[0].evaluate(np.linspace(0, 1, 500))
     assert np.abs(np.linalg.norm(Y[:, :2], axis=1) - 8).max() <= 2e-4
     # CSV
-    from geomkit._section_export import read_csv
+    from geomkit.section.export import read_csv
     p = sec.to_csv(tmp_path / "s.csv")
     curves, pts = read_csv(p)
     assert np.array_equal(curves[0], sec.curves[0])
@@ -288,7 +288,7 @@ def test_coplanar_surface_reported():
 # ------------------------------------------------------------- Open CASCADE oracle
 @pytest.mark.occ
 def test_against_occ_section():
-    occ = pytest.importorskip("geomkit.oracles.occ")
+    occ = pytest.importorskip("geomkit.bench.oracles.occ")
     if not occ.HAVE_OCP:
         pytest.skip("OCP not installed")
     s = samples.load("freeform_1")[0]

@@ -18,9 +18,9 @@ from geomkit import samples
 from geomkit.bench.distance import dense_oracle
 from geomkit.bench.distance import _rand_surface
 from geomkit.bench.distance import rand_pair as _rand_pair
-from geomkit.distance import surface_distance
+from geomkit.query.distance import surface_distance
 from geomkit.errors import InvalidInputError
-from geomkit.types import Surface
+from geomkit.nurbs.surface import Surface
 
 SLACK = 0.0  # the interval carries its own rounding allowance
 
@@ -102,7 +102,7 @@ def test_symmetry_and_rigid_motion(seed):
 
 @pytest.mark.parametrize("tol", [1e-3, 1e-6, 1e-10, 1e-12])
 def test_tolerance_sweep_interval_width(tol):
-    from geomkit.distance import ROUNDING
+    from geomkit.query.distance import ROUNDING
 
     a, b = _rand_pair(3)
     o = dense_oracle(a, b)
@@ -168,7 +168,7 @@ def test_trimmed_plate_hole_rim_upper_exact_interval_honest():
 @pytest.mark.parametrize("seed", [0, 2, 5])
 def test_against_occ_dist_shape_shape(seed):
     pytest.importorskip("OCP")
-    from geomkit.oracles import occ
+    from geomkit.bench.oracles import occ
 
     a, b = _rand_pair(seed)
     fa, fb = (occ.make_face(s.degree_u, s.degree_v, s.knots_u, s.knots_v, s.control_points,
@@ -226,7 +226,7 @@ def test_untrimmed_specialisation_matches_general_kernels(name, monkeypatch):
     (seg_all None, numba prunes those branches: less to compile on a first run); on an
     untrimmed scene the general kernels take none of those paths, so both give the
     same bits."""
-    import geomkit.distance as gd
+    import geomkit.query.distance as gd
     from geomkit._kernels import _aot
     from geomkit._kernels import distance as dk
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import geomkit
-from geomkit._tess_trim import speed_bound
-from geomkit.evaluation import derivatives
-from geomkit.types import Surface
+from geomkit.mesh.trim_polylines import speed_bound
+from geomkit.nurbs.evaluation import derivatives
+from geomkit.nurbs.surface import Surface
 
 
 def _random_surface(rng, p, q, nu, nv, wspread):

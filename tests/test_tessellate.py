@@ -99,7 +99,7 @@ def test_sampler_detects_a_deviation():
     V = mesh.vertices.copy()
     i = int(np.argmin(np.abs(mesh.uv - [0.3, 0.4]).sum(axis=1)))   # an ordinary vertex
     V[i] *= 1 + 10 * tol / np.linalg.norm(V[i])                     # radially out
-    bumped = geomkit.types.Mesh(V, mesh.faces, mesh.uv, mesh.vertex_surface,
+    bumped = geomkit.mesh.mesh.Mesh(V, mesh.faces, mesh.uv, mesh.vertex_surface,
                                 mesh.face_surface, mesh.face_deviation, tol, {})
     fan = np.nonzero((mesh.faces == i).any(axis=1))[0]
     r = naive.sample_mesh_deviation(bumped, case.surfaces, exact_above=tol)

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
 from geomkit import OUTSIDE, InvalidInputError, Surface, samples
-from geomkit.tessellate import tessellate
+from geomkit.mesh.tessellate import tessellate
 
 import naive
 from conftest import describe, random_surfaces
@@ -225,7 +225,7 @@ def test_uniform_grid_and_adaptive_paths_both_hold_tol(monkeypatch):
     independent sampler and have comparable sizes."""
     import importlib
 
-    T = importlib.import_module("geomkit.tessellate")  # the module, not the function
+    T = importlib.import_module("geomkit.mesh.tessellate")  # the module, not the function
     case = case_of("cylinder_quarter")
     tol = 1e-3
     grid = tessellate(case.surfaces, tol)
@@ -244,7 +244,7 @@ def test_uniform_grid_and_adaptive_paths_both_hold_tol(monkeypatch):
 def test_uniform_grid_refuses_a_failing_grid():
     """A grid whose cells fail the measurement is not returned (the adaptive path
     takes over): heavy_weights with the grid predicted for 1000 x tol."""
-    from geomkit import _quadtree as qt
+    from geomkit.mesh import quadtree as qt
 
     s = samples.load("heavy_weights")[0]
     ub = np.unique(s.knots_u[s.degree_u:len(s.knots_u) - s.degree_u])
@@ -260,7 +260,7 @@ def test_uniform_grid_refuses_a_failing_grid():
 def test_hanging_node_counts_match_brute_force():
     """Kernel counts of lattice points strictly inside each cell edge, against a
     direct count over all points, on a randomly refined cell set."""
-    from geomkit import _quadtree as qt
+    from geomkit.mesh import quadtree as qt
 
     rng = np.random.default_rng(3)
     lat = qt.Lattice(np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0]))
@@ -289,7 +289,7 @@ def test_measured_triangles_are_found_only_when_identical():
     same six UV coordinates (bit for bit), NaN otherwise."""
     import importlib
 
-    _Measured = importlib.import_module("geomkit.tessellate")._Measured
+    _Measured = importlib.import_module("geomkit.mesh.tessellate")._Measured
     rng = np.random.default_rng(0)
     tri = rng.random((500, 3, 2))
     cache = _Measured()

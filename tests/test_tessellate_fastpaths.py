@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geomkit import _quadtree as qt
+from geomkit.mesh import quadtree as qt
 from geomkit import samples
-from geomkit._tess_trim import _span_samples
-from geomkit.tessellate import tessellate
+from geomkit.mesh.trim_polylines import _span_samples
+from geomkit.mesh.tessellate import tessellate
 
-T = importlib.import_module("geomkit.tessellate")  # the module, not the function
+T = importlib.import_module("geomkit.mesh.tessellate")  # the module, not the function
 REF = Path(__file__).parent / "data" / "tess_fastpath_reference.npz"
 FIELDS = ("faces", "face_surface", "vertex_surface", "vertices", "uv", "face_uv",
           "face_deviation")

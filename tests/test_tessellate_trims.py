@@ -14,7 +14,7 @@ from hypothesis import given, note, settings
 from hypothesis import strategies as st
 
 from geomkit import OUTSIDE, Surface
-from geomkit.tessellate import tessellate
+from geomkit.mesh.tessellate import tessellate
 
 import naive
 from conftest import describe, random_surfaces
@@ -179,8 +179,8 @@ def test_trim_polylines_chords_within_half_tol_of_the_exact_boundary():
     and every chord's midpoint within it (plus the dense polyline's sag) of the curve.
     On a curved freeform with a circle trim, the non-uniformly parametrized plane
     (where UV chords bow in 3-D) and a rotated plate with a hole."""
-    from geomkit._tess_trim import TrimPolylines
-    from geomkit.tessellate import TRIM_TARGET
+    from geomkit.mesh.trim_polylines import TrimPolylines
+    from geomkit.mesh.tessellate import TRIM_TARGET
 
     rng = np.random.default_rng(11)
     nu = nv = 5
@@ -214,7 +214,7 @@ def test_trimmed_plane_direct_path_matches_the_cell_path(monkeypatch):
     areas agree with the analytic area within the chord bound."""
     import importlib
 
-    T = importlib.import_module("geomkit.tessellate")
+    T = importlib.import_module("geomkit.mesh.tessellate")
     case = case_of("plate_with_hole")
     tol = 1e-2
     direct = tessellate(case.surfaces, tol)
@@ -243,7 +243,7 @@ def test_planar_triangulation_falls_back_when_delaunay_misses_a_boundary_edge():
     and every boundary edge is a triangle edge."""
     import shapely
 
-    from geomkit._tess_trim import TrimPolylines, _delaunay_inside, planar_trimmed
+    from geomkit.mesh.trim_polylines import TrimPolylines, _delaunay_inside, planar_trimmed
 
     teeth = []
     for i in range(6):
@@ -280,7 +280,7 @@ def test_affine_test_uses_greville_abscissae():
     trimmed too (direct path, area exact for a polygon hole); moving one interior
     control point in the plane (still flat, no longer affine) sends it to the cell
     path."""
-    from geomkit._tess_trim import affine_map
+    from geomkit.mesh.trim_polylines import affine_map
 
     ku = [0, 0, 0, 0.2, 0.7, 1, 1, 1]
     kv = [0, 0, 0.5, 1, 1]

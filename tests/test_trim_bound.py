@@ -58,7 +58,7 @@ def test_disk_above_a_hole_is_the_nearest_face():
     S = _scene()
     P = np.array([[C[0] - 4.17, C[1] - 0.64, 31.41]])  # under the disk, over the hole
     pr = geomkit.project_points(S, P)
-    assert pr.surface[0] == 2 and pr.status[0] == geomkit.results.INTERIOR
+    assert pr.surface[0] == 2 and pr.status[0] == geomkit.query.results.INTERIOR
     assert abs(pr.distance[0] - 1.59) < 1e-12
     assert pr.lower_bound[0] <= pr.distance[0]
 

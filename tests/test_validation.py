@@ -14,7 +14,7 @@ import pytest
 import geomkit
 from geomkit import (GeomkitError, InvalidSurfaceError, InvalidTrimError, Surface,
                      TrimCurve, TrimLoop, classify_uv, INSIDE, OUTSIDE)
-from geomkit.trimming import evaluate_trim_curve
+from geomkit.nurbs.trimming import evaluate_trim_curve
 
 # --------------------------------------------------------------------------- helpers
 RNG = np.random.default_rng(20240611)

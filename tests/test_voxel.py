@@ -10,7 +10,7 @@ import geomkit
 from geomkit._kernels.tess import point_triangle_distance
 from geomkit._kernels.triangles import triangle_triangle_distance
 from geomkit.errors import InvalidInputError
-from geomkit.voxel import CROSSED, ENCLOSED, VoxelGrid
+from geomkit.query.voxel import CROSSED, ENCLOSED, VoxelGrid
 
 
 def random_mesh(rng, m, scale=10.0, size=1.0):

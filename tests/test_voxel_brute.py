@@ -24,9 +24,9 @@ import pytest
 import geomkit
 from geomkit._kernels.triangles import triangle_triangle_distance
 from geomkit.errors import InvalidInputError
-from geomkit.projection import Projector
-from geomkit.results import BEYOND
-from geomkit.voxel import VoxelGrid
+from geomkit.query.projection import Projector
+from geomkit.query.results import BEYOND
+from geomkit.query.voxel import VoxelGrid
 
 igl = pytest.importorskip("igl")
 

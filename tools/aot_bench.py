@@ -19,12 +19,12 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]
 
 def _jobs():
     from geomkit import samples
-    from geomkit.deviation import deviation
-    from geomkit.demo import PROBE_RADIUS, synthetic_scan
-    from geomkit.distance import surface_distance
-    from geomkit.projection import project_points
-    from geomkit.section import plane_section
-    from geomkit.tessellate import tessellate
+    from geomkit.jobs.deviation import deviation
+    from geomkit.cli.demo import PROBE_RADIUS, synthetic_scan
+    from geomkit.query.distance import surface_distance
+    from geomkit.query.projection import project_points
+    from geomkit.section.plane import plane_section
+    from geomkit.mesh.tessellate import tessellate
 
     surf = samples.load("freeform_1")[0]
     C, N, _ = synthetic_scan(surf, 40)

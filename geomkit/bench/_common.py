@@ -53,7 +53,7 @@ def median_time(fn, repeat=3, budget=None):
 def occ_or_none():
     """The Open CASCADE oracle module, or None when ``cadquery-ocp`` is missing."""
     try:
-        from geomkit.oracles import occ
+        from geomkit.bench.oracles import occ
     except Exception:  # noqa: BLE001 - the reference is optional
         return None
     return occ if occ.HAVE_OCP else None

@@ -20,7 +20,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from ._common import median_time, occ_or_none
+from geomkit.bench._common import median_time, occ_or_none
 
 
 def _impeller() -> Path:
@@ -36,7 +36,7 @@ def _occ_nurbs_faces(shape):
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.oracles.occ import _cast
+    from geomkit.bench.oracles.occ import _cast
 
     ex, n = TopExp_Explorer(shape, TopAbs_FACE), 0
     while ex.More():

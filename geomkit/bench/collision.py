@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 import geomkit
-from geomkit.collision import Body, collide, collide_many, min_distance
+from geomkit.collision.collide import Body, collide, collide_many, min_distance
 
 
 def _meshes(quick):
@@ -256,7 +256,7 @@ def sweep(pairs=SWEEP_PAIRS, tols=(1e-1, 3e-2, 1e-2), poses=100, bv="obb", seed=
     * ``min_distance`` vs ``coal.distance`` (medians over poses): error = largest
       |mesh distance - exact distance of the surfaces| over the poses.
     """
-    from ._common import MISSING_COAL, coal_or_none, make_row
+    from geomkit.bench._common import MISSING_COAL, coal_or_none, make_row
 
     coal = coal_or_none()
     rows = []

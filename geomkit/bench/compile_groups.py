@@ -16,7 +16,7 @@ recorded (:class:`CompileProfile`) and a table is printed per compiled function
 (module, number of compiles = signatures, *exclusive* CPU = its own typing, lowering
 and code generation, *inclusive* CPU = with the callees compiled while typing it),
 per kernel module, per group step and per compiler pass.  The group ``demo`` runs
-:func:`geomkit.demo.run_demo` without its background helper, so every kernel the demo
+:func:`geomkit.cli.demo.run_demo` without its background helper, so every kernel the demo
 needs is compiled (and attributed) in this process.
 
 With ``--log FILE``: summarise a compile log written by any geomkit run with
@@ -194,7 +194,7 @@ def _groups():
     def g_demo():
         import tempfile
 
-        from geomkit.demo import run_demo
+        from geomkit.cli.demo import run_demo
         with tempfile.TemporaryDirectory() as d:
             run_demo(d, warm_up=False, progress=_demo_progress)
 

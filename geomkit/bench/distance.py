@@ -25,9 +25,9 @@ import time
 import numpy as np
 
 from geomkit import samples
-from geomkit.distance import surface_distance
-from geomkit.tessellate import tessellate
-from geomkit.types import Surface
+from geomkit.query.distance import surface_distance
+from geomkit.mesh.tessellate import tessellate
+from geomkit.nurbs.surface import Surface
 
 
 def _moved(s, t):
@@ -147,7 +147,7 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=3):
     ``BRepExtrema_DistShapeShape.Perform`` with ``SetDeflection(tol)``; errors are
     |distance - truth| against the case's analytic truth, or the dense-sampling +
     L-BFGS-B oracle (:func:`dense_oracle`) for the random pairs."""
-    from ._common import MISSING_OCC, make_row, median_time, occ_or_none
+    from geomkit.bench._common import MISSING_OCC, make_row, median_time, occ_or_none
 
     occ = occ_or_none()
     a, b = samples.load("sphere_pair")
@@ -187,7 +187,7 @@ def continuum_table(repeat=5, tol=1e-9):
     """Continuum-minimum cases only (issue 15): median time of ``surface_distance``
     (after warm-up) and of OCC ``DistShapeShape`` on the same faces in this run, the
     interval width and whether it certified; prints a markdown table."""
-    from ._common import occ_or_none
+    from geomkit.bench._common import occ_or_none
 
     occ = occ_or_none()
     a, b = samples.load("sphere_pair")
@@ -224,7 +224,7 @@ def main(argv=None):
         continuum_table(args.repeat)
         return
     try:
-        from geomkit.oracles import occ
+        from geomkit.bench.oracles import occ
         occ._require_ocp("bench")
     except Exception:  # noqa: BLE001 - the benchmark runs without OCC too
         occ = None

@@ -61,7 +61,7 @@ def run(points=100_000, geomdl_points=None, occ_points=20_000, cases=CASES, out=
     rng = np.random.default_rng(1)
     geomdl_points = points if geomdl_points is None else geomdl_points
     try:
-        from geomkit.oracles import occ
+        from geomkit.bench.oracles import occ
         have_occ = occ.HAVE_OCP
     except Exception:  # pragma: no cover - optional
         have_occ = False
@@ -126,7 +126,7 @@ def sweep(sizes=(1_000, 10_000), cases=SWEEP_CASES, repeat=5, seed=1):
     random parameters (geomkit after warm-up; OCC ``Geom_BSplineSurface`` in a Python
     loop) and the error of the points: the largest |analytic residual| (distance of
     the returned point from the exact sphere / torus)."""
-    from ._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
+    from geomkit.bench._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
 
     occ = occ_or_none()
     rng = np.random.default_rng(seed)

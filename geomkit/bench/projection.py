@@ -90,7 +90,7 @@ def _occ_run(occ, s, P):
 
 def run(n=100_000, occ_n=1000, margin=10.0, cases=CASES, seed=0):
     try:
-        from geomkit.oracles import occ
+        from geomkit.bench.oracles import occ
         have_occ = occ.HAVE_OCP
     except ImportError:  # pragma: no cover
         have_occ = False
@@ -111,7 +111,7 @@ def run(n=100_000, occ_n=1000, margin=10.0, cases=CASES, seed=0):
             t_gk = (time.perf_counter() - t0) / len(P)
             exact = analytic_distance(name, P)
             row = dict(case=name, points=label, n=len(P), build_s=build, gk_us=t_gk * 1e6,
-                       edge=float(np.mean(res.status != geomkit.results.INTERIOR)))
+                       edge=float(np.mean(res.status != geomkit.query.results.INTERIOR)))
             sub = np.arange(min(occ_n, len(P)))
             ref = exact
             if have_occ:
@@ -184,7 +184,7 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), n=4_000, occ_n=100,
     largest |distance - analytic distance| (geomkit over all ``n`` points, OCC over
     its subset).  ``mesh_cases``: also the mesh-query rows of :func:`mesh_sweep`
     (libigl per call and with a prebuilt tree, trimesh) on ``mesh_n`` points."""
-    from ._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
+    from geomkit.bench._common import MISSING_OCC, make_row, median_time, occ_or_none, occ_surface
 
     occ = occ_or_none()
     rng = np.random.default_rng(seed)
@@ -228,7 +228,7 @@ def main(argv=None):
                          "profile (geomkit.bench.projection_mesh)")
     a = ap.parse_args(argv)
     if a.mesh:
-        from .projection_mesh import run as run_mesh
+        from geomkit.bench.projection_mesh import run as run_mesh
         run_mesh(a.n)
         return
     run(a.n, a.occ_n, a.margin, a.cases.split(","))
@@ -243,8 +243,8 @@ def mesh_sweep(cases=("freeform_1", "sphere", "torus", "plate_with_hole", "impel
     per reference — libigl ``point_mesh_squared_distance`` (tree built per call),
     libigl ``AABB.squared_distance`` (tree built once) and trimesh
     ``proximity.closest_point`` (on the first ``trimesh_n`` points; it needs rtree)."""
-    from ._common import make_row
-    from .projection_mesh import run as run_mesh
+    from geomkit.bench._common import make_row
+    from geomkit.bench.projection_mesh import run as run_mesh
 
     refs = (("igl_us", "libigl point_mesh_squared_distance (1e-3 mesh)", "igl_err"),
             ("aabb_us", "libigl AABB, tree prebuilt (1e-3 mesh)", "igl_err"),

@@ -73,7 +73,7 @@ def stage_profile(pr, P, repeat=3):
     """Median seconds of each stage of ``pr.project(P)`` (one chunk per 65,536
     points): ``total``, ``search`` (candidate search alone, same kernel, same
     threads), ``newton`` (batch kernel minus search), ``trim``, ``finish`` and
-    ``python`` (the rest), plus the last :class:`~geomkit.results.Projection`."""
+    ``python`` (the rest), plus the last :class:`~geomkit.query.results.Projection`."""
     from geomkit._kernels import project as pk
 
     g = pr.grid

@@ -66,7 +66,7 @@ def _surfaces():
 
 def one(path, chunk):
     """Stream one scan (no output) and print JSON: points, seconds, peak RSS."""
-    from geomkit.stream import stream_deviation
+    from geomkit.jobs.stream import stream_deviation
 
     t0 = time.perf_counter()
     last = [0]
@@ -108,8 +108,8 @@ def memory(ns, folder, chunk, keep=False):
 
 
 def throughput(n, chunk, folder):
-    from geomkit.distributed import make_client
-    from geomkit.stream import stream_deviation
+    from geomkit.jobs.distributed import make_client
+    from geomkit.jobs.stream import stream_deviation
 
     p = make_scan(Path(folder) / f"geomkit-scale-tp-{n}.npy", n)
     surfs = _surfaces()

@@ -25,9 +25,9 @@ import time
 
 import numpy as np
 
-from geomkit.collision import Body
-from geomkit.motion import first_contact
-from geomkit.scene import SweepAndPrune
+from geomkit.collision.collide import Body
+from geomkit.collision.motion import first_contact
+from geomkit.collision.scene import SweepAndPrune
 from geomkit._kernels import sap as ks
 
 
@@ -177,8 +177,8 @@ def coherence(frames=200, quick=False, seed=0, x0=1.45):
     import trimesh
     from scipy.spatial.transform import Rotation
 
-    from geomkit.collision import collide
-    from geomkit.scene import CoherentPair
+    from geomkit.collision.collide import collide
+    from geomkit.collision.scene import CoherentPair
 
     ma = trimesh.creation.icosphere(3 if quick else 4, 1.0)
     mb = trimesh.creation.capsule(height=2.0, radius=0.5,

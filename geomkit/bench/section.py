@@ -4,7 +4,7 @@
 For each case and plane: median wall time of geomkit (after JIT warm-up), of
 ``BRepAlgoAPI_Section.Build`` and of ``GeomAPI_IntSS``; the number of curves / points
 each finds; and for each the largest plane residual and the largest distance to the
-surface (``GeomAPI_ProjectPointOnSurf`` via :func:`geomkit.oracles.occ.project_point`
+surface (``GeomAPI_ProjectPointOnSurf`` via :func:`geomkit.bench.oracles.occ.project_point`
 on up to 60 points per curve, the same projection for all three).  Then a tolerance
 sweep of geomkit (time, points, achieved chord error).
 
@@ -60,7 +60,7 @@ def _residuals(occ, gsurf, plane, polys):
 
 
 def run(repeat=5, tol=1e-6, out=print):
-    from geomkit.oracles import occ, occ_section
+    from geomkit.bench.oracles import occ, occ_section
 
     have = occ.HAVE_OCP
     plane_section(samples.load("sphere"), [0, 0, 1, -3], 1e-3)   # JIT warm-up
@@ -152,10 +152,10 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-5, 1e-7), repeat=5):
     """Rows of the common schema (:mod:`geomkit.bench._common`): for each case with an
     exact section (circles) and each chord tolerance, the median time of
     ``plane_section`` (after warm-up) and of ``BRepAlgoAPI_Section`` with its edges
-    discretised at the same deflection (:func:`geomkit.oracles.occ.section`, whole
+    discretised at the same deflection (:func:`geomkit.bench.oracles.occ.section`, whole
     call, so it includes reading the points back into Python); errors are the largest
     distances of the polylines from the exact circles (:func:`circle_error`)."""
-    from ._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
+    from geomkit.bench._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
 
     occ = occ_or_none()
     plane_section(samples.load("sphere"), [0, 0, 1, -3], 1e-3)   # JIT warm-up
@@ -194,8 +194,8 @@ def impeller(planes=IMPELLER_PLANES, repeat=3, tol=1e-3, out=print):
     on the same file (IGESControl_Reader), ``Build`` only, with approximation off and
     on; curves (geomkit) and edges (OCC) found."""
     from geomkit.cad.gaps import model_gap
-    from geomkit.iges import read_iges
-    from geomkit.oracles import occ
+    from geomkit.cad.iges.reader import read_iges
+    from geomkit.bench.oracles import occ
 
     try:
         from pyiges import examples

@@ -20,8 +20,8 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import InvalidInputError
-from ._common import FIELDS
+from geomkit.errors import InvalidInputError
+from geomkit.bench._common import FIELDS
 
 ENGINES = ("evaluation", "tessellate", "projection", "section", "distance", "collision")
 FILES = ("bench.json", "bench.md", "bench.png")
@@ -61,7 +61,7 @@ def machine_info() -> dict:
     import numba
     import numpy
 
-    from ._common import coal_or_none, occ_or_none
+    from geomkit.bench._common import coal_or_none, occ_or_none
 
     info = {"python": sys.version.split()[0], "platform": platform.platform(),
             "cpu_count": os.cpu_count(), "numba_threads": numba.get_num_threads(),
@@ -122,7 +122,7 @@ def run_suite(engines=None, quick=True, out_dir=None, progress=None, overwrite=F
     """
     import importlib
 
-    from ._common import MISSING_COAL, MISSING_OCC, coal_or_none, occ_or_none
+    from geomkit.bench._common import MISSING_COAL, MISSING_OCC, coal_or_none, occ_or_none
 
     engines = list(ENGINES if engines is None else engines)
     unknown = [e for e in engines if e not in CONFIG]
@@ -172,8 +172,8 @@ def _jsonable(x):
 def write_outputs(result, paths, overwrite=False) -> dict:
     """Write ``bench.json``, ``bench.md``, ``bench.png`` atomically (keeping existing
     files unless ``overwrite``); returns {name: path}."""
-    from ..io import _atomic_write
-    from .plot import plot_rows
+    from geomkit.exchange.cases import _atomic_write
+    from geomkit.bench.plot import plot_rows
 
     for p in paths.values():
         if p.exists() and not overwrite:

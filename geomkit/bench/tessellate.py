@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from geomkit import samples, tessellate
-from geomkit.evaluation import derivatives, evaluate
+from geomkit.nurbs.evaluation import derivatives, evaluate
 
 CASES = ["sphere", "torus", "cylinder_quarter", "freeform_1", "crease", "wave_seed003",
          "heavy_weights", "saddle", "plate_with_hole", "offset_planes"]
@@ -101,7 +101,7 @@ def run(cases=CASES, tols=(1e-2, 1e-3), out=print, repeat=15):
     """Print one row per case and tolerance: medians of interleaved repeats (geomkit,
     then OCC, alternately, so load from other jobs hits both alike)."""
     try:
-        from geomkit.oracles import occ
+        from geomkit.bench.oracles import occ
         have_occ = occ.HAVE_OCP
     except Exception:  # pragma: no cover - optional
         have_occ = False
@@ -174,7 +174,7 @@ def sweep(cases=SWEEP_CASES, tols=(1e-1, 3e-2, 1e-2), repeat=3, angle=0.5, budge
     as many runs as geomkit; its time is ``BRepMesh_IncrementalMesh`` alone, without
     reading the triangulation back into Python).  The two are timed alternately, run
     by run, so that a change in the machine's load hits both alike."""
-    from ._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
+    from geomkit.bench._common import MISSING_OCC, make_row, median_time, occ_face, occ_or_none
 
     occ = occ_or_none()
     tessellate(samples.load("sphere"), 1e-1)                  # JIT warm-up

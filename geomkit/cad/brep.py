@@ -28,10 +28,10 @@ import math
 
 import numpy as np
 
-from ..types import TrimCurve
-from .analytic import angle_to_param, arc_curve, line_curve, plane_patch, revolve
-from .loops import Unsupported
-from .uvmap import map_pcurve
+from geomkit.nurbs.surface import TrimCurve
+from geomkit.cad.analytic import angle_to_param, arc_curve, line_curve, plane_patch, revolve
+from geomkit.cad.loops import Unsupported
+from geomkit.cad.uvmap import map_pcurve
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface"]
@@ -136,7 +136,7 @@ def analytic(rd, de: int) -> Analytic:
     """Entity 108 / 190-198 as an :class:`Analytic` (its 124 transform applied)."""
     t = rd.type_of(de)
     r = rd.rec(de)
-    from ._iges_entities import f_, i_
+    from geomkit.cad.iges.entities import f_, i_
 
     def pt(k):
         return np.array([f_(x) for x in rd.rec(k)[1:4]])
@@ -186,7 +186,7 @@ def analytic(rd, de: int) -> Analytic:
 # --------------------------------------------------------------------- edges
 def _curve_derivs(curve, t, d):
     """Points and derivatives up to order ``d`` of a ``(p, U, Pw)`` curve: (m, d+1, 3)."""
-    from .._kernels.bezier import curve_points
+    from geomkit._kernels.bezier import curve_points
 
     p, U, Pw = curve
     out = np.empty((len(t), d + 1, 3))
@@ -216,7 +216,7 @@ class _Edge:
 
 def edge_loop_508(rd, de: int):
     """The oriented model-space edges of a 508 loop (vertex entries are dropped)."""
-    from ._iges_entities import curve3d, i_
+    from geomkit.cad.iges.entities import curve3d, i_
 
     r = rd.rec(de)
     n = i_(r[1])
@@ -238,7 +238,7 @@ def edge_loop_508(rd, de: int):
 def curve_loop_142(rd, de: int):
     """The model-space curve ``CPTR`` of a 142 as oriented edges (102 composites
     split)."""
-    from ._iges_entities import curve3d, i_
+    from geomkit.cad.iges.entities import curve3d, i_
 
     def walk(c):
         if rd.type_of(c) == 102:
@@ -257,7 +257,7 @@ def curve_loop_142(rd, de: int):
 def curve_loop_141(rd, de: int):
     """The model-space curves of a 141 boundary as oriented edges (``SENSE = 2``:
     reversed)."""
-    from ._iges_entities import curve3d, i_
+    from geomkit.cad.iges.entities import curve3d, i_
 
     if rd.type_of(de) != 141:
         raise Unsupported(f"boundary DE {de} is entity {rd.type_of(de)}, expected 141")
@@ -378,7 +378,7 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
                         for e in lp])
     size = float(np.ptp(P, axis=0).max()) or 1.0
     if rd.type_of(srf_de) == 140:  # offset of an analytic surface: exact, the side
-        from ._iges_entities import f_, i_  # that holds the face's edges
+        from geomkit.cad.iges.entities import f_, i_  # that holds the face's edges
 
         r = rd.rec(srf_de)
         if rd.transform(srf_de) is not None:

@@ -32,9 +32,9 @@ import math
 
 import numpy as np
 
-from ..errors import FileFormatError
-from .analytic import angle_to_param, arc_curve
-from .analytic import turn_into as _turn
+from geomkit.errors import FileFormatError
+from geomkit.cad.analytic import angle_to_param, arc_curve
+from geomkit.cad.analytic import turn_into as _turn
 
 __all__ = ["conic_arc", "ON_CONIC_TOL", "FORMS"]
 

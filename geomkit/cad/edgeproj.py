@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import TrimCurve
-from .loops import Unsupported
+from geomkit.nurbs.surface import TrimCurve
+from geomkit.cad.loops import Unsupported
 
 __all__ = ["edge_uv", "EDGE_TOL"]
 
@@ -26,9 +26,9 @@ def edge_uv(base, edges, tol: float, what: str):
     """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
     (:class:`geomkit.cad.brep._Edge`) on the untrimmed ``base``, and the largest
     model-space distance measured between a segment's UV midpoint and the edge."""
-    from ..evaluation import evaluate
-    from ..projection import project_points
-    from .brep import _eval
+    from geomkit.nurbs.evaluation import evaluate
+    from geomkit.query.projection import project_points
+    from geomkit.cad.brep import _eval
 
     pieces, worst = [], 0.0
     for k, e in enumerate(edges):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..trimming import evaluate_trim_curve
+from geomkit.nurbs.trimming import evaluate_trim_curve
 
 __all__ = ["boundary_samples", "model_gap"]
 

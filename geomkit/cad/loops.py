@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import TrimCurve
+from geomkit.nurbs.surface import TrimCurve
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL"]
 
@@ -163,8 +163,8 @@ def _refit_clipped(c, box, eps, fit_tol):
     """A curve whose control polygon leaves the domain but whose points leave it by at
     most ``eps``: re-fitted (cubic, within ``fit_tol / 100``) to its
     points clipped to the domain.  Returns ``(curve, how far its points were out)``."""
-    from ..trimming import evaluate_trim_curve
-    from .uvmap import map_pcurve
+    from geomkit.nurbs.trimming import evaluate_trim_curve
+    from geomkit.cad.uvmap import map_pcurve
 
     u0, u1, v0, v1 = box
     p = c.degree

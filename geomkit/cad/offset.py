@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .loops import Unsupported
+from geomkit.cad.loops import Unsupported
 
 __all__ = ["offset_args", "OFFSET_TOL", "SAFETY"]
 
@@ -30,7 +30,7 @@ sampled error: the true largest error between samples is above the sampled one."
 
 
 def _offset_points(base, d, uu, vv):
-    from ..evaluation import evaluate, normals
+    from geomkit.nurbs.evaluation import evaluate, normals
 
     uv = np.stack(np.meshgrid(uu, vv, indexing="ij"), -1).reshape(-1, 2)
     N, status = normals(base, uv, return_status=True)

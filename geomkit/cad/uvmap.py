@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..trimming import evaluate_trim_curve
-from ..types import TrimCurve
+from geomkit.nurbs.trimming import evaluate_trim_curve
+from geomkit.nurbs.surface import TrimCurve
 
 __all__ = ["map_pcurve"]
 

@@ -9,12 +9,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import GeomkitError
-from ._common import Parser, _positive_float, _positive_int, _positive_or_zero, _units_arg
-from . import bench as _bench
-from . import clearance as _clearance
-from .jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
-                   _cmd_samples, _cmd_section)
+from geomkit.errors import GeomkitError
+from geomkit.cli._common import (Parser, _positive_float, _positive_int, _positive_or_zero,
+                                 _units_arg)
+from geomkit.cli import bench as _bench
+from geomkit.cli import clearance as _clearance
+from geomkit.cli.jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
+                              _cmd_samples, _cmd_section)
 
 EXAMPLES = """examples:
   geomkit demo                              deviation, section, clearance on built-in data,
@@ -64,8 +65,8 @@ def _add_cad_options(p) -> None:
 def _version_line() -> str:
     import numba
 
-    from .. import __version__
-    from .._warmup import kernels_status
+    from geomkit.version import __version__
+    from geomkit.cli.warmup import kernels_status
 
     return f"geomkit {__version__} (numba {numba.__version__}; {kernels_status()})"
 
@@ -126,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
                    help="tolerance band: T (meaning -T..T) or LOWER UPPER")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
-    from .scale import add_deviation_options  # issue 16: streamed / folder / Dask runs
+    from geomkit.cli.scale import add_deviation_options  # issue 16: streamed / folder / Dask runs
     add_deviation_options(p)
     p.set_defaults(func=_cmd_deviation)
     p = sub.add_parser("distance", parents=[common],
@@ -189,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_mesh)
     p = sub.add_parser("samples", help="list the bundled samples")
     p.set_defaults(func=_cmd_samples)
-    from . import _reports  # --report html,pdf on deviation, section, clearance
+    from geomkit.cli import _reports  # --report html,pdf on deviation, section, clearance
 
     _reports.add_options(sub)
     return ap

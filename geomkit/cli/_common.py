@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..errors import InvalidInputError
+from geomkit.errors import InvalidInputError
 
 
 class Parser(argparse.ArgumentParser):
@@ -31,7 +31,7 @@ def _load_input(name: str, skip_invalid: bool = False, units: str | None = None,
     ``units`` (from ``--units``) overrides the units the file states; the case's
     ``units`` is None when neither says.  ``skip_unsupported`` reads a CAD file on
     without the faces it cannot convert; they are listed in ``case.skipped``."""
-    from .. import load_case, samples
+    from geomkit import load_case, samples
     try:
         exists = Path(name).exists()
     except OSError:  # e.g. a name too long for the file system: load_case reports it
@@ -75,14 +75,14 @@ def _model_info(case):
 
 
 def _load_points(path):
-    from ..points_io import read_points
+    from geomkit.exchange.points import read_points
 
     return read_points(path)
 
 
 def _unit(units) -> str:
     """The unit as printed: ``mm`` or ``model units``."""
-    from ..units import unit_label
+    from geomkit.units import unit_label
 
     return unit_label(units)
 
@@ -96,7 +96,7 @@ class Outputs:
     write, so a run that fails on its inputs or in its work leaves nothing behind."""
 
     def __init__(self, folder, names, overwrite: bool = False, inputs=()):
-        from ..report import prepare_outputs
+        from geomkit.report.files import prepare_outputs
 
         self.folder, self.names = Path(folder), list(names)
         self.overwrite, self.inputs = overwrite, list(inputs)
@@ -114,7 +114,7 @@ class Outputs:
 
     def create(self) -> dict:
         """``{name: Path}``, the folder created if needed."""
-        from ..report import prepare_outputs
+        from geomkit.report.files import prepare_outputs
 
         return prepare_outputs(self.folder, self.names, self.overwrite, inputs=self.inputs)
 
@@ -123,7 +123,7 @@ def _file_target(path, overwrite: bool, inputs=(), option: str = "-o") -> Path:
     """Check an output file before the work: its folder must exist (it is not created
     for a file target) and be writable; an existing file needs ``--overwrite``; an
     input is never a target."""
-    from ..report import prepare_outputs
+    from geomkit.report.files import prepare_outputs
 
     p = Path(path)
     if p.is_dir():
@@ -240,7 +240,7 @@ def _positive_int(text: str) -> int:
 
 def _units_arg(text: str) -> str:
     """``--units``: a length unit name (mm, cm, m, in, ft, um, ...)."""
-    from ..units import canonical_units
+    from geomkit.units import canonical_units
 
     try:
         return canonical_units(text)

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..report_jobs import REPORT_KINDS, parse_kinds, report_files, write_reports
-from ._common import _tolerance
+from geomkit.report.jobs import REPORT_KINDS, parse_kinds, report_files, write_reports
+from geomkit.cli._common import _tolerance
 
 JOBS = ("deviation", "section", "clearance")
 
@@ -48,8 +48,8 @@ def names(args, job: str) -> list[str]:
     is reported before the work)."""
     kinds = parse_kinds(getattr(args, "report", None))
     if job == "section" and getattr(args, "scan", None):
-        from ..errors import InvalidInputError
-        from ..points_io import read_points
+        from geomkit.errors import InvalidInputError
+        from geomkit.exchange.points import read_points
 
         if "html" not in kinds:
             raise InvalidInputError("the scan is drawn in the HTML report: add --report "
@@ -61,7 +61,7 @@ def names(args, job: str) -> list[str]:
         args._report_tolerance = _tolerance(args.tolerance)
         args._report_scan = read_points(args.scan).points
     elif job == "section" and getattr(args, "tolerance", None) is not None:
-        from ..errors import InvalidInputError
+        from geomkit.errors import InvalidInputError
 
         raise InvalidInputError("the tolerance band is for the --scan whiskers: add --scan "
                                 "POINTS --report html", "--tolerance")

@@ -7,10 +7,10 @@ import sys
 
 
 def _cmd_bench(args) -> int:
-    from ..bench.suite import ENGINES, FILES, format_table, run_suite, write_outputs
-    from ..errors import InvalidInputError
-    from ..report import _clean
-    from ._common import Outputs
+    from geomkit.bench.suite import ENGINES, FILES, format_table, run_suite, write_outputs
+    from geomkit.errors import InvalidInputError
+    from geomkit.report.files import _clean
+    from geomkit.cli._common import Outputs
 
     engines = [e.strip() for e in args.engines.split(",") if e.strip()] if args.engines \
         else list(ENGINES)
@@ -40,7 +40,7 @@ def _cmd_bench(args) -> int:
 def add_parser(sub):
     import argparse
 
-    from ..bench.suite import ENGINES
+    from geomkit.bench.suite import ENGINES
 
     p = sub.add_parser("bench", help="speed against error of every engine beside Open "
                                      "CASCADE / Coal",

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from . import _reports
-from ._common import Outputs, _load_input, _model_info, _progress, _unit
+from geomkit.errors import InvalidInputError
+from geomkit.cli import _reports
+from geomkit.cli._common import Outputs, _load_input, _model_info, _progress, _unit
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
                "optionally extension_radius, extension_length, body_radius, body_length) "
@@ -32,7 +32,7 @@ Exit code 0: every travel move passes; 1: some travel move fails (margin or cont
 
 
 def parse_stylus(text: str):
-    from ..clearance import STYLUS_KEYS, Stylus
+    from geomkit.jobs.clearance import STYLUS_KEYS, Stylus
 
     p = Path(text)
     if text.lower().endswith(".json") or p.is_file():
@@ -50,8 +50,8 @@ def parse_stylus(text: str):
 
 
 def _cmd_clearance(args) -> int:
-    from ..clearance import probe_clearance, read_path
-    from ..report import _clean, plot_clearance, write_clearance_csv, write_json
+    from geomkit.jobs.clearance import probe_clearance, read_path
+    from geomkit.report.files import _clean, plot_clearance, write_clearance_csv, write_json
 
     stylus = parse_stylus(args.stylus)
     case = _load_input(args.part, args.skip_invalid, args.units,

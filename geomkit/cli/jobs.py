@@ -7,16 +7,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from . import _reports
-from ._common import (Outputs, _file_target, _load_input, _load_points, _model_info,
-                      _progress, _tolerance, _unit)
+from geomkit.errors import InvalidInputError
+from geomkit.cli import _reports
+from geomkit.cli._common import (Outputs, _file_target, _load_input, _load_points, _model_info,
+                                 _progress, _tolerance, _unit)
 
 
 def _cmd_demo(args) -> int:
     import sys
 
-    from ..demo import STEPS, run_demo
+    from geomkit.cli.demo import STEPS, run_demo
 
     if args.json:
         print(json.dumps(run_demo(out_dir=args.output, grid=args.grid, tol=args.tol),
@@ -89,12 +89,12 @@ _DEMO_LINES = {"deviation": _demo_deviation, "alignment": _demo_alignment,
 
 
 def _cmd_deviation(args) -> int:
-    from .scale import run_scaled, wants_scale  # issue 16: streamed / folder / Dask runs
+    from geomkit.cli.scale import run_scaled, wants_scale  # issue 16: streamed / folder / Dask runs
     if wants_scale(args):
         return run_scaled(args)
-    from ..deviation import deviation
-    from ..report import (plot_deviation_map, plot_histogram, write_deviation_csv,
-                          write_json)
+    from geomkit.jobs.deviation import deviation
+    from geomkit.report.files import (plot_deviation_map, plot_histogram, write_deviation_csv,
+                                      write_json)
 
     tol = _tolerance(args.tolerance)
     out = args.output or f"{Path(args.points).stem}-deviation"
@@ -135,7 +135,7 @@ def _cmd_deviation(args) -> int:
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
     write_json(summary, targets["summary.json"], args.overwrite, **rk)  # last
     if args.json:
-        from ..report import _clean
+        from geomkit.report.files import _clean
         print(json.dumps(_clean(summary), indent=1))
         return 0
     s = summary
@@ -171,8 +171,8 @@ def _require_matches(matched: int, total: int, max_distance) -> None:
 
 
 def _cmd_distance(args) -> int:
-    from .. import project_points
-    from ..report import _clean
+    from geomkit import project_points
+    from geomkit.report.files import _clean
 
     case = _load_input(args.surface, args.skip_invalid, args.units,
                        skip_unsupported=args.skip_unsupported)
@@ -190,8 +190,8 @@ def _cmd_distance(args) -> int:
     u = _unit(case.units)
     model, note = _model_info(case)
     if target is not None:
-        from ..io import _atomic_write
-        from ..results import STATUS_NAMES
+        from geomkit.exchange.cases import _atomic_write
+        from geomkit.query.results import STATUS_NAMES
 
         lines = ["index,x,y,z,foot_x,foot_y,foot_z,u,v,surface,distance,signed_distance,"
                  "lower_bound,status,units"]
@@ -231,9 +231,9 @@ def _cmd_distance(args) -> int:
 
 
 def _cmd_section(args) -> int:
-    from .. import plane_section
-    from ..report import _clean, plot_section, write_json, write_section
-    from ..section import as_plane
+    from geomkit import plane_section
+    from geomkit.report.files import _clean, plot_section, write_json, write_section
+    from geomkit.section.plane import as_plane
 
     base = as_plane(args.plane)
     if args.count < 1:
@@ -331,8 +331,8 @@ def _cmd_info(args) -> int:
 def _cmd_mesh(args) -> int:
     import math
 
-    from .. import tessellate
-    from ..io import MESH_FORMATS
+    from geomkit import tessellate
+    from geomkit.exchange.cases import MESH_FORMATS
 
     out = Path(args.output)
     if out.suffix.lower() not in MESH_FORMATS:
@@ -364,7 +364,7 @@ def _cmd_mesh(args) -> int:
 
 
 def _cmd_samples(args) -> int:
-    from .. import samples
+    from geomkit import samples
 
     for name in samples.names():
         case = samples.load_case(name)

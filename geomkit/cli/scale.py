@@ -9,8 +9,8 @@ import shutil
 import sys
 from pathlib import Path
 
-from ..errors import InvalidInputError
-from ._common import _load_input, _model_info, _progress, _tolerance, _unit
+from geomkit.errors import InvalidInputError
+from geomkit.cli._common import _load_input, _model_info, _progress, _tolerance, _unit
 
 STREAM_BYTES = 64 << 20
 """Point files larger than this are streamed (no plots) without being asked."""
@@ -55,7 +55,7 @@ def _cleanup(out: Path, existed: bool):
 
 
 def run_scaled(args) -> int:
-    from ..batch import batch_deviation, deviation_report
+    from geomkit.jobs.batch import batch_deviation, deviation_report
 
     if args.workers is not None and args.workers < 1:
         raise InvalidInputError(f"must be >= 1, got {args.workers}", "--workers")
@@ -66,7 +66,7 @@ def run_scaled(args) -> int:
         raise InvalidInputError(f"must be >= 1, got {chunk}", "--chunk-size")
     fmt = args.format or "csv"
     if fmt == "parquet":
-        from ..stream import _pyarrow_parquet
+        from geomkit.jobs.stream import _pyarrow_parquet
         _pyarrow_parquet()
     tol = _tolerance(args.tolerance)
     pts = Path(args.points)
@@ -79,7 +79,7 @@ def run_scaled(args) -> int:
     u = _unit(case.units)
     client = cluster = None
     if args.workers is not None or args.scheduler:
-        from ..distributed import make_client
+        from geomkit.jobs.distributed import make_client
         client, cluster = make_client(args.workers, args.scheduler)
     existed = out.exists()
     kw = dict(fmt=fmt, overwrite=args.overwrite, inputs=[args.nominal],
@@ -105,7 +105,7 @@ def run_scaled(args) -> int:
         if cluster is not None:
             cluster.close()
     if args.json:
-        from ..report import _clean
+        from geomkit.report.files import _clean
         print(json.dumps(_clean(s), indent=1))
         return 0
     if note:

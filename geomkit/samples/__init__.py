@@ -13,8 +13,8 @@ from __future__ import annotations
 import json
 from importlib import resources
 
-from ..errors import InvalidInputError
-from ..io import Case, case_from_doc
+from geomkit.errors import InvalidInputError
+from geomkit.exchange.cases import Case, case_from_doc
 
 __all__ = ["names", "load", "load_case", "path", "analytic_residual"]
 

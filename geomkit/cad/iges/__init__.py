@@ -1,0 +1,1 @@
+"""The IGES reader: file records, entities, faces."""

@@ -1,0 +1,1 @@
+"""Collision and distance of meshed bodies: Body, collide, motion, scenes."""

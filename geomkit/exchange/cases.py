@@ -1,0 +1,402 @@
+"""Reading and writing surfaces: ``geomkit-case/1`` JSON and geomdl JSON (and reading
+IGES / STEP models by suffix).
+
+``geomkit-case/1``::
+
+    {"format": "geomkit-case/1", "name": ..., "description": ..., "units": "mm",
+     "surfaces": [{"degree_u", "degree_v", "knots_u", "knots_v",
+                   "control_points": [nu][nv][3], "weights": [nu][nv] (optional),
+                   "trim": [loop, ...] (optional, outer first)}],
+     "truth": {...}}
+
+``units`` (optional) names the length unit of the coordinates (see
+:mod:`geomkit.units`); without it the units are unknown ("model units").
+
+geomdl JSON is what ``geomdl.exchange.export_json`` writes (``{"shape": {"type":
+"surface", "data": [...]}}``, control points flattened with v varying fastest).
+
+IGES and STEP files are read by :func:`load` / :func:`load_case` too (by suffix,
+through :mod:`geomkit.cad.iges.reader` / :mod:`geomkit.cad.step`).  Files are only read by :func:`load`; :func:`save` writes a temporary file beside the
+target and renames it into place, and refuses to replace an existing file unless
+``overwrite=True``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
+from geomkit.nurbs.surface import Surface
+
+__all__ = ["Case", "load", "load_case", "save", "surface_to_dict", "surface_from_dict",
+           "to_geomdl", "from_geomdl", "export_mesh", "CASE_FORMAT", "MESH_FORMATS"]
+
+MESH_FORMATS = (".stl", ".ply", ".obj")
+
+CASE_FORMAT = "geomkit-case/1"
+
+
+@dataclass
+class Case:
+    """A loaded case file: its surfaces plus the optional analytic truth.
+
+    ``units``: the length unit of the coordinates (``"mm"``, ``"in"``, ...; see
+    :mod:`geomkit.units`), None when the file does not say ("model units")."""
+
+    name: str
+    surfaces: list
+    truth: dict = field(default_factory=dict)
+    description: str = ""
+    units: str | None = None
+    skipped: list = field(default_factory=list)
+    """Faces left out of a CAD read (``skip_unsupported``): ``(id, reason)`` pairs."""
+
+
+# --------------------------------------------------------------------- dicts
+def surface_to_dict(s: Surface) -> dict:
+    d = {"degree_u": s.degree_u, "degree_v": s.degree_v,
+         "knots_u": s.knots_u.tolist(), "knots_v": s.knots_v.tolist(),
+         "control_points": s.control_points.tolist()}
+    if s.weights is not None:
+        d["weights"] = s.weights.tolist()
+    if s.trim:
+        d["trim"] = [loop.to_case() for loop in s.trim]
+    if s.name:
+        d["name"] = s.name
+    if s.approx_error:
+        d["approx_error"] = s.approx_error
+    return d
+
+
+def _prefixed(exc: InvalidInputError, prefix: str) -> InvalidInputError:
+    field_ = f"{prefix}.{exc.field}" if exc.field else prefix
+    msg = str(exc)
+    if exc.field and msg.startswith(exc.field + ": "):
+        msg = msg[len(exc.field) + 2:]
+    return type(exc)(msg, field_)
+
+
+def surface_from_dict(d: dict, where: str = "surface") -> Surface:
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{where}: expected an object, got {type(d).__name__}")
+    missing = [k for k in ("degree_u", "degree_v", "knots_u", "knots_v", "control_points")
+               if k not in d]
+    if missing:
+        raise FileFormatError(f"{where}: missing field(s) {', '.join(missing)}")
+    try:
+        return Surface(d["degree_u"], d["degree_v"], d["knots_u"], d["knots_v"],
+                       d["control_points"], d.get("weights"), d.get("trim"),
+                       name=d.get("name"), approx_error=d.get("approx_error", 0.0))
+    except InvalidInputError as exc:
+        raise _prefixed(exc, where) from None
+
+
+# -------------------------------------------------------------------- geomdl
+def to_geomdl(s: Surface):
+    """A geomdl ``BSpline.Surface`` or ``NURBS.Surface`` (trims are not carried)."""
+    from geomdl import BSpline, NURBS
+
+    nu, nv = s.shape
+    g = NURBS.Surface() if s.is_rational else BSpline.Surface()
+    g.degree_u = s.degree_u
+    g.degree_v = s.degree_v
+    g.ctrlpts_size_u = nu
+    g.ctrlpts_size_v = nv
+    g.ctrlpts = s.control_points.reshape(-1, 3).tolist()
+    if s.is_rational:
+        g.weights = s.weights.reshape(-1).tolist()
+    g.knotvector_u = s.knots_u.tolist()
+    g.knotvector_v = s.knots_v.tolist()
+    return g
+
+
+def from_geomdl(g) -> Surface:
+    """Build a :class:`Surface` from a geomdl surface object."""
+    try:
+        nu, nv = g.ctrlpts_size_u, g.ctrlpts_size_v
+        P = np.asarray(g.ctrlpts, dtype=float).reshape(nu, nv, -1)
+        w = getattr(g, "weights", None)
+    except Exception as exc:  # geomdl raises many kinds
+        raise InvalidInputError(f"not a geomdl surface ({exc})", "geomdl") from None
+    if P.shape[2] != 3:
+        raise InvalidInputError(f"expected 3-D control points, got {P.shape[2]}-D", "geomdl")
+    weights = np.asarray(w, float).reshape(nu, nv) if w else None
+    return Surface(g.degree_u, g.degree_v, list(g.knotvector_u), list(g.knotvector_v), P,
+                   weights)
+
+
+def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
+    shape = doc["shape"]
+    if not isinstance(shape, dict):
+        raise FileFormatError(f"{where}: geomdl 'shape' must be an object, got "
+                              f"{type(shape).__name__}")
+    if shape.get("type") != "surface":
+        raise FileFormatError(f"{where}: geomdl shape type {shape.get('type')!r}, "
+                              "only 'surface' is supported")
+    data = shape.get("data")
+    if not isinstance(data, list) or not data:
+        raise FileFormatError(f"{where}: geomdl 'shape.data' must be a non-empty list")
+    out = []
+    for k, d in enumerate(data):
+        w = f"{where}: shape.data[{k}]"
+        if not isinstance(d, dict):
+            raise FileFormatError(f"{w}: expected an object, got {type(d).__name__}")
+        try:
+            nu, nv = int(d["size_u"]), int(d["size_v"])
+            cp = d["control_points"]
+            P = np.asarray(cp["points"], dtype=float)
+            if P.ndim != 2 or P.shape[0] != nu * nv or P.shape[1] != 3:
+                raise FileFormatError(f"{w}.control_points.points: expected {nu * nv} points "
+                                      f"of 3 coordinates, got shape {P.shape}")
+            weights = cp.get("weights")
+            if weights is not None:
+                weights = np.asarray(weights, dtype=float).reshape(nu, nv)
+            out.append(Surface(d["degree_u"], d["degree_v"], d["knotvector_u"],
+                               d["knotvector_v"], P.reshape(nu, nv, 3), weights,
+                               name=d.get("name")))
+        except KeyError as exc:
+            raise FileFormatError(f"{w}: missing field {exc.args[0]!r}") from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            if isinstance(exc, InvalidInputError):
+                raise _prefixed(exc, w) from None
+            raise FileFormatError(f"{w}: {exc}") from None
+    return out
+
+
+# ---------------------------------------------------------------------- read
+def _read_json(path) -> dict:
+    p = Path(path)
+    try:
+        if not p.exists():
+            raise FileFormatError(f"{p}: no such file")
+        if p.is_dir():
+            raise FileFormatError(f"{p}: is a directory, expected a JSON file")
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise FileFormatError(f"{p}: not a text file (expected JSON)") from None
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{p}: invalid JSON at line {exc.lineno}, column {exc.colno}: "
+                              f"{exc.msg}") from None
+
+
+def case_from_doc(doc, where: str = "case") -> Case:
+    """Parse a ``geomkit-case/1`` or geomdl JSON document (already decoded)."""
+    if not isinstance(doc, dict):
+        raise FileFormatError(f"{where}: expected a JSON object at the top level")
+    if "shape" in doc:
+        return Case(doc.get("name", ""), _from_geomdl_json(doc, where))
+    fmt = doc.get("format", CASE_FORMAT)
+    if fmt != CASE_FORMAT:
+        raise FileFormatError(f"{where}: unknown format {fmt!r} (expected {CASE_FORMAT!r} "
+                              "or geomdl JSON)")
+    if "surfaces" not in doc:
+        raise FileFormatError(f"{where}: no 'surfaces' list (not a {CASE_FORMAT} or geomdl "
+                              "JSON file)")
+    surfs = doc["surfaces"]
+    if not isinstance(surfs, list) or not surfs:
+        raise FileFormatError(f"{where}: 'surfaces' must be a non-empty list")
+    out = [surface_from_dict(d, f"{where}: surfaces[{k}]") for k, d in enumerate(surfs)]
+    truth = doc.get("truth") or {}
+    return Case(doc.get("name", ""), out, truth, doc.get("description", ""),
+                _units_from_doc(doc, where))
+
+
+def _units_from_doc(doc: dict, where: str):
+    from geomkit.units import canonical_units
+
+    u = doc.get("units")
+    if u is None:
+        return None
+    if not isinstance(u, str):
+        raise FileFormatError(f"{where}: 'units' must be a string such as \"mm\", got "
+                              f"{type(u).__name__}")
+    try:
+        return canonical_units(u)
+    except InvalidInputError as exc:
+        raise FileFormatError(f"{where}: {exc}") from None
+
+
+CAD_SUFFIXES = (".igs", ".iges", ".stp", ".step")
+
+
+def load_case(path, *, skip_invalid: bool = False, skip_unsupported: bool = False) -> Case:
+    """Read a model file as a :class:`Case`: JSON (``geomkit-case/1`` with its truth
+    block, or geomdl JSON), IGES (``.igs`` / ``.iges``, :func:`geomkit.read_iges`) or
+    STEP (``.stp`` / ``.step``, :func:`geomkit.read_step`, needs Open CASCADE), told
+    apart by the file's suffix.
+
+    ``skip_invalid`` / ``skip_unsupported`` are the CAD readers' options: without them a
+    face that cannot be read stops the read (every such face named); with them the
+    faces left out are listed in ``case.skipped`` (never silent: an answer computed on
+    part of a model is not the model's).  A JSON case is read whole: they do not apply.
+    """
+    p = Path(path)
+    if p.suffix.lower() in CAD_SUFFIXES:
+        return _cad_case(p, skip_invalid, skip_unsupported)
+    case = case_from_doc(_read_json(p), str(path))
+    if not case.name:
+        case.name = p.stem
+    return case
+
+
+def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
+    if p.suffix.lower() in (".igs", ".iges"):
+        from geomkit.cad.iges.reader import read_iges as read
+    else:
+        from geomkit.cad.step import read_step as read
+    res = read(p, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
+    return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
+                skipped=list(res.skipped))
+
+
+def _reader_units(units):
+    """A CAD reader's unit name in canonical form (``"MM"`` -> ``"mm"``); a name
+    geomkit does not know is kept as the file states it."""
+    from geomkit.units import canonical_units
+
+    if not units:
+        return None
+    try:
+        return canonical_units(units)
+    except InvalidInputError:
+        return str(units)
+
+
+def load(path, *, skip_invalid: bool = False, skip_unsupported: bool = False
+         ) -> list[Surface]:
+    """Read the surfaces of a model file: ``geomkit-case/1`` or geomdl JSON, IGES or
+    STEP (by suffix; see :func:`load_case`, whose ``skipped`` list says which faces a
+    ``skip_unsupported`` / ``skip_invalid`` read left out).
+
+    Raises
+    ------
+    FileFormatError
+        Missing file, invalid JSON, unknown format or missing fields (the message
+        names the file and the field); a CAD file with faces that cannot be read
+        (each named) unless skipped.
+    InvalidSurfaceError
+        A surface that fails validation (the field path names the surface).
+    MissingDependencyError
+        A STEP file without Open CASCADE installed.
+    """
+    return load_case(path, skip_invalid=skip_invalid,
+                     skip_unsupported=skip_unsupported).surfaces
+
+
+# --------------------------------------------------------------------- write
+def save(path, surfaces, truth: dict | None = None, name: str | None = None,
+         format: str = "geomkit-case/1", overwrite: bool = False,
+         units: str | None = None) -> Path:
+    """Write surfaces as ``geomkit-case/1`` (default) or ``"geomdl"`` JSON.
+
+    ``units`` (e.g. ``"mm"``) is written as the case's top-level ``units`` field
+    (geomdl JSON has no place for it: refused there).  The file is written to a temporary name and renamed into place, so a failure
+    never leaves a half-written file; an existing file is kept unless
+    ``overwrite=True``.  geomdl JSON cannot hold trims: trimmed surfaces are refused.
+    """
+    if isinstance(surfaces, Surface):
+        surfaces = [surfaces]
+    if not isinstance(surfaces, (list, tuple)):
+        raise InvalidInputError(f"expected a Surface or a list of Surfaces, got "
+                                f"{type(surfaces).__name__}", "surfaces")
+    surfaces = list(surfaces)
+    if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
+        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces",
+                                "surfaces")
+    p = Path(path)
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    if units is not None:
+        from geomkit.units import canonical_units
+
+        units = canonical_units(units)
+    if format == CASE_FORMAT:
+        doc = {"format": CASE_FORMAT, "name": name or p.stem,
+               "surfaces": [surface_to_dict(s) for s in surfaces], "truth": truth or {}}
+        if units is not None:
+            doc["units"] = units
+    elif format == "geomdl":
+        if units is not None:
+            raise InvalidInputError("geomdl JSON cannot store units; use "
+                                    f"format={CASE_FORMAT!r}", "units")
+        if any(s.trim for s in surfaces):
+            raise InvalidSurfaceError("geomdl JSON cannot store trim loops; use "
+                                      f"format={CASE_FORMAT!r}", "trim")
+        data = []
+        for s in surfaces:
+            nu, nv = s.shape
+            cp = {"points": s.control_points.reshape(-1, 3).tolist()}
+            if s.is_rational:
+                cp["weights"] = s.weights.reshape(-1).tolist()
+            data.append({"type": "spline", "rational": s.is_rational, "dimension": 3,
+                         "degree_u": s.degree_u, "degree_v": s.degree_v,
+                         "knotvector_u": s.knots_u.tolist(),
+                         "knotvector_v": s.knots_v.tolist(),
+                         "size_u": nu, "size_v": nv, "control_points": cp})
+        doc = {"shape": {"type": "surface", "count": len(data), "data": data}}
+    else:
+        raise InvalidInputError(f"unknown format {format!r}; use {CASE_FORMAT!r} or 'geomdl'",
+                                "format")
+    return _atomic_write(p, lambda fh: fh.write(json.dumps(doc, indent=1).encode("utf-8")))
+
+
+def _umask() -> int:
+    """The process umask, read without changing it where the system allows
+    (``/proc/self/status`` on Linux), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _atomic_write(p: Path, write) -> Path:
+    """Write through a temporary file in the target folder, then rename into place.
+
+    The file gets the mode a plain ``open(p, "w")`` would give (``0o666`` less the
+    umask: 0644 under the usual 022), not the 0600 of the temporary file."""
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            os.fchmod(fh.fileno(), 0o666 & ~_umask())
+            write(fh)
+        os.replace(tmp, p)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p
+
+
+def export_mesh(mesh, path, overwrite: bool = False) -> Path:
+    """Write a :class:`~geomkit.Mesh` as STL (binary), PLY (binary) or OBJ, by extension.
+
+    Written atomically; an existing file is kept unless ``overwrite=True``.
+    """
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MESH_FORMATS:
+        raise InvalidInputError(f"unknown mesh format {p.suffix!r}; use one of "
+                                f"{', '.join(MESH_FORMATS)}", "path")
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    data = mesh.to_trimesh().export(file_type=ext[1:])
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    return _atomic_write(p, lambda fh: fh.write(data))

@@ -1,0 +1,1 @@
+"""The jobs users run: deviation and its statistics, streaming, Dask, batches, clearance."""

@@ -1,0 +1,263 @@
+"""Streamed CMM deviation: a scan of any size, chunk by chunk, results written as they
+come, statistics computed incrementally (:mod:`geomkit.jobs.stats`).
+
+The per-point values are those of :func:`geomkit.jobs.deviation.deviation` bit for bit:
+the same :class:`~geomkit.Projector` chunk projection and the same probe compensation
+(:func:`geomkit.jobs.deviation._compensate`).  Memory is bounded by the chunk size (the
+projector, one chunk of points and results, and the writer's buffer).
+
+Alignment (``align=True``) is fitted on a bounded, deterministic subsample of the scan
+(every k-th point, at most :data:`ALIGN_SAMPLE` points; one extra read pass) and the
+transform is then applied to every point; the summary states the sample size.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from geomkit.jobs.deviation import _apply, _as_tolerance, _check_settings, _compensate, align_rigid
+from geomkit.jobs.stats import DeviationStats
+from geomkit.errors import InvalidInputError, MissingDependencyError
+from geomkit.query.projection import _cached_projector
+from geomkit.query.results import STATUS_NAMES
+from geomkit.exchange.scans import DEFAULT_CHUNK, iter_scan
+
+__all__ = ["stream_deviation", "COLUMNS", "ALIGN_SAMPLE"]
+
+ALIGN_SAMPLE = 200_000
+"""Points at most in the alignment subsample of a streamed scan."""
+COLUMNS = ("index", "x", "y", "z", "ax", "ay", "az", "foot_x", "foot_y", "foot_z", "u",
+           "v", "surface", "nx", "ny", "nz", "signed_distance", "deviation", "status",
+           "edge")
+"""Per-point columns, those of :func:`geomkit.report.files.write_deviation_csv`."""
+
+
+def deviation_chunk(projector, P0, N, T, probe_radius, max_distance, offset):
+    """Deviation columns of one chunk of points (row ``offset`` onwards).
+
+    Returns
+    -------
+    dict
+        ``{column: (m,) array}`` for :data:`COLUMNS` (status as int8 codes), the
+        values of :func:`geomkit.jobs.deviation.deviation` for these points.
+    """
+    aligned = T is not None
+    P = _apply(T, P0) if aligned else P0
+    Nt = None if N is None else (N @ T[:3, :3].T if aligned else N)
+    md = None if max_distance is None else max_distance + probe_radius
+    [pr] = projector.iter_project(P, md, chunk_size=max(1, P.shape[0]))
+    dev, status, edge = _compensate(pr, Nt, probe_radius, max_distance)
+    m = P0.shape[0]
+    out = {"index": np.arange(offset, offset + m, dtype=np.int64)}
+    for k, name in enumerate("xyz"):
+        out[name] = P0[:, k]
+        out["a" + name] = P[:, k]
+        out["foot_" + name] = pr.point[:, k]
+        out["n" + name] = pr.normal[:, k]
+    out.update(u=pr.uv[:, 0], v=pr.uv[:, 1], surface=pr.surface.astype(np.int64),
+               signed_distance=pr.signed_distance, deviation=dev, status=status,
+               edge=edge.astype(np.int8))
+    return {c: np.ascontiguousarray(out[c]) for c in COLUMNS}
+
+
+# ------------------------------------------------------------------ writers
+class CSVWriter:
+    """Per-point CSV rows appended chunk by chunk (through pyarrow's C++ CSV writer
+    when installed, else Python; both round-trip every float exactly)."""
+
+    def __init__(self, fh):
+        self.fh = fh
+        try:
+            import pyarrow.csv  # noqa: F401
+            self.arrow = True
+        except ImportError:
+            self.arrow = False
+        fh.write((",".join(COLUMNS) + "\n").encode())
+
+    def write(self, cols):
+        if self.arrow:
+            import pyarrow.csv as pc
+
+            t = _arrow_table(cols)
+            pc.write_csv(t, self.fh, pc.WriteOptions(include_header=False,
+                                                     quoting_style="none"))
+            return
+        names = [STATUS_NAMES.get(int(s), str(int(s))) for s in cols["status"]]
+        f = (lambda x: repr(x) if math.isfinite(x) else "")
+        fl = {c: cols[c].tolist() for c in COLUMNS if c not in ("index", "surface",
+                                                                 "status", "edge")}
+        lines = []
+        for i in range(cols["index"].size):
+            row = [str(int(cols["index"][i]))]
+            row += [f(fl[c][i]) for c in COLUMNS[1:12]]
+            row.append(str(int(cols["surface"][i])))
+            row += [f(fl[c][i]) for c in COLUMNS[13:18]]
+            row += [names[i], str(int(cols["edge"][i]))]
+            lines.append(",".join(row))
+        self.fh.write(("\n".join(lines) + "\n").encode())
+
+    def close(self):
+        pass
+
+
+def _arrow_table(cols):
+    import pyarrow as pa
+
+    arrays = []
+    for c in COLUMNS:
+        a = cols[c]
+        if c == "status":
+            arrays.append(pa.array(_STATUS_LUT[a.astype(np.int64)]))
+        elif a.dtype.kind == "f":
+            arrays.append(pa.array(a, mask=~np.isfinite(a)))
+        else:
+            arrays.append(pa.array(a))
+    return pa.table(arrays, names=list(COLUMNS))
+
+
+_STATUS_LUT = np.array([STATUS_NAMES.get(i, str(i)) for i in range(128)], dtype=object)
+
+
+class ParquetWriter:
+    """Per-point rows as Parquet row groups (one per chunk), via pyarrow."""
+
+    def __init__(self, fh):
+        pq = _pyarrow_parquet()
+        self.fh = fh
+        self.pq = pq
+        self.w = None
+
+    def write(self, cols):
+        t = _arrow_table(cols)
+        if self.w is None:
+            self.w = self.pq.ParquetWriter(self.fh, t.schema)
+        self.w.write_table(t)
+
+    def close(self):
+        if self.w is not None:
+            self.w.close()
+
+
+def _pyarrow_parquet():
+    try:
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise MissingDependencyError("--format parquet needs pyarrow: pip install "
+                                     "geomkit[scale]") from None
+    return pq
+
+
+WRITERS = {"csv": CSVWriter, "parquet": ParquetWriter}
+
+
+# ------------------------------------------------------------------ the job
+def _align_sample(path, chunk_size):
+    """Rows 0, k, 2k, ... of the scan with k (a power of 2) doubled whenever the
+    sample would exceed :data:`ALIGN_SAMPLE` points: ``(points, normals, k)``."""
+    k, keep_p, keep_n, i0 = 1, None, None, 0
+    for P, N in iter_scan(path, chunk_size):
+        sel = (np.arange(i0, i0 + P.shape[0]) % k) == 0
+        i0 += P.shape[0]
+        keep_p = P[sel] if keep_p is None else np.concatenate([keep_p, P[sel]])
+        if N is not None:
+            keep_n = N[sel] if keep_n is None else np.concatenate([keep_n, N[sel]])
+        while keep_p.shape[0] > ALIGN_SAMPLE:  # multiples of k -> multiples of 2k
+            k *= 2
+            keep_p = keep_p[::2]
+            keep_n = None if keep_n is None else keep_n[::2]
+    return keep_p, keep_n, k
+
+
+def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
+                     probe_radius: float = 0.0, align: bool = False,
+                     max_distance: float | None = None, tolerance=None,
+                     chunk_size: int = DEFAULT_CHUNK, client=None, progress=None,
+                     require_valid: bool = True) -> dict:
+    """Deviation of a scan file streamed chunk by chunk.
+
+    Parameters
+    ----------
+    surfaces : Surface or list of Surface
+    scan : str or Path
+        A scan file (:func:`geomkit.exchange.scans.iter_scan` formats).
+    out : binary file object, optional
+        Per-point rows are written here as they come (``fmt`` "csv" or "parquet").
+    probe_radius, align, max_distance, tolerance
+        As :func:`geomkit.jobs.deviation.deviation` (alignment on a subsample, see the
+        module doc).
+    chunk_size : int
+        Points per chunk (and per Dask task).
+    client : dask.distributed.Client, optional
+        Run the chunks as tasks on this cluster (:mod:`geomkit.jobs.distributed`).
+    progress : callable(done_points, total or None), optional
+    require_valid : bool
+        Raise when no point has a deviation (else NaN statistics).
+
+    Returns
+    -------
+    dict
+        The statistics (:class:`~geomkit.jobs.stats.DeviationStats`), settings,
+        ``chunks``, ``seconds`` and ``alignment``.
+    """
+    t0 = time.perf_counter()
+    probe_radius, max_distance = _check_settings(probe_radius, max_distance)
+    tol = _as_tolerance(tolerance)
+    if fmt not in WRITERS:
+        raise InvalidInputError(f"expected one of {', '.join(WRITERS)}, got {fmt!r}",
+                                "format")
+    projector = _cached_projector(surfaces, None)
+    T, align_info = None, None
+    if align:
+        Ps, Ns, k = _align_sample(scan, chunk_size)
+        md = None if max_distance is None else max_distance + probe_radius
+        align_info = align_rigid(projector.surfaces, Ps, Ns, probe_radius, md)
+        align_info.update(sample_points=int(Ps.shape[0]), sample_stride=int(k))
+        T = align_info["transform"]
+    writer = WRITERS[fmt](out) if out is not None else None
+    stats = DeviationStats(tol)
+    chunks = iter_scan(scan, chunk_size)
+    if client is not None:
+        from geomkit.jobs.distributed import run_chunks
+
+        results = run_chunks(client, projector.surfaces, chunks, T, probe_radius,
+                             max_distance)
+    else:
+        results = _local(projector, chunks, T, probe_radius, max_distance)
+    nchunks = 0
+    for cols in results:
+        stats.update(cols["deviation"], cols["status"], cols["edge"].astype(bool))
+        if writer is not None:
+            writer.write(cols)
+        nchunks += 1
+        if progress is not None:
+            progress(stats.n, None)
+    if writer is not None:
+        writer.close()
+    st = stats.result(require_valid=require_valid)
+    st.update(probe_radius=probe_radius, max_distance=max_distance,
+              tolerance=list(tol) if tol else None, chunks=nchunks, chunk_size=chunk_size,
+              streamed=True, workers=_nworkers(client))
+    st["alignment"] = None
+    if align_info is not None:
+        st["alignment"] = {"transform": np.asarray(T).tolist(),
+                           **{k: align_info[k] for k in
+                              ("rms_before", "rms_after", "iterations", "rank",
+                               "converged", "sample_points", "sample_stride")}}
+    st["seconds"] = time.perf_counter() - t0
+    return st
+
+
+def _nworkers(client):
+    if client is None:
+        return 0
+    return len(client.scheduler_info().get("workers", {}))
+
+
+def _local(projector, chunks, T, probe_radius, max_distance):
+    offset = 0
+    for P, N in chunks:
+        yield deviation_chunk(projector, P, N, T, probe_radius, max_distance, offset)
+        offset += P.shape[0]

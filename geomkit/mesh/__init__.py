@@ -1,0 +1,1 @@
+"""Meshes of surfaces: the Mesh type, tessellation to a tolerance, trim polylines."""

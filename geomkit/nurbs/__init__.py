@@ -1,0 +1,1 @@
+"""Exact NURBS surfaces: the Surface type, evaluation, trims, Bezier extraction."""

@@ -1,0 +1,1 @@
+"""Distance queries: point projection, the voxel grid, surface distance, results."""

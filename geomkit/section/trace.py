@@ -1,0 +1,333 @@
+"""Tracing of a plane section on one surface: leaves -> crossings -> chains -> exact points.
+
+Private helper of :mod:`geomkit.section.plane` (Paper 2 plus certification and Newton
+refinement).  Works in the parameter plane of one surface; joining across surfaces,
+trims and the public result live in :mod:`geomkit.section.plane`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from geomkit._kernels import section as K
+from geomkit._kernels.surface import surface_points
+
+TTOL = 1e-15          # edge-root bracket, in the edge parameter t in [0, 1]
+MAX_ROUNDS = 60       # chord-refinement rounds (each halves the open segments)
+
+
+class _Eval:
+    """Kernel arguments of one surface and the plane, bundled."""
+
+    def __init__(self, surface, plane):
+        self.s = surface
+        self.args = (surface.homogeneous, surface.degree_u, surface.degree_v,
+                     surface.knots_u, surface.knots_v, plane)
+        (u0, u1), (v0, v1) = surface.domain
+        self.box = np.array([u0, u1, v0, v1])
+        self.plane = plane
+
+    def f(self, uv):
+        uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
+        out = np.empty(uv.shape[0])
+        K.plane_values(*self.args, uv, out)
+        return out
+
+    def points(self, uv):
+        uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
+        out = np.empty((uv.shape[0], 3))
+        a = self.args
+        surface_points(a[0], a[1], a[2], a[3], a[4], uv, out)
+        return out
+
+    def roots(self, a, b, fa, fb):
+        """Parameters of the root on segments a -> b (fa * fb < 0), (n, 2)."""
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        b = np.ascontiguousarray(b, dtype=np.float64)
+        t = np.empty(a.shape[0])
+        K.edge_roots(*self.args, a, b, np.ascontiguousarray(fa), np.ascontiguousarray(fb),
+                     TTOL, t)
+        return a + t[:, None] * (b - a)
+
+    def project(self, uv, maxstep, ftol, maxit=40):
+        uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
+        out = np.empty_like(uv)
+        f = np.empty(uv.shape[0])
+        K.project(*self.args, uv, np.ascontiguousarray(maxstep, dtype=np.float64), self.box,
+                  ftol, maxit, out, f)
+        return out, f
+
+
+def _merge_nodes(uv, radius):
+    """Union nodes closer than ``radius`` in UV; returns (representative index per node)."""
+    n = uv.shape[0]
+    parent = np.arange(n)
+    if n > 1:
+        pairs = cKDTree(uv).query_pairs(radius, output_type="ndarray")
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for i, j in pairs:
+            ri, rj = find(i), find(j)
+            if ri != rj:
+                parent[max(ri, rj)] = min(ri, rj)
+        for i in range(n):
+            parent[i] = find(i)
+    return parent
+
+
+def trace_surface(surface, plane, tol, zsnap, min_diam, max_depth=80):
+    """Section chains of one surface in its parameter plane.
+
+    Returns
+    -------
+    chains : list of dict ``{"uv": (k, 2), "closed": bool, "chord": float}``, points
+        exact (Newton / bracketed roots on f = 0) and spaced so that the chord
+        deviation measured at every segment's curve midpoint is <= ``tol``.
+    contacts : (m, 2) UV of isolated contact candidates (tangency, pole).
+    stats : dict of counts.
+    """
+    ev = _Eval(surface, plane)
+    bp = surface.bezier_patches()
+    leaves, visited = K.subdivide(bp.homogeneous, bp.u_breaks, bp.v_breaks, plane, zsnap,
+                                  min_diam, max_depth)
+    stats = {"subpatches": int(visited), "leaves": int(len(leaves)),
+             "unresolved": int(np.sum(leaves[:, 4] == K.UNRESOLVED)) if len(leaves) else 0}
+    if len(leaves) == 0:
+        return [], np.empty((0, 2)), stats
+    dom = max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
+    # ---- corners: one evaluation per distinct UV corner
+    L = len(leaves)
+    cu = np.stack([leaves[:, 0], leaves[:, 1], leaves[:, 1], leaves[:, 0]], axis=1)
+    cv = np.stack([leaves[:, 2], leaves[:, 2], leaves[:, 3], leaves[:, 3]], axis=1)
+    corners = np.stack([cu.ravel(), cv.ravel()], axis=1)
+    cuniq, cidx = np.unique(corners, axis=0, return_inverse=True)
+    cidx = cidx.reshape(L, 4)
+    fc = ev.f(cuniq)
+    fc[np.abs(fc) <= zsnap] = 0.0
+    # ---- strict crossings on leaf edges (distinct edges only)
+    EDGES = ((0, 1), (1, 2), (3, 2), (0, 3))
+    ea = cidx[:, [0, 1, 3, 0]]
+    eb = cidx[:, [1, 2, 2, 3]]
+    fa, fb = fc[ea], fc[eb]
+    strict = (fa * fb) < 0
+    key = np.stack([ea[strict], eb[strict]], axis=1)
+    ukey, kinv = np.unique(key, axis=0, return_inverse=True) if len(key) else (
+        np.empty((0, 2), int), np.empty(0, int))
+    roots = ev.roots(cuniq[ukey[:, 0]], cuniq[ukey[:, 1]], fc[ukey[:, 0]], fc[ukey[:, 1]]) \
+        if len(ukey) else np.empty((0, 2))
+    # node table: corners first (ids 0..nc-1), then roots
+    nc = len(cuniq)
+    node_uv = np.concatenate([cuniq, roots])
+    rep = _merge_nodes(node_uv, 1e-11 * dom)
+    root_id = np.full((L, 4), -1)
+    root_id[strict] = nc + kinv.ravel()
+    # ---- link crossings inside each leaf
+    edges = {}
+    hubs = []  # (leaf, [node ids])
+    used = np.zeros(len(node_uv), bool)
+    for li in range(L):
+        state = leaves[li, 4]
+        f4 = fc[cidx[li]]
+        for conv in (1, 2):
+            pos = f4 >= 0 if conv == 1 else f4 > 0
+            cross = []
+            for e, (i, j) in enumerate(EDGES):
+                if pos[i] == pos[j]:
+                    continue
+                if f4[i] != 0 and f4[j] != 0:
+                    nid = root_id[li, e]
+                else:
+                    nid = cidx[li, i] if f4[i] == 0 else cidx[li, j]
+                cross.append(rep[nid])
+            if not cross:
+                continue
+            if len(cross) == 2:
+                pairs = [(cross[0], cross[1])]
+            elif state != K.UNRESOLVED:
+                c = 1 if state == K.MONO_U else 0      # graph coordinate
+                order = sorted(cross, key=lambda n: (node_uv[n, c], node_uv[n, 1 - c]))
+                pairs = list(zip(order[0::2], order[1::2]))
+            else:
+                hubs.append((li, cross))
+                pairs = []
+            for a, b in pairs:
+                if a != b:
+                    edges[(min(a, b), max(a, b))] = li
+                    used[a] = used[b] = True
+            break  # the second convention only where the first found nothing
+    # hubs: a junction point inside an unresolved leaf (singular crossing)
+    if hubs:
+        boxes = np.array([leaves[li, :4] for li, _ in hubs])
+        huv = np.empty((len(hubs), 2))
+        hf = np.empty(len(hubs))
+        K.critical_points(*ev.args, boxes, 30, huv, hf)
+        base = len(node_uv)
+        node_uv = np.concatenate([node_uv, huv])
+        rep = np.concatenate([rep, base + np.arange(len(hubs))])
+        used = np.concatenate([used, np.ones(len(hubs), bool)])
+        for k, (li, cross) in enumerate(hubs):
+            for a in cross:
+                edges[(min(a, base + k), max(a, base + k))] = li
+                used[a] = True
+    # ---- contact candidates: zero corners on no segment; unresolved leaves without any
+    zero_c = np.nonzero((fc == 0) & ~used[rep[:nc]])[0]
+    contacts = [cuniq[zero_c]]
+    lonely = [li for li in range(L) if leaves[li, 4] == K.UNRESOLVED
+              and not np.any(used[rep[cidx[li]]])]
+    if lonely:
+        boxes = np.ascontiguousarray(leaves[lonely, :4])
+        cuv = np.empty((len(lonely), 2))
+        cf = np.empty(len(lonely))
+        K.critical_points(*ev.args, boxes, 30, cuv, cf)
+        contacts.append(cuv[cf <= zsnap])
+    contacts = np.concatenate(contacts) if contacts else np.empty((0, 2))
+    # ---- chains
+    chains = _chains(edges)
+    stats["crossings"] = int(len(roots))
+    out = []
+    for nodes, closed in chains:
+        segleaf = np.array([edges[(min(a, b), max(a, b))] for a, b in zip(nodes[:-1], nodes[1:])])
+        uv, chord = _refine(ev, leaves, node_uv[nodes], segleaf, tol, zsnap)
+        if closed:
+            uv = uv[:-1]
+        out.append({"uv": uv, "closed": bool(closed), "chord": chord})
+    return out, contacts, stats
+
+
+def _chains(edges):
+    """Split a graph (dict of (a, b) edges) into chains of node ids.
+
+    Nodes of degree != 2 end chains (so branches meet at junctions); what remains are
+    cycles.  Returns [(nodes list, closed)], a closed chain repeating its first node.
+    """
+    adj = {}
+    for a, b in edges:
+        adj.setdefault(a, []).append(b)
+        adj.setdefault(b, []).append(a)
+    seen = set()
+    out = []
+
+    def walk(start, nxt):
+        path = [start, nxt]
+        seen.add((min(start, nxt), max(start, nxt)))
+        prev, cur = start, nxt
+        while len(adj[cur]) == 2 and cur != start:
+            a, b = adj[cur]
+            step = b if a == prev else a
+            e = (min(cur, step), max(cur, step))
+            if e in seen:
+                break
+            seen.add(e)
+            path.append(step)
+            prev, cur = cur, step
+        return path
+
+    for n in adj:
+        if len(adj[n]) != 2:
+            for m in adj[n]:
+                if (min(n, m), max(n, m)) not in seen:
+                    out.append((walk(n, m), False))
+    for n in adj:
+        for m in adj[n]:
+            if (min(n, m), max(n, m)) not in seen:
+                path = walk(n, m)
+                out.append((path, path[0] == path[-1]))
+    return out
+
+
+def _midpoints(ev, leaves, a, b, leaf, zsnap):
+    """Exact curve points between consecutive exact points ``a``, ``b`` (n, 2).
+
+    In a leaf monotone in u the curve is a graph over v: the midpoint is the root on
+    the u-line through the middle v (bracketed by the leaf's sides); likewise for v.
+    Elsewhere (unresolved leaves, no bracket) Newton along the gradient.
+    """
+    m = 0.5 * (a + b)
+    out = m.copy()
+    state = leaves[leaf, 4]
+    done = np.zeros(len(m), bool)
+    for st, c in ((K.MONO_U, 0), (K.MONO_V, 1)):
+        sel = np.nonzero(state == st)[0]
+        if not len(sel):
+            continue
+        lo = m[sel].copy()
+        hi = m[sel].copy()
+        lo[:, c] = leaves[leaf[sel], 2 * c]
+        hi[:, c] = leaves[leaf[sel], 2 * c + 1]
+        flo, fhi = ev.f(lo), ev.f(hi)
+        flo[np.abs(flo) <= zsnap] = 0.0
+        fhi[np.abs(fhi) <= zsnap] = 0.0
+        br = flo * fhi < 0
+        if np.any(br):
+            i = sel[br]
+            out[i] = ev.roots(lo[br], hi[br], flo[br], fhi[br])
+            done[i] = True
+    rest = np.nonzero(~done)[0]
+    if len(rest):
+        step = np.linalg.norm(b[rest] - a[rest], axis=1)
+        out[rest], _ = ev.project(m[rest], step, 0.25 * zsnap)
+    return out
+
+
+def _refine(ev, leaves, uv, segleaf, tol, zsnap):
+    """Insert exact midpoints until every segment's chord deviation is <= tol.
+
+    Returns the refined (k, 2) UV polyline and the largest chord deviation measured
+    at the accepted segments (distance of the exact midpoint from the 3-D chord).
+    """
+    X = ev.points(uv)
+    active = np.ones(len(uv) - 1, bool)
+    chord = 0.0
+    for _ in range(MAX_ROUNDS):
+        idx = np.nonzero(active)[0]
+        if not len(idx):
+            break
+        a, b = uv[idx], uv[idx + 1]
+        mid = _midpoints(ev, leaves, a, b, segleaf[idx], zsnap)
+        M = ev.points(mid)
+        A, B = X[idx], X[idx + 1]
+        d = B - A
+        ll = np.einsum("ij,ij->i", d, d)
+        t = np.clip(np.einsum("ij,ij->i", M - A, d) / np.where(ll > 0, ll, 1.0), 0, 1)
+        err = np.linalg.norm(A + t[:, None] * d - M, axis=1)
+        tiny = np.linalg.norm(b - a, axis=1) <= 1e-13
+        # safety factor 2: the midpoint deviation estimates the arc's largest one
+        # (exact for a circular arc; near a singular crossing the corner can be missed)
+        split = (err > 0.5 * tol) & ~tiny
+        # an S-shaped arc (inflection) has its midpoint on the chord: check the quarter
+        # points of the segments about to be accepted too
+        ok = np.nonzero(~split & ~tiny)[0]
+        if len(ok):
+            for lo_, hi_ in ((a[ok], mid[ok]), (mid[ok], b[ok])):
+                Q = ev.points(_midpoints(ev, leaves, lo_, hi_, segleaf[idx[ok]], zsnap))
+                tq = np.clip(np.einsum("ij,ij->i", Q - A[ok], d[ok])
+                             / np.where(ll[ok] > 0, ll[ok], 1.0), 0, 1)
+                eq = np.linalg.norm(A[ok] + tq[:, None] * d[ok] - Q, axis=1)
+                err[ok] = np.maximum(err[ok], eq)
+            split = (err > 0.5 * tol) & ~tiny
+        if np.any(~split):
+            chord = max(chord, float(err[~split].max()))
+        if not np.any(split):
+            break
+        # insert the midpoints of the split segments
+        s_idx = idx[split]
+        n = len(uv)
+        new_uv = np.insert(uv, s_idx + 1, mid[split], axis=0)
+        new_X = np.insert(X, s_idx + 1, M[split], axis=0)
+        new_leaf = np.insert(segleaf, s_idx + 1, segleaf[s_idx])
+        new_active = np.zeros(n - 1 + len(s_idx), bool)
+        pos = s_idx + np.arange(len(s_idx))   # position of the left half after insertion
+        new_active[pos] = True
+        new_active[pos + 1] = True
+        uv, X, segleaf, active = new_uv, new_X, new_leaf, new_active
+    else:
+        idx = np.nonzero(active)[0]
+        if len(idx):  # out of rounds: report what was reached
+            chord = max(chord, np.inf)
+    return uv, chord
