@@ -9,9 +9,8 @@ and :func:`geomkit.min_distance` against the minimum over all triangle pairs; th
 candidate search of :func:`geomkit.project_points` (a :class:`Projector` with each
 voxel size) against the analytic distance to planar rectangles.
 
-The pyramid of a grid with more than 2**8 voxels along an axis has 9 or more
-levels: such grids were answered from unowned memory before the heap values kept
-their level in bits of their own (:mod:`geomkit._kernels.voxel`).
+Grids with more than 2**8 voxels along an axis have 9 or more pyramid levels: the
+heap values' encoding (:mod:`geomkit._kernels.voxel`) must hold every level.
 """
 
 from __future__ import annotations
