@@ -1,8 +1,8 @@
 """Build hook: the ahead-of-time compiled kernels (docs/compile.md).
 
 Everything else is in pyproject.toml.  ``build_ext`` runs
-``geomkit/_kernels/_aot_build.py build`` (numba's pycc) in a child process and puts the
-extension module ``geomkit/_kernels/_aot_lib`` and its manifest into the build (or,
+``geomkit/_kernels/numba_ext/aot_build.py build`` (numba's pycc) in a child process and puts the
+extension module ``geomkit/_kernels/numba_ext/aot_lib`` and its manifest into the build (or,
 for ``pip install -e .``, into the source tree).  The AOT build never fails the
 install: if it fails the package is installed without it and runs on the JIT
 (``geomkit --version`` says which).  ``GEOMKIT_NO_AOT=1`` skips it.
@@ -19,7 +19,7 @@ from setuptools.command.build_ext import build_ext
 from setuptools.dist import Distribution
 
 ROOT = Path(__file__).resolve().parent
-KERNELS = ("geomkit", "_kernels")
+KERNELS = ("geomkit", "_kernels", "numba_ext")
 
 
 class BinaryDistribution(Distribution):
@@ -35,8 +35,8 @@ class build_aot(build_ext):
         self._aot_outputs = []
         out = (ROOT if self.inplace else Path(self.build_lib)).joinpath(*KERNELS)
         out.mkdir(parents=True, exist_ok=True)
-        man = out / "_aot_manifest.json"
-        for old in list(out.glob("_aot_lib*")) + [man]:  # a previous build's
+        man = out / "aot_manifest.json"
+        for old in list(out.glob("aot_lib*")) + [man]:  # a previous build's
             if old.exists():
                 old.unlink()
         if os.environ.get("GEOMKIT_NO_AOT", "") not in ("", "0"):
@@ -44,10 +44,10 @@ class build_aot(build_ext):
             return
         t0 = time.time()
         try:
-            # by path, without geomkit/__init__.py (see _aot_build.by_path_command)
+            # by path, without geomkit/__init__.py (see aot_build.by_path_command)
             code = ("import runpy, sys; sys.argv = sys.argv[1:]; "
                     "runpy.run_path(sys.argv[0], run_name='__main__')")
-            tool = ROOT / "geomkit" / "_kernels" / "_aot_build.py"
+            tool = ROOT.joinpath(*KERNELS, "aot_build.py")
             r = subprocess.run([sys.executable, "-c", code, str(tool), "build", str(out)],
                                cwd=str(ROOT))
             ok = r.returncode == 0 and man.exists()
@@ -55,14 +55,14 @@ class build_aot(build_ext):
             print(f"geomkit: ahead-of-time build did not run: {e}")
             ok = False
         if not ok:
-            for f in list(out.glob("_aot_lib*")) + [man]:
+            for f in list(out.glob("aot_lib*")) + [man]:
                 if f.exists():
                     f.unlink()
             print("geomkit: WARNING: the ahead-of-time kernel build failed; geomkit "
                   "will compile its kernels on first use (JIT)")
             return
         print(f"geomkit: ahead-of-time kernels built in {time.time() - t0:.0f} s")
-        self._aot_outputs = [str(p) for p in out.glob("_aot_lib*")] + [str(man)]
+        self._aot_outputs = [str(p) for p in out.glob("aot_lib*")] + [str(man)]
 
     def get_outputs(self):
         return super().get_outputs() + list(getattr(self, "_aot_outputs", []))

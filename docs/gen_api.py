@@ -3,7 +3,7 @@ signature and the first paragraph of its docstring.  Run after changing the API:
 
     python docs/gen_api.py
 
-tests/test_docs.py checks that docs/api.md is what this script writes."""
+tests/package/test_docs.py checks that docs/api.md is what this script writes."""
 
 from __future__ import annotations
 

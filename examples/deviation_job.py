@@ -6,7 +6,7 @@ import sys
 import tempfile
 
 from geomkit import samples
-from geomkit.cli.demo import synthetic_scan
+from geomkit.jobs.demo import synthetic_scan
 from geomkit.jobs.deviation import deviation
 from geomkit.report.files import (plot_deviation_map, plot_histogram, prepare_outputs,
                             write_deviation_csv, write_json)

@@ -42,7 +42,7 @@ MOVED = {
     "geomkit.clearance": ("geomkit.jobs.clearance",),
     "geomkit.report_html": ("geomkit.report.html",),
     "geomkit.report_pdf": ("geomkit.report.pdf",),
-    "geomkit.demo": ("geomkit.cli.demo",),
+    "geomkit.demo": ("geomkit.jobs.demo",),
     "geomkit.oracles": ("geomkit.bench.oracles",),
     "geomkit.oracles.occ": ("geomkit.bench.oracles.occ",),
 }

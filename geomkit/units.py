@@ -53,8 +53,8 @@ def canonical_units(text: str) -> str:
 
 
 def unit_label(units: str | None) -> str:
-    """``"mm"``, or ``"model units"`` when unknown."""
-    return units if units else "model units"
+    """``"mm"``, or ``"model units"`` when unknown (None or blank)."""
+    return units.strip() if units and units.strip() else "model units"
 
 
 def dxf_insunits(units: str | None) -> int:

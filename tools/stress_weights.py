@@ -1,7 +1,7 @@
 """Tessellation of random rational surfaces with independent weights: a long run.
 
 ``python tools/stress_weights.py [count] [seed] [max_seconds]``: draws ``count``
-surfaces from ``tests/test_tessellate_weights.py``'s generator with independent
+surfaces from ``tests/mesh/test_tessellate_weights.py``'s generator with independent
 weights (ratios up to 1e6 between neighbouring control points), tessellates each at a
 tolerance of 1e-4 to 1e-2 of its size and prints the surfaces that end above
 ``tol`` (a :class:`~geomkit.errors.ToleranceNotMetWarning`) or take longer than
@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+# tests/ for the helpers package the test module imports, tests/mesh/ for the module
+sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "mesh")]
 
 import geomkit  # noqa: E402
 from test_tessellate_weights import random_rational  # noqa: E402

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from .numba_ext.policy import jit
 
 
 @jit

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit_plain as jit, prun
+from .numba_ext.policy import jit_plain as jit, prun
 
 from .basis import ders_basis_funs, ders_scratch, find_span
 

@@ -20,7 +20,7 @@ int64 ``order`` (m,) and ``face_tags`` (m,); the body's ``N``, ``T``, ``order``,
 records keep their offsets modulo 128 bytes, and it sits next to the root record:
 a root-only query reads the start of each buffer and nothing else).  The kernel
 takes its six arguments as the caller's Python objects, unconverted
-(:mod:`geomkit._kernels._pyobj`: numba's conversion of two arrays and four
+(:mod:`geomkit._kernels.numba_ext.pyobj`: numba's conversion of two arrays and four
 addresses was most of a root-only call): the two bodies' buffers (read-only
 float64 arrays, their length checked against their header), the two poses (an exact
 float64 2-D ``ndarray`` of any layout is read through NumPy's array struct by
@@ -51,8 +51,8 @@ from numba import carray
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-from ._numba import jit, jit_holding_gil, jit_inline
-from ._pyobj import (DATA, DIMS, NPY_DOUBLE, OB_TYPE, address, array_data, f64_load, f64_ptr,
+from .numba_ext.policy import jit, jit_holding_gil, jit_inline
+from .numba_ext.pyobj import (DATA, DIMS, NPY_DOUBLE, OB_TYPE, address, array_data, f64_load, f64_ptr,
                      i64_ptr)
 from .bvh import rigid_code
 from .bvh_query import LEAF_BUF, SAT_EPS, STACK
@@ -333,7 +333,7 @@ def _relative(Pa, Pb, Rr, tr):
 
 @jit
 def collide_many_boxes(i0, i1, ba, bb, PA, PB, first_only, colliding, npairs, tests):
-    """Serial worker (run by :func:`geomkit._kernels._numba.prun`): the packed bodies
+    """Serial worker (run by :func:`geomkit._kernels.numba_ext.policy.prun`): the packed bodies
     at the addresses ``ba``, ``bb`` (as :func:`collide_packed`; the caller keeps them
     alive) under the pose pairs ``k`` in ``[i0, i1)`` of ``PA``, ``PB`` ((n, 4, 4) or
     (1, 4, 4) float64 C-contiguous, broadcast; checked rigid by the caller): flags,
@@ -462,7 +462,7 @@ def _packed_body(obj, ndarray, float64):
 @jit_holding_gil
 def collide_packed(body_a, body_b, pose_a, pose_b, first_only, scratch):
     """:func:`collide_boxes` for two packed bodies under two poses; every argument is
-    the caller's Python object, passed by address (:data:`geomkit._kernels._pyobj.object_ref`):
+    the caller's Python object, passed by address (:data:`geomkit._kernels.numba_ext.pyobj.object_ref`):
     ``body_a``, ``body_b`` the bodies' packed buffers (float64 1-D ndarrays, see the
     module docstring), ``pose_a``, ``pose_b`` float64 2-D ndarrays of any layout
     (copied to ``W``) or ``None`` (the caller wrote that pose to ``W``),

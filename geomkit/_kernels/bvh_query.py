@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline
 from .bvh import refit_kdop
 from .triangles import _intersect_point, triangle_triangle_distance
 from .voxel import _heap_pop, _heap_push
@@ -196,6 +196,15 @@ def _size(kind, E, K, i):
 
 
 @jit_inline
+def split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
+    """The traversal's descent rule for node pair (i, j): split A's node (True) when
+    B's is a leaf, or when neither is and A's is at least as large; else split B's."""
+    la = childA[i, 0] < 0
+    lb = childB[j, 0] < 0
+    return lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j))
+
+
+@jit_inline
 def _move(T, r, M, m, out):
     for v in range(3):
         x, y, z = T[r, v, 0], T[r, v, 1], T[r, v, 2]
@@ -335,7 +344,7 @@ def collide_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                         if first_only:
                             return npairs, tests
             continue
-        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+        if split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
             st[top, 0] = childA[i, 1]
             st[top, 1] = j
             st[top + 1, 0] = childA[i, 0]
@@ -366,7 +375,7 @@ def distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
     """
     # the heap of node pairs (i << 32 | j; it grows) and scratch, owned here: the
     # search reads them, and the trees, through borrowed views (no atomic reference
-    # counting in its loop, geomkit._kernels._borrow)
+    # counting in its loop, geomkit._kernels.numba_ext.borrow)
     return _distance_search(
         kind, childA, rngA, CA, RA, EA, KA, TA, orderA, childB, rngB, CB, RB, EB, KB, TB,
         orderB, Rr, tr, MA, mA, MB, mB, order, margin, out_p, out_q,
@@ -438,7 +447,7 @@ def _distance_search(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                         if margin > 0.0 or d == 0.0:
                             return best, fa, fb, tests
             continue
-        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+        if split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
@@ -469,7 +478,7 @@ def _distance_search(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
 @jit
 def collide_many_kdops(i0, i1, childA, rngA, KA, TA, orderA, childB, rngB, KB, TB, orderB,
                        PA, PB, order, first_only, colliding, npairs, tests):
-    """Serial worker (run by :func:`geomkit._kernels._numba.prun`): 14-DOP trees
+    """Serial worker (run by :func:`geomkit._kernels.numba_ext.policy.prun`): 14-DOP trees
     under the pose pairs ``k`` in ``[i0, i1)`` (``PA``, ``PB`` as in
     :func:`collide_many_boxes`).  Each body is refitted in the world frame
     (Paper 5's rebuild, O(triangles)) only when its pose differs from the one of

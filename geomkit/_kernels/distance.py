@@ -36,8 +36,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all, borrow_opt
-from ._numba import jit_plain as jit
+from .numba_ext.borrow import borrow_all, borrow_opt
+from .numba_ext.policy import jit_plain as jit
 from .surface import D2, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH
 from .voxel import _heap_pop, _heap_push
@@ -236,14 +236,14 @@ def branch_and_bound(ctrl, ni, nf, n_nodes, nodes_a, nodes_b, Pw_all, U_all, V_a
 def _search(ctrl, ni, nf, ph, hlb, hab, sti, stf, mrow, nsep, surf, seg_all, trims, scr, tscr,
             uv_tol, tol, min_size, max_pairs, max_newton, step_tol, out_f, out_i):
     """The best-first loop of :func:`branch_and_bound` over borrowed views of every
-    array (no atomic reference counting, :mod:`geomkit._kernels._borrow`): the
+    array (no atomic reference counting, :mod:`geomkit._kernels.numba_ext.borrow`): the
     arguments, the caller's scratch and the pools (``ctrl``, ``ni``, ``nf``, ``ph``,
     the heap ``hlb``, ``hab``), which never grow here: before each pair, when one could
     not take two more nodes (``mrow`` control-point values each) or two more heap
     entries, the state goes back into ``sti`` / ``stf`` and the search returns False
     for the caller to grow them and call again.  True when the search is over
     (``out_f``, ``out_i`` filled).  ``seg_all`` is read through ``segb``
-    (:func:`~geomkit._kernels._borrow.borrow_opt`)."""
+    (:func:`~geomkit._kernels.numba_ext.borrow.borrow_opt`)."""
     Pw_all, U_all, V_all, meta, dom = borrow_all(surf)
     seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)
     segb = borrow_opt(seg_all)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit_plain as jit
+from .numba_ext.policy import jit_plain as jit
 from .distance_nodes import _uv_inside
 from .project import _surface
 from .project_newton import foot_newton

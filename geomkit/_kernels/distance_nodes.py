@@ -9,8 +9,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all, borrow_opt
-from ._numba import jit_plain as jit, jit_inline
+from .numba_ext.borrow import borrow_all, borrow_opt
+from .numba_ext.policy import jit_plain as jit, jit_inline
 from .trim import INSIDE, MAX_DEPTH, OUTSIDE, classify_point
 
 NI = 10
@@ -280,8 +280,8 @@ def init_nodes(ctrl, ni, nf, n, seg_all, seg_deg, seg_loop, seg_box, trim_meta, 
 @jit
 def _init_nodes_loop(ctrl, ni, nf, n, seg_all, trims, uv_tol, tscr):
     """The loop of :func:`init_nodes` over borrowed views of its arrays and the
-    caller's scratch (no atomic reference counting, :mod:`._borrow`; ``seg_all`` is
-    read through ``segb``, see :func:`~geomkit._kernels._borrow.borrow_opt`)."""
+    caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`; ``seg_all`` is
+    read through ``segb``, see :func:`~geomkit._kernels.numba_ext.borrow.borrow_opt`)."""
     ctrl, ni, nf = borrow_all((ctrl, ni, nf))
     segb = borrow_opt(seg_all)
     seg_deg, seg_loop, seg_box, trim_meta = borrow_all(trims)

@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit_plain as jit
+from .numba_ext.policy import jit_plain as jit
 
 NSEP = 10         # 2 fitted sphere centres, 2 points + 2 lines per foot
 SEP_W = 7         # sep rows: kind (0 point, 1 line), centre (3), direction (3)

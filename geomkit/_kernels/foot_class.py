@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from .numba_ext.policy import jit
 from .trim import BOUNDARY, INSIDE, OUTSIDE, classify_point
 
 

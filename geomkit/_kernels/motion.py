@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit_plain as jit
+from .numba_ext.policy import jit_plain as jit
 from .bvh import KDOP_DIRS
-from .bvh_query import LB_SHRINK, SAT_EPS, STACK, _move, _rel_box, _size, box_separation
+from .bvh_query import (LB_SHRINK, SAT_EPS, STACK, _move, _rel_box, box_separation,
+                        split_a)
 from .triangles import triangle_triangle_distance
 
 BARY_EPS = 1e-12
@@ -346,7 +347,7 @@ def toi_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                         fb = orderB[rb]
                         out_p[:] = p
             continue
-        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+        if split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]
@@ -525,7 +526,7 @@ def sweep_distance_trees(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                         if d == 0.0:
                             return best, best_s, fa, fb, tests
             continue
-        if lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j)):
+        if split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
             i0, j0, i1, j1 = childA[i, 0], j, childA[i, 1], j
         else:
             i0, j0, i1, j1 = i, childB[j, 0], i, childB[j, 1]

@@ -6,20 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit_plain as jit
-from .bvh_query import STACK, _move, _node_sep, _size
+from .numba_ext.policy import jit_plain as jit
+from .bvh_query import STACK, _move, _node_sep, split_a
 from .triangles import _intersect_point
 
 
 # ------------------------------------------------------------------ frame coherence
-@jit
-def _split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
-    """The traversal's rule: does node pair (i, j) descend into A's children?"""
-    la = childA[i, 0] < 0
-    lb = childB[j, 0] < 0
-    return lb or (not la and _size(kind, EA, KA, i) >= _size(kind, EB, KB, j))
-
-
 @jit
 def collide_front(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                   childB, rngB, CB, RB, EB, KB, TB, orderB,
@@ -82,7 +74,7 @@ def collide_front(kind, childA, rngA, CA, RA, EA, KA, TA, orderA,
                                 out_pairs[npairs, 1] = orderB[rb]
                             npairs += 1
                 continue
-            if _split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
+            if split_a(kind, childA, childB, EA, KA, EB, KB, i, j):
                 st[top, 0] = childA[i, 1]
                 st[top, 1] = j
                 st[top + 1, 0] = childA[i, 0]
@@ -119,7 +111,7 @@ def collapse_front(kind, childA, parentA, EA, KA, childB, parentB, EB, KB, front
         i = front[k, 0]
         j = front[k, 1]
         p = parentA[i]
-        if p >= 0 and _split_a(kind, childA, childB, EA, KA, EB, KB, p, j):
+        if p >= 0 and split_a(kind, childA, childB, EA, KA, EB, KB, p, j):
             s = childA[p, 1] if childA[p, 0] == i else childA[p, 0]
             key = s * nB + j
             q = np.searchsorted(skeys, key)
@@ -128,7 +120,7 @@ def collapse_front(kind, childA, parentA, EA, KA, childB, parentB, EB, KB, front
                 sib[k] = perm[q]
                 continue
         p = parentB[j]
-        if p >= 0 and not _split_a(kind, childA, childB, EA, KA, EB, KB, i, p):
+        if p >= 0 and not split_a(kind, childA, childB, EA, KA, EB, KB, i, p):
             s = childB[p, 1] if childB[p, 0] == j else childB[p, 0]
             key = i * nB + s
             q = np.searchsorted(skeys, key)

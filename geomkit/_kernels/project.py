@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline, prun
 from .foot_class import _deep_cell, _foot_class
 from .project_cert import cert_settle
 from .project_newton import (FOOT_NOT_CONVERGED, FOOT_OK, MAX_ITER,  # noqa: F401 (re-exported)
@@ -73,7 +73,7 @@ def _project_range(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
                    out_s, out_uv, out_d, out_st, out_cls, out_nf, out_lb, out_rest,
                    out_flags, out_work, sc, settled, SKL, scr, bin_, x, tscr):
     """The loop of :func:`_project_chunk` over borrowed arrays
-    (:mod:`geomkit._kernels._borrow`: no atomic reference counts in the loop; every
+    (:mod:`geomkit._kernels.numba_ext.borrow`: no atomic reference counts in the loop; every
     array here is owned by the caller, which outlives this call)."""
     (P, V, F, fdev, face_surf, face_uv, origin, lvl_dims, lvl_off, occ, start, tris,
      Pw_all, U_all, V_all, meta, dom, closed, trimmed, brk_all, brk_off) = borrow_all((

@@ -16,7 +16,7 @@ interior knot), so the values are those of ``surface_derivs2`` to rounding.
 
 from __future__ import annotations
 
-from ._numba import jit, jit_inline
+from .numba_ext.policy import jit, jit_inline
 from .basis import find_span
 from .surface import surface_derivs2
 

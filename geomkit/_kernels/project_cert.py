@@ -43,7 +43,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, jit_inline
+from .numba_ext.policy import jit, jit_inline
 
 CERT_MARGIN = 1e-9
 """Relative margin of the certificate's inequality (rounding of its evaluation)."""

@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, prun
 from .project import PROJECT_CHUNK, _surface
 from .project_bilinear import derivs2
 from .surface import (D2, POLE_RATIO, _binomial_table, derivs_scratch,
@@ -29,7 +29,7 @@ def _frames_chunk(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, 
 @jit
 def _frames_range(i0, i1, uv, surf, Pw_all, U_all, V_all, meta, dom, degen_rel, out_p,
                   out_n, scr, bin_, SKL):
-    """The loop of :func:`_frames_chunk` over borrowed arrays (:mod:`._borrow`)."""
+    """The loop of :func:`_frames_chunk` over borrowed arrays (:mod:`.numba_ext.borrow`)."""
     uv, surf, Pw_all, U_all, V_all, meta, dom, out_p, out_n, scr, bin_, SKL = borrow_all((
         uv, surf, Pw_all, U_all, V_all, meta, dom, out_p, out_n, scr, bin_, SKL))
     for i in range(i0, i1):

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ._numba import jit, jit_inline
+from .numba_ext.policy import jit, jit_inline
 from .project_bilinear import derivs2, derivs2_bilinear
 from .surface import surface_derivs2
 

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 
-from ._numba import jit, jit_inline
+from .numba_ext.policy import jit, jit_inline
 from .project_cert import box_bounds
 from .project_bilinear import derivs2
 from .trim import OUTSIDE

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline
 from .surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
 
 PRUNE = 0
@@ -281,7 +281,7 @@ def plane_values(Pw, p, q, U, V, plane, uv, out):
 @jit
 def _plane_values_loop(Pw, p, q, U, V, plane, uv, out, scratch):
     """The loop of :func:`plane_values` over borrowed views of its arrays and the
-    caller's scratch (no atomic reference counting, :mod:`._borrow`)."""
+    caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, uv, out, (Nu, Nv, left, right, tmp, X) = borrow_all((
         Pw, U, V, plane, uv, out, scratch))
     for i in range(uv.shape[0]):
@@ -310,7 +310,7 @@ def edge_roots(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out):
 
 @jit
 def _edge_roots_loop(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out, scratch):
-    """The loop of :func:`edge_roots` over borrowed views (:mod:`._borrow`)."""
+    """The loop of :func:`edge_roots` over borrowed views (:mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, a, b, fa, fb, out, (Nu, Nv, left, right, tmp, X) = borrow_all((
         Pw, U, V, plane, a, b, fa, fb, out, scratch))
     for i in range(a.shape[0]):
@@ -368,7 +368,7 @@ def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f)
 @jit
 def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
                   bin_, scr, SKL):
-    """The loop of :func:`project` over borrowed views (:mod:`._borrow`)."""
+    """The loop of :func:`project` over borrowed views (:mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL = borrow_all((
         Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL))
     for i in range(uv.shape[0]):
@@ -423,7 +423,7 @@ def critical_points(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f):
 @jit
 def _critical_points_loop(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f, bin_, scr,
                           SKL):
-    """The loop of :func:`critical_points` over borrowed views (:mod:`._borrow`)."""
+    """The loop of :func:`critical_points` over borrowed views (:mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, boxes, out_uv, out_f, bin_, scr, SKL = borrow_all((
         Pw, U, V, plane, boxes, out_uv, out_f, bin_, scr, SKL))
     for i in range(boxes.shape[0]):

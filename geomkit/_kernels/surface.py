@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline, prun
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
@@ -63,7 +63,7 @@ def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
 
 
 @jit
-def _surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
+def surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
     m = max(p, q) + 1
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
@@ -75,8 +75,8 @@ def _surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
 
 @jit
 def _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, scratch):
-    """The loop of :func:`_surface_points_range` over borrowed views (no atomic
-    reference counting, :mod:`._borrow`)."""
+    """The loop of :func:`surface_points_range` over borrowed views (no atomic
+    reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, uv, out, (Nu, Nv, left, right, tmp) = borrow_all((Pw, U, V, uv, out, scratch))
     for i in range(i0, i1):
         surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp, out[i])
@@ -84,7 +84,7 @@ def _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, scratch):
 
 def surface_points(Pw, p, q, U, V, uv, out):
     """Batch S(u, v) for ``uv`` (n, 2) into ``out`` (n, 3), parallel over points."""
-    prun(_surface_points_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, out)
+    prun(surface_points_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, out)
 
 
 @jit

@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline, prun
 from .basis import basis_funs, find_span
 from .surface import _binomial_table, derivs_scratch, surface_derivs, surface_point
 
@@ -103,7 +103,7 @@ def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
 @jit
 def _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out, scratch):
     """The loop of :func:`_cell_errors_range` over borrowed views of its arrays and
-    the caller's scratch (no atomic reference counting, :mod:`._borrow`)."""
+    the caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, cells, out, (Nu, Nv, left, right, tmp, G, Nrm, Bu, Bv, H) = borrow_all((
         Pw, U, V, cells, out, scratch))
     for c in range(i0, i1):
@@ -413,7 +413,7 @@ def _triangle_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, 
 def _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin,
                              vmax, exact_above, out, G, gc, scratch):
     """The loop of :func:`_triangle_deviation_range` over borrowed views (no atomic
-    reference counting, :mod:`._borrow`)."""
+    reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, tri_uv, tri_xyz, out, G, gc,
      (Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr)) = borrow_all((
          Pw, U, V, tri_uv, tri_xyz, out, G, gc, scratch))
@@ -512,7 +512,7 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
 def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                          exact_above, target, out, scratch):
     """The loop of :func:`_cell_deviation_range` over borrowed views (no atomic
-    reference counting, :mod:`._borrow`)."""
+    reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, cells, first, out,
      (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T, bin_,
       dscr)) = borrow_all((

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline
 
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
 
@@ -40,7 +40,7 @@ def edge_counts(hkeys, vkeys, key, cells, out):
     """Numbers of lattice points strictly inside the bottom, right, top and left edges
     of each cell (``out`` (N, 4)); ``hkeys`` / ``vkeys`` as in :func:`fill_rings`."""
     # borrowed views of the arguments (the caller holds them): the inlined _range
-    # rebinds its array, an atomic reference count per call otherwise (:mod:`._borrow`)
+    # rebinds its array, an atomic reference count per call otherwise (:mod:`.numba_ext.borrow`)
     hkeys, vkeys, cells, out = borrow_all((hkeys, vkeys, cells, out))
     for c in range(cells.shape[0]):
         a, b = _range(hkeys, cells[c, 2], cells[c, 0], cells[c, 1], key)
@@ -167,7 +167,7 @@ def _cell_triangles_loop(hkeys, vkeys, key, cells, diag, starts, out, kind, buf,
                          corners):
     """The loop of :func:`cell_triangles` over borrowed views of its arrays and the
     caller's scratch ``buf``, ``buf2``, ``corners`` (no atomic reference counting,
-    :mod:`._borrow`)."""
+    :mod:`.numba_ext.borrow`)."""
     hkeys, vkeys, cells, diag, starts, out, kind, buf, buf2, corners = borrow_all((
         hkeys, vkeys, cells, diag, starts, out, kind, buf, buf2, corners))
     for c in range(cells.shape[0]):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from .numba_ext.policy import jit
 from .basis import basis_funs, find_span
 from .surface import surface_point
 

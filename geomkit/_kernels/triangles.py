@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit
+from .numba_ext.policy import jit
 from .tess import point_triangle_distance
 
 DEGENERATE_REL = 1e-14

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._numba import jit, jit_inline, prun
+from .numba_ext.policy import jit, jit_inline, prun
 from .bezier import de_casteljau_split
 
 OUTSIDE = 0

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline, prun
 from .project_newton import MAX_ITER
 from .project_bilinear import derivs2
 from .surface import D2, _binomial_table, derivs_scratch
@@ -162,7 +162,7 @@ def _trim_feet_range(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, s
 def _trim_feet_loop(i0, i1, P, Pw, p, q, U, V, dom, seg, deg, near, samp_seg, samp_t,
                     step_tol, out_uv, out_d, out_seg, out_t, bin_, scr, SKL, bern):
     """The loop of :func:`_trim_feet_range` over borrowed views (no atomic reference
-    counting, :mod:`._borrow`)."""
+    counting, :mod:`.numba_ext.borrow`)."""
     (P, Pw, U, V, dom, seg, deg, near, samp_seg, samp_t, out_uv, out_d, out_seg, out_t,
      bin_, scr, SKL, bern) = borrow_all((P, Pw, U, V, dom, seg, deg, near, samp_seg,
                                          samp_t, out_uv, out_d, out_seg, out_t, bin_, scr,

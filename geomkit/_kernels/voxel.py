@@ -22,8 +22,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, jit_inline, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, jit_inline, prun
 from .tess import point_triangle_closest
 
 CROSSED = 1
@@ -392,7 +392,7 @@ def point_candidates(px, py, pz, V, F, fdev, dmax, origin, h, lvl_dims, lvl_off,
     count may be 0 and LB > max_dist).
 
     The arrays are not grown for the caller (it borrows them, see
-    :mod:`geomkit._kernels._borrow`): ``heap`` > 0 is the heap size the search
+    :mod:`geomkit._kernels.numba_ext.borrow`): ``heap`` > 0 is the heap size the search
     needed beyond ``hk`` (it grew a private copy), and a count above
     ``cand_t.shape[0]`` says the candidates did not fit: none is kept, the caller
     grows the arrays to at least ``count`` and searches again with a new ``qid``

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from ._borrow import borrow_all
-from ._numba import jit, prun
+from .numba_ext.borrow import borrow_all
+from .numba_ext.policy import jit, prun
 from .triangles import triangle_triangle_distance
 from .voxel import (_decode, _heap_grow, _heap_pop, _push_children, _seed_heap,
                     _top_cells, _tri_aabb)
@@ -57,7 +57,7 @@ def _best_first_range(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ,
 def _best_first_loop(ia, ib, VA, FA, VB, FB, origin, h, lvl_dims, lvl_off, occ, start,
                      tris, out_d, out_t, out_pa, out_pb, visits, stamp, heap, work):
     """The loop of :func:`_best_first_range` over borrowed views (no atomic reference
-    counting, :mod:`._borrow`; the scratch is owned by the caller)."""
+    counting, :mod:`.numba_ext.borrow`; the scratch is owned by the caller)."""
     (VA, FA, VB, FB, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t, out_pa,
      out_pb, visits, stamp, heap, work) = borrow_all((
         VA, FA, VB, FB, origin, lvl_dims, lvl_off, occ, start, tris, out_d, out_t, out_pa,

@@ -36,13 +36,13 @@ def _occ_nurbs_faces(shape):
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.bench.oracles.occ import _cast
+    from geomkit.cad.occ import cast_shape
 
     ex, n = TopExp_Explorer(shape, TopAbs_FACE), 0
     while ex.More():
-        f = _cast("Face", ex.Current())
+        f = cast_shape("Face", ex.Current())
         if BRep_Tool.Surface_s(f).DynamicType().Name() != "Geom_BSplineSurface":
-            f = _cast("Face", BRepBuilderAPI_NurbsConvert(f, True).Shape())
+            f = cast_shape("Face", BRepBuilderAPI_NurbsConvert(f, True).Shape())
         GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(f))
         n += 1
         ex.Next()

@@ -16,7 +16,7 @@ recorded (:class:`CompileProfile`) and a table is printed per compiled function
 (module, number of compiles = signatures, *exclusive* CPU = its own typing, lowering
 and code generation, *inclusive* CPU = with the callees compiled while typing it),
 per kernel module, per group step and per compiler pass.  The group ``demo`` runs
-:func:`geomkit.cli.demo.run_demo` without its background helper, so every kernel the demo
+:func:`geomkit.jobs.demo.run_demo` without its background helper, so every kernel the demo
 needs is compiled (and attributed) in this process.
 
 With ``--log FILE``: summarise a compile log written by any geomkit run with
@@ -118,7 +118,7 @@ class CompileProfile:
 
 
 def read_log(path, file=None):
-    """Summarise a ``GEOMKIT_COMPILE_LOG`` file (see :mod:`geomkit._kernels._numba`):
+    """Summarise a ``GEOMKIT_COMPILE_LOG`` file (see :mod:`geomkit._kernels.numba_ext.policy`):
     per process the compiles, exclusive CPU and the span of its compilations; the
     functions compiled in more than one process (compiled twice: wasted CPU)."""
     import sys
@@ -194,7 +194,7 @@ def _groups():
     def g_demo():
         import tempfile
 
-        from geomkit.cli.demo import run_demo
+        from geomkit.jobs.demo import run_demo
         with tempfile.TemporaryDirectory() as d:
             run_demo(d, warm_up=False, progress=_demo_progress)
 

@@ -1,4 +1,4 @@
-"""Surface–surface distance against Open CASCADE, same run (issue 5).
+"""Surface–surface distance against Open CASCADE, same run.
 
 1. Per case: geomkit :func:`~geomkit.surface_distance` (tol 1e-9, after JIT warm-up,
    median of ``--repeat`` runs) against ``BRepExtrema_DistShapeShape`` on the same
@@ -11,7 +11,7 @@
    bound creates against the triangles / memory of :func:`geomkit.tessellate` at the
    same accuracy (the mesh route of Paper 1).
 
-4. ``--continuum``: only the continuum-minimum cases (issue 15) against OCC.
+4. ``--continuum``: only the continuum-minimum cases (curves or surfaces of minima) against OCC.
 
 Usage: ``python -m geomkit.bench.distance [--repeat 5] [--continuum]``
 """
@@ -184,7 +184,7 @@ def sweep(cases=SWEEP_CASES, tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=3):
 
 
 def continuum_table(repeat=5, tol=1e-9):
-    """Continuum-minimum cases only (issue 15): median time of ``surface_distance``
+    """Continuum-minimum cases only: median time of ``surface_distance``
     (after warm-up) and of OCC ``DistShapeShape`` on the same faces in this run, the
     interval width and whether it certified; prints a markdown table."""
     from geomkit.bench._common import occ_or_none

@@ -1,7 +1,7 @@
 """Point projection against Open CASCADE, same run.
 
-For each case: N random points in the surface's box grown by ``--margin`` (the issue's
-"within +-10"), and N near-surface points (surface samples moved along the normal by
+For each case: N random points in the surface's box grown by ``--margin`` (default 10:
+points within +-10 of the box), and N near-surface points (surface samples moved along the normal by
 a N(0, 0.05) offset, the CMM situation).  geomkit ``project_points`` (after JIT
 warm-up; the candidate mesh build is timed separately) against, on a subset,
 ``GeomAPI_ProjectPointOnSurf`` (orthogonal feet only, OCC's point projector) and

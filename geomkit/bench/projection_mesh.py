@@ -10,7 +10,7 @@ model's bounding box) — this times:
   batch kernel minus the search), trim feet, finishing (status, normals, signed
   distance: the certification of each answer) and the remaining Python overhead;
 * libigl ``point_mesh_squared_distance`` on geomkit's own mesh of chord tolerance
-  ``mesh_tol`` (default 1e-3 model units, the issue's setting) — it builds its AABB
+  ``mesh_tol`` (default 1e-3 model units) — it builds its AABB
   tree on every call — and ``igl.AABB.squared_distance`` with the tree built once
   (the like-for-like comparison with a reused :class:`geomkit.Projector`); their
   achieved error is reported against geomkit's exact distance;

@@ -172,7 +172,7 @@ def _jsonable(x):
 def write_outputs(result, paths, overwrite=False) -> dict:
     """Write ``bench.json``, ``bench.md``, ``bench.png`` atomically (keeping existing
     files unless ``overwrite``); returns {name: path}."""
-    from geomkit.exchange.cases import _atomic_write
+    from geomkit.outputs import atomic_write
     from geomkit.bench.plot import plot_rows
 
     for p in paths.values():
@@ -180,11 +180,11 @@ def write_outputs(result, paths, overwrite=False) -> dict:
             raise FileExistsError(f"{p} exists; pass overwrite=True")
     doc = {k: v for k, v in result.items() if k != "files"}
     text = json.dumps(doc, indent=1, allow_nan=True).encode("utf-8")
-    _atomic_write(paths["bench.json"], lambda fh: fh.write(text))
+    atomic_write(paths["bench.json"], lambda fh: fh.write(text))
     md = (f"# geomkit bench ({result['mode']} mode, {result['seconds']:.0f} s)\n\n"
           f"{_machine_line(result['machine'])}\n\n{format_table(result['rows'])}\n")
-    _atomic_write(paths["bench.md"], lambda fh: fh.write(md.encode("utf-8")))
-    _atomic_write(paths["bench.png"], lambda fh: plot_rows(result["rows"], fh,
+    atomic_write(paths["bench.md"], lambda fh: fh.write(md.encode("utf-8")))
+    atomic_write(paths["bench.png"], lambda fh: plot_rows(result["rows"], fh,
                                                            title=_machine_line(
                                                                result["machine"])))
     return {k: str(v) for k, v in paths.items()}

@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from geomkit._kernels.bezier import curve_points
+
 __all__ = ["arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
            "angle_to_param", "param_to_angle", "turn_into", "arc_knots", "transform_curve"]
 
@@ -99,6 +101,20 @@ def line_curve(p0, p1, t0: float = 0.0, t1: float = 1.0):
     """The segment ``p0 + (t - t0) / (t1 - t0) (p1 - p0)`` as a degree-1 curve."""
     P = np.array([p0, p1], float)
     return 1, np.array([t0, t0, t1, t1], float), np.column_stack([P, np.ones(2)])
+
+
+def curve_derivs(curve, t, d: int) -> np.ndarray:
+    """Points and derivatives up to order ``d`` of a ``(p, U, Pw)`` curve: (m, d+1, 3)."""
+    p, U, Pw = curve
+    out = np.empty((len(t), d + 1, 3))
+    curve_points(np.ascontiguousarray(Pw, float), p, np.asarray(U, float),
+                 np.ascontiguousarray(t, float), d, out)
+    return out
+
+
+def curve_eval(curve, t) -> np.ndarray:
+    """Points (m, 3) of a ``(p, U, Pw)`` curve."""
+    return curve_derivs(curve, t, 0)[:, 0, :]
 
 
 def transform_curve(curve, M):

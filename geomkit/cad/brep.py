@@ -28,8 +28,13 @@ import math
 
 import numpy as np
 
+from geomkit.tolerances import ISO_TOL
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.cad.analytic import angle_to_param, arc_curve, line_curve, plane_patch, revolve
+from geomkit.cad.analytic import (angle_to_param, arc_curve, curve_eval, line_curve, plane_patch,
+                                  revolve)
+from geomkit.cad.iges.entities import curve3d
+from geomkit.cad.iges.file import integer as i_
+from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_pcurve
 
@@ -40,9 +45,6 @@ ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical
             194: "right circular conical surface", 196: "spherical surface",
             198: "toroidal surface"}
 _NS = 65  # samples per edge for the inversion
-ISO_TOL = 1e-7
-"""An edge whose local coordinate varies by at most this x the face size is an
-iso-line (files write 124 matrices and points to ~9 digits)."""
 TWO_PI = 2 * math.pi
 
 
@@ -136,7 +138,6 @@ def analytic(rd, de: int) -> Analytic:
     """Entity 108 / 190-198 as an :class:`Analytic` (its 124 transform applied)."""
     t = rd.type_of(de)
     r = rd.rec(de)
-    from geomkit.cad.iges.entities import f_, i_
 
     def pt(k):
         return np.array([f_(x) for x in rd.rec(k)[1:4]])
@@ -184,21 +185,6 @@ def analytic(rd, de: int) -> Analytic:
 
 
 # --------------------------------------------------------------------- edges
-def _curve_derivs(curve, t, d):
-    """Points and derivatives up to order ``d`` of a ``(p, U, Pw)`` curve: (m, d+1, 3)."""
-    from geomkit._kernels.bezier import curve_points
-
-    p, U, Pw = curve
-    out = np.empty((len(t), d + 1, 3))
-    curve_points(np.ascontiguousarray(Pw, float), p, np.asarray(U, float),
-                 np.ascontiguousarray(t, float), d, out)
-    return out
-
-
-def _eval(curve, t):
-    return _curve_derivs(curve, t, 0)[:, 0, :]
-
-
 class _Edge:
     """One oriented model-space edge: its NURBS curve and parameter direction."""
 
@@ -216,7 +202,6 @@ class _Edge:
 
 def edge_loop_508(rd, de: int):
     """The oriented model-space edges of a 508 loop (vertex entries are dropped)."""
-    from geomkit.cad.iges.entities import curve3d, i_
 
     r = rd.rec(de)
     n = i_(r[1])
@@ -238,7 +223,6 @@ def edge_loop_508(rd, de: int):
 def curve_loop_142(rd, de: int):
     """The model-space curve ``CPTR`` of a 142 as oriented edges (102 composites
     split)."""
-    from geomkit.cad.iges.entities import curve3d, i_
 
     def walk(c):
         if rd.type_of(c) == 102:
@@ -257,7 +241,6 @@ def curve_loop_142(rd, de: int):
 def curve_loop_141(rd, de: int):
     """The model-space curves of a 141 boundary as oriented edges (``SENSE = 2``:
     reversed)."""
-    from geomkit.cad.iges.entities import curve3d, i_
 
     if rd.type_of(de) != 141:
         raise Unsupported(f"boundary DE {de} is entity {rd.type_of(de)}, expected 141")
@@ -290,7 +273,7 @@ def _chain(srf, loop, size):
     s = np.linspace(0.0, 1.0, _NS)
     out, first, prev, prev_pole = [], {}, None, False
     for e in loop:
-        ab, rho = srf.local(_eval(e.curve, e.ts(s)))
+        ab, rho = srf.local(curve_eval(e.curve, e.ts(s)))
         pole = rho <= 1e-9 * size
         if pole.all():
             raise Unsupported("an edge lies on the surface's axis")
@@ -357,7 +340,7 @@ def _fit(srf, e, ab, fu, fv, tol):
 
     def loc(s, k):
         s = np.clip(s, 0.0, 1.0)
-        v, _ = srf.local(_eval(e.curve, e.ts(s)))
+        v, _ = srf.local(curve_eval(e.curve, e.ts(s)))
         x = v[:, k]
         if srf.periodic[k]:
             ref = np.interp(s, s0, ab[:, k])
@@ -374,12 +357,11 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
     """``(surface args, [loops of TrimCurve pieces], domain)`` of one face: the
     analytic surface ``srf_de`` over the range of its boundary ``loops`` (lists of
     :class:`_Edge`, outer first)."""
-    P = np.concatenate([_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
+    P = np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
                         for e in lp])
     size = float(np.ptp(P, axis=0).max()) or 1.0
     if rd.type_of(srf_de) == 140:  # offset of an analytic surface: exact, the side
-        from geomkit.cad.iges.entities import f_, i_  # that holds the face's edges
-
+        # that holds the face's edges
         r = rd.rec(srf_de)
         if rd.transform(srf_de) is not None:
             raise Unsupported(f"offset surface DE {srf_de} with its own transformation")

@@ -32,15 +32,13 @@ import math
 
 import numpy as np
 
+from geomkit.tolerances import ON_CONIC_TOL
 from geomkit.errors import FileFormatError
 from geomkit.cad.analytic import angle_to_param, arc_curve
 from geomkit.cad.analytic import turn_into as _turn
 
 __all__ = ["conic_arc", "ON_CONIC_TOL", "FORMS"]
 
-ON_CONIC_TOL = 1e-6
-"""End points may lie this far (x the conic's size) off the conic (files write ~9
-digits); they are moved onto it along the canonical parameter."""
 FORMS = {1: "ellipse", 2: "hyperbola", 3: "parabola"}
 _PARABOLA_TOL = 1e-9  # |B^2 - 4AC| / (A^2 + B^2 + C^2) below this: a parabola
 

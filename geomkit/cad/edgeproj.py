@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
+from geomkit.cad.analytic import curve_eval
+from geomkit.nurbs.evaluation import evaluate
+from geomkit.query.projection import project_points
 
 __all__ = ["edge_uv", "EDGE_TOL"]
 
-EDGE_TOL = 1e-6
-"""Default fit tolerance of a projected edge, relative to the surface size."""
 _MAX_POINTS = 4097
 
 
@@ -26,15 +28,11 @@ def edge_uv(base, edges, tol: float, what: str):
     """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
     (:class:`geomkit.cad.brep._Edge`) on the untrimmed ``base``, and the largest
     model-space distance measured between a segment's UV midpoint and the edge."""
-    from geomkit.nurbs.evaluation import evaluate
-    from geomkit.query.projection import project_points
-    from geomkit.cad.brep import _eval
-
     pieces, worst = [], 0.0
     for k, e in enumerate(edges):
         s = np.linspace(0.0, 1.0, 17)
         while True:
-            X = _eval(e.curve, e.ts(s))
+            X = curve_eval(e.curve, e.ts(s))
             pr = project_points([base], X)
             off = float(np.nanmax(pr.distance)) if np.all(np.isfinite(pr.distance)) \
                 else np.inf
@@ -43,7 +41,7 @@ def edge_uv(base, edges, tol: float, what: str):
                                   f"{off:.3g} from it, tolerance {tol:.3g})")
             uv = pr.uv
             sm = 0.5 * (s[1:] + s[:-1])
-            Xm = _eval(e.curve, e.ts(sm))
+            Xm = curve_eval(e.curve, e.ts(sm))
             dev = np.linalg.norm(evaluate(base, 0.5 * (uv[1:] + uv[:-1])) - Xm, axis=1)
             bad = dev > tol
             if not bad.any():

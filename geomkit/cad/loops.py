@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from geomkit.tolerances import GAP_TOL
 from geomkit.nurbs.surface import TrimCurve
+from geomkit.nurbs.trims import evaluate_trim_curve
+from geomkit.cad.uvmap import map_pcurve
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL"]
 
-GAP_TOL = 1e-2
-"""Largest gap between the pieces of a trim loop that is bridged, relative to the
-parameter domain size."""
 
 
 class Unsupported(Exception):
@@ -163,8 +163,6 @@ def _refit_clipped(c, box, eps, fit_tol):
     """A curve whose control polygon leaves the domain but whose points leave it by at
     most ``eps``: re-fitted (cubic, within ``fit_tol / 100``) to its
     points clipped to the domain.  Returns ``(curve, how far its points were out)``."""
-    from geomkit.nurbs.trimming import evaluate_trim_curve
-    from geomkit.cad.uvmap import map_pcurve
 
     u0, u1, v0, v1 = box
     p = c.degree

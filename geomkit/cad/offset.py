@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from geomkit.tolerances import OFFSET_TOL
 from geomkit.cad.loops import Unsupported
+from geomkit.nurbs.evaluation import evaluate, normals
 
 __all__ = ["offset_args", "OFFSET_TOL", "SAFETY"]
 
-OFFSET_TOL = 1e-6
-"""Default approximation error of an offset surface, relative to its base's size."""
 _MAX_GRID = 513
 SAFETY = 2.0
 """The fit aims at ``tol / SAFETY`` on its check sample and states ``SAFETY`` x the
@@ -30,7 +30,6 @@ sampled error: the true largest error between samples is above the sampled one."
 
 
 def _offset_points(base, d, uu, vv):
-    from geomkit.nurbs.evaluation import evaluate, normals
 
     uv = np.stack(np.meshgrid(uu, vv, indexing="ij"), -1).reshape(-1, 2)
     N, status = normals(base, uv, return_status=True)

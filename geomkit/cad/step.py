@@ -21,11 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                             MissingDependencyError)
 import re
 
-from geomkit.cad.loops import GAP_TOL, chain, clip_to_domain, close_gaps
+from geomkit.cad.loops import chain, clip_to_domain, close_gaps
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.nurbs.surface import Surface, TrimCurve
 
@@ -38,9 +39,6 @@ _UNITS = {"MILLIMETRE": ("mm", 1.0), "METRE": ("m", 1000.0), "INCH": ("in", 25.4
 _UNCERTAINTY = re.compile(r"UNCERTAINTY_MEASURE_WITH_UNIT\s*\(\s*LENGTH_MEASURE\s*\(\s*"
                           r"([-+0-9.EeDd]+)\s*\)", re.I)
 
-CLIP_TOL = 1e-4
-"""Pcurve control points this close outside the face's domain (relative to its size)
-are moved onto it; the move counts as a bridged gap."""
 
 INSTALL_HINT = "reading STEP needs Open CASCADE: pip install 'geomkit[step]' (cadquery-ocp)"
 
@@ -93,7 +91,7 @@ def _wire_edges(w, face) -> list:
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
-    from geomkit.bench.oracles.occ import _cast
+    from geomkit.cad.occ import cast_shape
 
     walk, every = [], []
     we = BRepTools_WireExplorer(w, face)
@@ -102,7 +100,7 @@ def _wire_edges(w, face) -> list:
         we.Next()
     ex = TopExp_Explorer(w, TopAbs_EDGE)
     while ex.More():
-        every.append(_cast("Edge", ex.Current()))
+        every.append(cast_shape("Edge", ex.Current()))
         ex.Next()
     return walk if len(walk) >= len(every) else every
 
@@ -171,7 +169,7 @@ def read_step(path, skip_invalid: bool = False,
         from OCP.TopExp import TopExp_Explorer
     except ImportError:
         raise MissingDependencyError(INSTALL_HINT) from None
-    from geomkit.bench.oracles.occ import _cast
+    from geomkit.cad.occ import cast_shape
     rd = STEPControl_Reader()
     if rd.ReadFile(str(p)) != IFSelect_RetDone:
         raise FileFormatError(f"{p}: not a readable STEP file")
@@ -185,7 +183,7 @@ def read_step(path, skip_invalid: bool = False,
     k = -1
     while ex.More():
         k += 1
-        face0 = _cast("Face", ex.Current())
+        face0 = cast_shape("Face", ex.Current())
         ex.Next()
         name = f"face{k}"
         try:
@@ -193,7 +191,7 @@ def read_step(path, skip_invalid: bool = False,
             if kind in ("Geom_BSplineSurface", "Geom_BezierSurface"):
                 face = face0  # already bounded and exact; pcurves as in the file
             else:  # the face's bounded patch (elementary, swept, offset, trimmed)
-                face = _cast("Face", BRepBuilderAPI_NurbsConvert(face0, True).Shape())
+                face = cast_shape("Face", BRepBuilderAPI_NurbsConvert(face0, True).Shape())
             bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
             u0, u1, v0, v1 = bs.Bounds()
             domain = ((u0, u1), (v0, v1))
@@ -201,7 +199,7 @@ def read_step(path, skip_invalid: bool = False,
             wires = [outer]
             wx = TopExp_Explorer(face, TopAbs_WIRE)
             while wx.More():
-                w = _cast("Wire", wx.Current())
+                w = cast_shape("Wire", wx.Current())
                 if not w.IsSame(outer):
                     wires.append(w)
                 wx.Next()
@@ -223,7 +221,7 @@ def read_step(path, skip_invalid: bool = False,
                     if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size
                            for a, b in zip(pieces, pieces[1:] + pieces[:1])):
                         pieces = chain(pieces, size, periods, domain)  # edge order, seam sides
-                    pieces, moved = clip_to_domain(pieces, domain, CLIP_TOL, GAP_TOL)
+                    pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
                     gaps += moved
                     pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}")
                     gaps += g

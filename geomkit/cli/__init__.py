@@ -66,7 +66,7 @@ def _version_line() -> str:
     import numba
 
     from geomkit.version import __version__
-    from geomkit.cli.warmup import kernels_status
+    from geomkit.jobs.warmup import kernels_status
 
     return f"geomkit {__version__} (numba {numba.__version__}; {kernels_status()})"
 
@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, nargs="+", metavar="T", default=None,
                    help="tolerance band: T (meaning -T..T) or LOWER UPPER")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG images")
-    from geomkit.cli.scale import add_deviation_options  # issue 16: streamed / folder / Dask runs
+    from geomkit.cli.scale import add_deviation_options  # streamed scans, folders, Dask
     add_deviation_options(p)
     p.set_defaults(func=_cmd_deviation)
     p = sub.add_parser("distance", parents=[common],

@@ -9,7 +9,7 @@ import sys
 def _cmd_bench(args) -> int:
     from geomkit.bench.suite import ENGINES, FILES, format_table, run_suite, write_outputs
     from geomkit.errors import InvalidInputError
-    from geomkit.report.files import _clean
+    from geomkit.outputs import json_safe
     from geomkit.cli._common import Outputs
 
     engines = [e.strip() for e in args.engines.split(",") if e.strip()] if args.engines \
@@ -25,7 +25,7 @@ def _cmd_bench(args) -> int:
                     (lambda m: print(m, file=sys.stderr, flush=True)))
     res["files"] = write_outputs(res, outputs.create(), args.overwrite)  # folder made now
     if args.json:
-        print(json.dumps(_clean({k: res[k] for k in ("mode", "seconds", "machine", "rows",
+        print(json.dumps(json_safe({k: res[k] for k in ("mode", "seconds", "machine", "rows",
                                                      "files")}), indent=1, default=str))
         return 0
     print(format_table(res["rows"]))

@@ -51,7 +51,8 @@ def parse_stylus(text: str):
 
 def _cmd_clearance(args) -> int:
     from geomkit.jobs.clearance import probe_clearance, read_path
-    from geomkit.report.files import _clean, plot_clearance, write_clearance_csv, write_json
+    from geomkit.outputs import json_safe
+    from geomkit.report.files import plot_clearance, write_clearance_csv, write_json
 
     stylus = parse_stylus(args.stylus)
     case = _load_input(args.part, args.skip_invalid, args.units,
@@ -95,7 +96,7 @@ def _cmd_clearance(args) -> int:
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
     write_json(summary, targets["clearance_summary.json"], args.overwrite, **rk)
     if args.json:
-        print(json.dumps(_clean(summary), indent=1))
+        print(json.dumps(json_safe(summary), indent=1))
     else:
         s = summary
         if note:  # a pass on part of the part is not a pass on the part: say so first

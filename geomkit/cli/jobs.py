@@ -16,7 +16,7 @@ from geomkit.cli._common import (Outputs, _file_target, _load_input, _load_point
 def _cmd_demo(args) -> int:
     import sys
 
-    from geomkit.cli.demo import STEPS, run_demo
+    from geomkit.jobs.demo import STEPS, run_demo
 
     if args.json:
         print(json.dumps(run_demo(out_dir=args.output, grid=args.grid, tol=args.tol),
@@ -89,7 +89,7 @@ _DEMO_LINES = {"deviation": _demo_deviation, "alignment": _demo_alignment,
 
 
 def _cmd_deviation(args) -> int:
-    from geomkit.cli.scale import run_scaled, wants_scale  # issue 16: streamed / folder / Dask runs
+    from geomkit.cli.scale import run_scaled, wants_scale  # streamed scans, folders, Dask
     if wants_scale(args):
         return run_scaled(args)
     from geomkit.jobs.deviation import deviation
@@ -135,8 +135,8 @@ def _cmd_deviation(args) -> int:
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
     write_json(summary, targets["summary.json"], args.overwrite, **rk)  # last
     if args.json:
-        from geomkit.report.files import _clean
-        print(json.dumps(_clean(summary), indent=1))
+        from geomkit.outputs import json_safe
+        print(json.dumps(json_safe(summary), indent=1))
         return 0
     s = summary
     print(f"{s['points']} points, {s['valid']} matched ({s['edge']} on edges, "
@@ -172,7 +172,7 @@ def _require_matches(matched: int, total: int, max_distance) -> None:
 
 def _cmd_distance(args) -> int:
     from geomkit import project_points
-    from geomkit.report.files import _clean
+    from geomkit.outputs import json_safe
 
     case = _load_input(args.surface, args.skip_invalid, args.units,
                        skip_unsupported=args.skip_unsupported)
@@ -190,7 +190,7 @@ def _cmd_distance(args) -> int:
     u = _unit(case.units)
     model, note = _model_info(case)
     if target is not None:
-        from geomkit.exchange.cases import _atomic_write
+        from geomkit.outputs import atomic_write
         from geomkit.query.results import STATUS_NAMES
 
         lines = ["index,x,y,z,foot_x,foot_y,foot_z,u,v,surface,distance,signed_distance,"
@@ -206,7 +206,7 @@ def _cmd_distance(args) -> int:
         data = ("\n".join(lines) + "\n").encode("utf-8")
         if target.exists() and not args.overwrite:
             raise FileExistsError(f"{target}: exists; pass --overwrite to replace it")
-        _atomic_write(target, lambda fh: fh.write(data))
+        atomic_write(target, lambda fh: fh.write(data))
     d = pr.distance[ok]
     info = {"surface_file": args.surface, "points_file": args.points, "points": len(pr),
             "matched": int(ok.sum()), "counts": pr.counts(), "units": u, "model": model,
@@ -215,7 +215,7 @@ def _cmd_distance(args) -> int:
             "mean": float(d.mean()) if d.size else None,
             "output": str(target) if target else None}
     if args.json:
-        print(json.dumps(_clean(info), indent=1))
+        print(json.dumps(json_safe(info), indent=1))
         return 0
     written = f"; written {target}" if target else ""
     if note:
@@ -232,7 +232,8 @@ def _cmd_distance(args) -> int:
 
 def _cmd_section(args) -> int:
     from geomkit import plane_section
-    from geomkit.report.files import _clean, plot_section, write_json, write_section
+    from geomkit.outputs import json_safe
+    from geomkit.report.files import plot_section, write_json, write_section
     from geomkit.section.plane import as_plane
 
     base = as_plane(args.plane)
@@ -295,7 +296,7 @@ def _cmd_section(args) -> int:
                "files": files + [str(targets["section_summary.json"])]}
     write_json(summary, targets["section_summary.json"], args.overwrite, **rk)
     if args.json:
-        print(json.dumps(_clean(summary), indent=1))
+        print(json.dumps(json_safe(summary), indent=1))
         return 0
     for r in rows:
         a, b, c, d = r["plane"]

@@ -1,5 +1,5 @@
-"""The deviation command at scale: streamed scans, folders of scans, Dask workers
-(issue 16).  :func:`add_deviation_options` adds the options; :func:`wants_scale`
+"""The deviation command at scale: streamed scans, folders of scans, Dask workers.
+:func:`add_deviation_options` adds the options; :func:`wants_scale`
 tells :func:`geomkit.cli.jobs._cmd_deviation` to hand the run to :func:`run_scaled`."""
 
 from __future__ import annotations
@@ -66,8 +66,8 @@ def run_scaled(args) -> int:
         raise InvalidInputError(f"must be >= 1, got {chunk}", "--chunk-size")
     fmt = args.format or "csv"
     if fmt == "parquet":
-        from geomkit.jobs.stream import _pyarrow_parquet
-        _pyarrow_parquet()
+        from geomkit.jobs.stream import pyarrow_parquet
+        pyarrow_parquet()
     tol = _tolerance(args.tolerance)
     pts = Path(args.points)
     if not pts.exists():
@@ -105,8 +105,8 @@ def run_scaled(args) -> int:
         if cluster is not None:
             cluster.close()
     if args.json:
-        from geomkit.report.files import _clean
-        print(json.dumps(_clean(s), indent=1))
+        from geomkit.outputs import json_safe
+        print(json.dumps(json_safe(s), indent=1))
         return 0
     if note:
         print(note)

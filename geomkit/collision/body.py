@@ -1,7 +1,8 @@
-"""Result and body types of :mod:`geomkit.collision.collide` (slim, no algorithms).
+"""Bodies and the result types of :mod:`geomkit.collision.collide`.
 
-:class:`Body` holds a triangle mesh and its flattened bounding-volume hierarchy;
-construction hands off to :func:`geomkit.collision.collide.build_body`.
+:class:`Body` holds a triangle mesh and its flattened bounding-volume hierarchy, built
+once by :func:`build_body` (the tree kernels are in :mod:`geomkit._kernels.bvh`, the
+packed record layout in :mod:`geomkit._kernels.bvh_boxes`).
 """
 
 from __future__ import annotations
@@ -10,7 +11,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Body", "Contact", "Contacts", "Distance"]
+from geomkit._kernels import bvh as kb
+from geomkit._kernels import bvh_boxes as kp
+from geomkit._kernels import bvh_query as kq
+from geomkit.validate import as_int, as_mesh_arrays
+from geomkit.errors import InvalidInputError
+
+__all__ = ["Body", "Contact", "Contacts", "Distance", "build_body", "BV_KINDS"]
+
+BV_KINDS = {"obb": 0, "aabb": 1, "kdop14": 2}
+
+_EK = np.empty((0, 14))
+_EN = np.empty((0, 16))
 
 
 class Body:
@@ -46,7 +58,6 @@ class Body:
     """
 
     def __init__(self, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="covariance"):
-        from geomkit.collision.collide import build_body
         build_body(self, mesh, bv, face_tags, leaf_size, obb_center)
 
     def __setstate__(self, state):
@@ -55,8 +66,7 @@ class Body:
         # become views of it again
         self.__dict__.update(state)
         if state.get("_pf") is not None:
-            from geomkit.collision.collide import _share_packed
-            _share_packed(self)
+            share_packed(self)
 
     def __repr__(self) -> str:
         return (f"<Body {self.faces.shape[0]} faces, bv={self.bv!r}, "
@@ -137,3 +147,82 @@ class Distance:
     triangle_b: int
     bv_tests: int
     within_margin: bool
+
+
+# ------------------------------------------------------------------ building
+def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="covariance"):
+    """Fill a :class:`Body`: validate, build the tree, pack it (called by the constructor)."""
+    if bv not in BV_KINDS:
+        raise InvalidInputError(f"expected one of {sorted(BV_KINDS)}, got {bv!r}", "bv")
+    if obb_center not in ("covariance", "regions"):
+        raise InvalidInputError(f"expected 'covariance' or 'regions', got {obb_center!r}",
+                                "obb_center")
+    leaf_size = as_int(leaf_size, "leaf_size", minimum=1)
+    if leaf_size > kq.LEAF_BUF:
+        raise InvalidInputError(f"must be <= {kq.LEAF_BUF} (the leaf tests hold a leaf's "
+                                f"triangles in a fixed buffer), got {leaf_size}", "leaf_size")
+    V, F, tags = as_mesh_arrays(mesh)
+    if F.shape[0] > kp.MAX_TRIANGLES:
+        raise InvalidInputError(f"at most {kp.MAX_TRIANGLES} triangles, got {F.shape[0]}",
+                                "mesh")
+    if face_tags is not None:
+        tags = face_tags
+    if tags is None:
+        tags = np.zeros(F.shape[0], dtype=np.int64)
+    tags = np.asarray(tags)
+    if tags.shape != (F.shape[0],) or not np.issubdtype(tags.dtype, np.integer):
+        raise InvalidInputError(f"expected ({F.shape[0]},) integers, got shape {tags.shape} "
+                                f"dtype {tags.dtype}", "face_tags")
+    kind = BV_KINDS[bv]
+    order, child, rng, C, R, E, K, depth = kb.build_tree(
+        V, F, kind, leaf_size, 4 if obb_center == "regions" else 0)
+    body.vertices, body.faces = V, F
+    body.face_tags = np.ascontiguousarray(tags, dtype=np.int64)
+    body.bv, body.kind, body.leaf_size, body.obb_center = bv, kind, leaf_size, obb_center
+    body.order, body.child, body.rng = order, child, rng
+    body.C, body.R, body.E = C, R, E
+    body.K = K if kind == 2 else _EK
+    body.T = kb.leaf_triangles(V, F, order)
+    body._pf = body._addr = None
+    if kind == 2:
+        body.N = _EN
+    else:   # one record per node for the traversal (kp.pack_boxes), in one buffer
+        _pack(body, kp.pack_boxes(child, rng, C, R, E))
+    body.depth, body.n_nodes = int(depth), int(child.shape[0])
+    body._world_pose = None      # 14-DOP trees: pose of the cached world refit
+    body._world_K = None
+
+
+def _pack(body, N):
+    """One buffer per box tree for the single-call kernel (layout in
+    :mod:`geomkit._kernels.bvh_boxes`); the body's ``N``, ``T``, ``order`` and
+    ``face_tags`` become views into it (nothing stored twice)."""
+    n, m = N.shape[0], body.T.shape[0]
+    h = kp.HEADER
+    nf = h + 16 * n + 9 * m
+    buf = np.zeros(kp.packed_size(n, m))
+    bi = buf.view(np.int64)
+    bi[:2] = n, m
+    buf[h:h + 16 * n] = N.ravel()
+    buf[h + 16 * n:nf] = body.T.ravel()
+    bi[nf:nf + m] = body.order
+    bi[nf + m:nf + 2 * m] = body.face_tags
+    body._pf = buf
+    share_packed(body)
+
+
+def share_packed(body):
+    """Make the packed buffer ``body._pf`` read-only (the traversal trusts its
+    links) and the body's ``N``, ``T``, ``order``, ``face_tags`` read-only views into
+    it; also after unpickling, which gives each array its own copy."""
+    buf = body._pf
+    buf.flags.writeable = False
+    n, m = buf[:2].view(np.int64).tolist()
+    h = kp.HEADER
+    nf = h + 16 * n + 9 * m
+    bi = buf.view(np.int64)
+    body._addr = buf.ctypes.data     # the batch kernel's handle on it (the body keeps buf)
+    body.N = buf[h:h + 16 * n].reshape(n, 16)
+    body.T = buf[h + 16 * n:nf].reshape(m, 3, 3)
+    body.order = bi[nf:nf + m]
+    body.face_tags = bi[nf + m:nf + 2 * m]

@@ -47,108 +47,22 @@ import threading
 import numba
 import numpy as np
 
+from geomkit.tolerances import POSE_TOL
 from geomkit.collision.body import Body, Contact, Contacts, Distance, _contact, _new
 from geomkit._kernels import bvh as kb
-from geomkit._kernels._numba import prun
+from geomkit._kernels.numba_ext.policy import prun
 from geomkit._kernels import bvh_boxes as kp
 from geomkit._kernels import bvh_query as kq
-from geomkit._kernels._pyobj import array_fields_ok, object_ref
-from geomkit.validate import as_float_array, as_int, as_mesh_arrays
+from geomkit._kernels.numba_ext.pyobj import array_fields_ok, object_ref
+from geomkit.validate import as_float_array
 from geomkit.errors import InvalidInputError
 
 __all__ = ["Body", "Contact", "Contacts", "Distance", "collide", "collide_many",
            "min_distance", "validate_pose"]
 
-BV_KINDS = {"obb": 0, "aabb": 1, "kdop14": 2}
-POSE_TOL = 1e-9
-"""Largest deviation of a pose's rotation from orthonormal (entries of R^T R - I)."""
 
 _E3 = np.empty((0, 3))
 _E33 = np.empty((0, 3, 3))
-_EK = np.empty((0, 14))
-_EN = np.empty((0, 16))
-
-
-# ------------------------------------------------------------------ building
-_mesh_arrays = as_mesh_arrays
-
-
-def build_body(body, mesh, bv="obb", face_tags=None, leaf_size=4, obb_center="covariance"):
-    """Fill a :class:`Body` (called by its constructor)."""
-    if bv not in BV_KINDS:
-        raise InvalidInputError(f"expected one of {sorted(BV_KINDS)}, got {bv!r}", "bv")
-    if obb_center not in ("covariance", "regions"):
-        raise InvalidInputError(f"expected 'covariance' or 'regions', got {obb_center!r}",
-                                "obb_center")
-    leaf_size = as_int(leaf_size, "leaf_size", minimum=1)
-    if leaf_size > kq.LEAF_BUF:
-        raise InvalidInputError(f"must be <= {kq.LEAF_BUF} (the leaf tests hold a leaf's "
-                                f"triangles in a fixed buffer), got {leaf_size}", "leaf_size")
-    V, F, tags = _mesh_arrays(mesh)
-    if F.shape[0] > kp.MAX_TRIANGLES:
-        raise InvalidInputError(f"at most {kp.MAX_TRIANGLES} triangles, got {F.shape[0]}",
-                                "mesh")
-    if face_tags is not None:
-        tags = face_tags
-    if tags is None:
-        tags = np.zeros(F.shape[0], dtype=np.int64)
-    tags = np.asarray(tags)
-    if tags.shape != (F.shape[0],) or not np.issubdtype(tags.dtype, np.integer):
-        raise InvalidInputError(f"expected ({F.shape[0]},) integers, got shape {tags.shape} "
-                                f"dtype {tags.dtype}", "face_tags")
-    kind = BV_KINDS[bv]
-    order, child, rng, C, R, E, K, depth = kb.build_tree(
-        V, F, kind, leaf_size, 4 if obb_center == "regions" else 0)
-    body.vertices, body.faces = V, F
-    body.face_tags = np.ascontiguousarray(tags, dtype=np.int64)
-    body.bv, body.kind, body.leaf_size, body.obb_center = bv, kind, leaf_size, obb_center
-    body.order, body.child, body.rng = order, child, rng
-    body.C, body.R, body.E = C, R, E
-    body.K = K if kind == 2 else _EK
-    body.T = kb.leaf_triangles(V, F, order)
-    body._pf = body._addr = None
-    if kind == 2:
-        body.N = _EN
-    else:   # one record per node for the traversal (kp.pack_boxes), in one buffer
-        _pack(body, kp.pack_boxes(child, rng, C, R, E))
-    body.depth, body.n_nodes = int(depth), int(child.shape[0])
-    body._world_pose = None      # 14-DOP trees: pose of the cached world refit
-    body._world_K = None
-
-
-def _pack(body, N):
-    """One buffer per box tree for the single-call kernel (layout in
-    :mod:`geomkit._kernels.bvh_boxes`); the body's ``N``, ``T``, ``order`` and
-    ``face_tags`` become views into it (nothing stored twice)."""
-    n, m = N.shape[0], body.T.shape[0]
-    h = kp.HEADER
-    nf = h + 16 * n + 9 * m
-    buf = np.zeros(kp.packed_size(n, m))
-    bi = buf.view(np.int64)
-    bi[:2] = n, m
-    buf[h:h + 16 * n] = N.ravel()
-    buf[h + 16 * n:nf] = body.T.ravel()
-    bi[nf:nf + m] = body.order
-    bi[nf + m:nf + 2 * m] = body.face_tags
-    body._pf = buf
-    _share_packed(body)
-
-
-def _share_packed(body):
-    """Make the packed buffer ``body._pf`` read-only (the traversal trusts its
-    links) and the body's ``N``, ``T``, ``order``, ``face_tags`` read-only views into
-    it; also after unpickling, which gives each array its own copy."""
-    buf = body._pf
-    buf.flags.writeable = False
-    n, m = buf[:2].view(np.int64).tolist()
-    h = kp.HEADER
-    nf = h + 16 * n + 9 * m
-    bi = buf.view(np.int64)
-    body._addr = buf.ctypes.data     # the batch kernel's handle on it (the body keeps buf)
-    body.N = buf[h:h + 16 * n].reshape(n, 16)
-    body.T = buf[h + 16 * n:nf].reshape(m, 3, 3)
-    body.order = bi[nf:nf + m]
-    body.face_tags = bi[nf + m:nf + 2 * m]
 
 
 def _body(x, field):
@@ -256,7 +170,7 @@ def collide(a, pose_a, b, pose_b, all_pairs=True) -> Contact:
     if type(a) is Body and type(b) is Body and _BY_REF:
         # box trees: one kernel call (pose checks, relative motion, root test,
         # traversal, tags) given the bodies' buffers, the poses and the scratch as
-        # the Python objects (geomkit._kernels._pyobj: nothing converted)
+        # the Python objects (geomkit._kernels.numba_ext.pyobj: nothing converted)
         try:
             W = _scratch.W
         except AttributeError:      # per-thread scratch, reused (results copied out)
@@ -374,8 +288,8 @@ task is ~0.1-1 ms of work.  Measured on 2 cores (sphere–torus, 1e-2 meshes, 10
 machine (load ~2) chunks of 256 (one thread) 5.8 / 6.8, 64: 4.3 / 4.8, 32: 3.8 /
 4.3; with six more busy processes (load ~8) 6.6 / 6.4 against 6.8 / 7.5 for 32 —
 the threads help on a machine with a core to spare and cost little on a saturated
-one, where an earlier session had seen 90 against 14 µs/query with tasks of 16 (a
-pool thread that has not started is cancelled, :func:`geomkit._kernels._numba.prun`,
+one (with tasks of 16 a saturated machine has shown 90 against 14 µs/query: a
+pool thread that has not started is cancelled, :func:`geomkit._kernels.numba_ext.policy.prun`,
 but one preempted inside its task is waited for)."""
 _scratch = threading.local()
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)

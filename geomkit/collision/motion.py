@@ -45,6 +45,7 @@ import heapq
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from geomkit._kernels import motion as km
 from geomkit.validate import as_float_array, as_int
@@ -228,31 +229,6 @@ def _backoff(a, Pa, va, b, Pb, vb, t_max, step, sim_step):
 
 
 # ------------------------------------------------------------------ probe paths
-def _rot_log(R):
-    """Axis-angle vector of a rotation matrix (angle in [0, pi])."""
-    c = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
-    th = np.arccos(c)
-    if th < 1e-12:
-        return np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / 2.0
-    if np.pi - th < 1e-6:
-        # near pi: axis from the symmetric part
-        M = (R + np.eye(3)) / 2.0
-        k = int(np.argmax(np.diag(M)))
-        ax = M[:, k] / np.sqrt(max(M[k, k], 1e-300))
-        return ax / np.linalg.norm(ax) * th
-    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    return v * (th / (2.0 * np.sin(th)))
-
-
-def _rot_exp(v):
-    th = np.linalg.norm(v)
-    if th == 0.0:
-        return np.eye(3)
-    k = v / th
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * (K @ K)
-
-
 def _path_poses(poses):
     P = np.asarray(poses, dtype=np.float64) if not isinstance(poses, np.ndarray) else poses
     if P.ndim == 2 and P.shape[1] == 3:
@@ -336,7 +312,7 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
     for k in range(m):
         P0, P1 = P[k], P[k + 1]
         dt = P1[:3, 3] - P0[:3, 3]
-        rv = _rot_log(P0[:3, :3].T @ P1[:3, :3])
+        rv = Rotation.from_matrix(P0[:3, :3].T @ P1[:3, :3]).as_rotvec()
         theta = float(np.linalg.norm(rv))
         if theta <= 1e-15:
             d, s, p_b, p_p, ev = _sweep_min(body, P0, dt, part, Pp)
@@ -356,7 +332,7 @@ def probe_path(body, poses, part, part_pose=None, margin=0.0, tol=None,
 
 def _interp(P0, dt, rv, s):
     Q = P0.copy()
-    Q[:3, :3] = P0[:3, :3] @ _rot_exp(s * rv)
+    Q[:3, :3] = P0[:3, :3] @ Rotation.from_rotvec(s * rv).as_matrix()
     Q[:3, 3] = P0[:3, 3] + s * dt
     return Q
 

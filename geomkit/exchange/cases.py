@@ -24,20 +24,20 @@ target and renames it into place, and refuses to replace an existing file unless
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
-from geomkit.nurbs.surface import Surface
+from geomkit.mesh.mesh import MESH_FORMATS, export_mesh
+from geomkit.nurbs import serial
+from geomkit.nurbs.surface import Surface, as_surfaces
+from geomkit.outputs import atomic_write, check_target
 
 __all__ = ["Case", "load", "load_case", "save", "surface_to_dict", "surface_from_dict",
            "to_geomdl", "from_geomdl", "export_mesh", "CASE_FORMAT", "MESH_FORMATS"]
 
-MESH_FORMATS = (".stl", ".ply", ".obj")
 
 CASE_FORMAT = "geomkit-case/1"
 
@@ -60,18 +60,8 @@ class Case:
 
 # --------------------------------------------------------------------- dicts
 def surface_to_dict(s: Surface) -> dict:
-    d = {"degree_u": s.degree_u, "degree_v": s.degree_v,
-         "knots_u": s.knots_u.tolist(), "knots_v": s.knots_v.tolist(),
-         "control_points": s.control_points.tolist()}
-    if s.weights is not None:
-        d["weights"] = s.weights.tolist()
-    if s.trim:
-        d["trim"] = [loop.to_case() for loop in s.trim]
-    if s.name:
-        d["name"] = s.name
-    if s.approx_error:
-        d["approx_error"] = s.approx_error
-    return d
+    """The ``geomkit-case/1`` form of ``s`` (same as ``s.to_dict()``)."""
+    return serial.surface_to_dict(s)
 
 
 def _prefixed(exc: InvalidInputError, prefix: str) -> InvalidInputError:
@@ -100,35 +90,12 @@ def surface_from_dict(d: dict, where: str = "surface") -> Surface:
 # -------------------------------------------------------------------- geomdl
 def to_geomdl(s: Surface):
     """A geomdl ``BSpline.Surface`` or ``NURBS.Surface`` (trims are not carried)."""
-    from geomdl import BSpline, NURBS
-
-    nu, nv = s.shape
-    g = NURBS.Surface() if s.is_rational else BSpline.Surface()
-    g.degree_u = s.degree_u
-    g.degree_v = s.degree_v
-    g.ctrlpts_size_u = nu
-    g.ctrlpts_size_v = nv
-    g.ctrlpts = s.control_points.reshape(-1, 3).tolist()
-    if s.is_rational:
-        g.weights = s.weights.reshape(-1).tolist()
-    g.knotvector_u = s.knots_u.tolist()
-    g.knotvector_v = s.knots_v.tolist()
-    return g
+    return serial.surface_to_geomdl(s)
 
 
 def from_geomdl(g) -> Surface:
     """Build a :class:`Surface` from a geomdl surface object."""
-    try:
-        nu, nv = g.ctrlpts_size_u, g.ctrlpts_size_v
-        P = np.asarray(g.ctrlpts, dtype=float).reshape(nu, nv, -1)
-        w = getattr(g, "weights", None)
-    except Exception as exc:  # geomdl raises many kinds
-        raise InvalidInputError(f"not a geomdl surface ({exc})", "geomdl") from None
-    if P.shape[2] != 3:
-        raise InvalidInputError(f"expected 3-D control points, got {P.shape[2]}-D", "geomdl")
-    weights = np.asarray(w, float).reshape(nu, nv) if w else None
-    return Surface(g.degree_u, g.degree_v, list(g.knotvector_u), list(g.knotvector_v), P,
-                   weights)
+    return Surface.from_geomdl(g)
 
 
 def _from_geomdl_json(doc: dict, where: str) -> list[Surface]:
@@ -304,18 +271,8 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     never leaves a half-written file; an existing file is kept unless
     ``overwrite=True``.  geomdl JSON cannot hold trims: trimmed surfaces are refused.
     """
-    if isinstance(surfaces, Surface):
-        surfaces = [surfaces]
-    if not isinstance(surfaces, (list, tuple)):
-        raise InvalidInputError(f"expected a Surface or a list of Surfaces, got "
-                                f"{type(surfaces).__name__}", "surfaces")
-    surfaces = list(surfaces)
-    if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
-        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces",
-                                "surfaces")
-    p = Path(path)
-    if p.exists() and not overwrite:
-        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
+    surfaces = as_surfaces(surfaces)
+    p = check_target(path, overwrite)
     if units is not None:
         from geomkit.units import canonical_units
 
@@ -347,56 +304,4 @@ def save(path, surfaces, truth: dict | None = None, name: str | None = None,
     else:
         raise InvalidInputError(f"unknown format {format!r}; use {CASE_FORMAT!r} or 'geomdl'",
                                 "format")
-    return _atomic_write(p, lambda fh: fh.write(json.dumps(doc, indent=1).encode("utf-8")))
-
-
-def _umask() -> int:
-    """The process umask, read without changing it where the system allows
-    (``/proc/self/status`` on Linux), else by setting and restoring it."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _atomic_write(p: Path, write) -> Path:
-    """Write through a temporary file in the target folder, then rename into place.
-
-    The file gets the mode a plain ``open(p, "w")`` would give (``0o666`` less the
-    umask: 0644 under the usual 022), not the 0600 of the temporary file."""
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            os.fchmod(fh.fileno(), 0o666 & ~_umask())
-            write(fh)
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return p
-
-
-def export_mesh(mesh, path, overwrite: bool = False) -> Path:
-    """Write a :class:`~geomkit.Mesh` as STL (binary), PLY (binary) or OBJ, by extension.
-
-    Written atomically; an existing file is kept unless ``overwrite=True``.
-    """
-    p = Path(path)
-    ext = p.suffix.lower()
-    if ext not in MESH_FORMATS:
-        raise InvalidInputError(f"unknown mesh format {p.suffix!r}; use one of "
-                                f"{', '.join(MESH_FORMATS)}", "path")
-    if p.exists() and not overwrite:
-        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
-    data = mesh.to_trimesh().export(file_type=ext[1:])
-    if isinstance(data, str):
-        data = data.encode("utf-8")
-    return _atomic_write(p, lambda fh: fh.write(data))
+    return atomic_write(p, lambda fh: fh.write(json.dumps(doc, indent=1).encode("utf-8")))

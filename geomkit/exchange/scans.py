@@ -11,7 +11,7 @@ Formats (by extension):
   read with laspy's chunk iterator.
 * text (``.csv .xyz .txt .asc .pts``): :func:`geomkit.exchange.points.iter_text` (headers,
   decimal commas, see :mod:`geomkit.exchange.points`).
-* ``.stl``: read whole (:func:`geomkit.exchange.points.read_points`); a mesh, not a scan.
+* ``.stl``: read whole (its unique vertices, through trimesh); a mesh, not a scan.
 
 Every reader checks its rows: a non-finite coordinate, a truncated file or a file with
 no points is a :class:`~geomkit.FileFormatError` naming the file and the row.  Files
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from geomkit.errors import FileFormatError, MissingDependencyError
-from geomkit.exchange.points import TEXT_FORMATS, _check_path, iter_text, read_points
+from geomkit.exchange.text import TEXT_FORMATS, check_path, iter_text
 
 __all__ = ["iter_scan", "scan_length", "STREAM_FORMATS", "DEFAULT_CHUNK"]
 
@@ -116,7 +116,7 @@ def _iter_ply(p: Path, chunk: int):
     idx = [names.index(c) for c in cols]
     with open(p, "rb") as fh:
         fh.seek(hlen)
-        rows, a, lineno = [], 0, 0
+        rows, a = [], 0
         for k in range(n):
             raw = fh.readline()
             if not raw:
@@ -220,7 +220,7 @@ def _iter_npy(p: Path, chunk: int):
 def scan_length(path) -> int | None:
     """Number of points of a scan file when its header says it (``.npy``, PLY, LAS),
     else None (text files are not counted ahead)."""
-    p = _check_path(path)
+    p = check_path(path)
     ext = p.suffix.lower()
     if ext == ".npy":
         return int(_npy(p)[0][0])
@@ -249,6 +249,29 @@ def _normals(p, a, A, what):
     return np.ascontiguousarray(N / ln[:, None])
 
 
+def mesh_vertices(p: Path) -> np.ndarray:
+    """The unique vertices (n, 3) of a mesh file (STL) read through trimesh."""
+    import trimesh  # heavy: loaded when a mesh file is read
+
+    try:
+        obj = trimesh.load(str(p), process=False)
+    except Exception as exc:  # trimesh raises many kinds on bad files
+        raise FileFormatError(f"{p}: cannot read as {p.suffix[1:].upper()} ({exc})") from None
+    if isinstance(obj, trimesh.Scene):
+        geoms = list(obj.geometry.values())
+        verts = [np.asarray(g.vertices) for g in geoms if hasattr(g, "vertices")]
+        V = np.concatenate(verts) if verts else np.empty((0, 3))
+    else:
+        V = np.asarray(getattr(obj, "vertices", np.empty((0, 3))), dtype=np.float64)
+    if V.ndim != 2 or V.shape[0] == 0:
+        raise FileFormatError(f"{p}: no points (empty point set)")
+    V = np.unique(V.reshape(-1, 3), axis=0)
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise FileFormatError(f"{p}: {int(bad.sum())} vertices with non-finite coordinates")
+    return np.ascontiguousarray(V)
+
+
 def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
     """Read a scan in chunks of at most ``chunk_size`` points, in file order.
 
@@ -270,7 +293,7 @@ def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
         Unknown type, truncated file, a non-finite value or a zero normal (naming the
         row, 0-based for binary formats, the line for text), no points.
     """
-    p = _check_path(path)
+    p = check_path(path)
     chunk = int(chunk_size)
     if chunk < 1:
         raise FileFormatError(f"chunk size must be >= 1, got {chunk}")
@@ -284,9 +307,9 @@ def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
             raise FileFormatError(f"{p}: no points (empty point set)")
         return
     if ext == ".stl":
-        ps = read_points(p)
-        for a in range(0, len(ps), chunk):
-            yield ps.points[a:a + chunk], None
+        V = mesh_vertices(p)
+        for a in range(0, len(V), chunk):
+            yield V[a:a + chunk], None
         return
     if ext == ".npy":
         it, what = _iter_npy(p, chunk), "row"

@@ -15,7 +15,7 @@ import io
 from pathlib import Path
 
 from geomkit.errors import GeomkitError, InvalidInputError
-from geomkit.exchange.cases import _atomic_write
+from geomkit.outputs import atomic_write
 from geomkit.report.files import prepare_outputs, write_json
 from geomkit.exchange.scans import is_scan_file
 from geomkit.jobs.stream import stream_deviation
@@ -52,7 +52,7 @@ def deviation_report(surfaces, scan, folder, *, fmt="csv", overwrite=False, inpu
     def job(fh):
         result.update(stream_deviation(surfaces, scan, fh, fmt=fmt, **kw))
 
-    f = _atomic_write(targets[names[0]], job)
+    f = atomic_write(targets[names[0]], job)
     summary = {**(extra or {}), "points_file": str(scan), **result,
                "files": [str(f), str(targets["summary.json"])],
                "plots": "not drawn for streamed runs"}
@@ -119,7 +119,7 @@ def batch_deviation(surfaces, folder, out, *, fmt="csv", overwrite=False, inputs
     data = buf.getvalue().encode()
     if outs["parts.csv"].exists() and not overwrite:
         raise FileExistsError(f"{outs['parts.csv']}: exists; pass --overwrite to replace it")
-    _atomic_write(outs["parts.csv"], lambda fh: fh.write(data))
+    atomic_write(outs["parts.csv"], lambda fh: fh.write(data))
     summary = {**(extra or {}), "folder": str(folder), "parts": rows,
                "passed": sum(r["pass"] == "pass" for r in rows),
                "failed": sum(r["pass"] == "fail" for r in rows),

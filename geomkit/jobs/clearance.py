@@ -32,19 +32,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from geomkit.tolerances import SCREW_REL
 from geomkit.validate import as_float_array
 from geomkit.query.distance import surface_distance
 from geomkit.errors import InvalidInputError
-from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.surface import Surface, as_surfaces
 
 __all__ = ["Stylus", "Clearance", "probe_clearance", "read_path", "STYLUS_KEYS"]
 
 STYLUS_KEYS = ("tip_radius", "shaft_radius", "shaft_length", "extension_radius",
                 "extension_length", "body_radius", "body_length")
-SCREW_REL = 1e-9
-"""A segment whose motion has both a rotation and a translation along the rotation axis
-larger than this (relative to the pose scale) is a screw: refused."""
 MAX_BISECTIONS = 60
 
 
@@ -203,17 +202,6 @@ class Clearance:
                 "seconds": self.stats.get("seconds")}
 
 
-def _part_surfaces(part) -> list[Surface]:
-    if isinstance(part, Surface):
-        return [part]
-    surfaces = getattr(part, "surfaces", part)  # a Case
-    if isinstance(surfaces, (list, tuple)) and surfaces and all(
-            isinstance(s, Surface) for s in surfaces):
-        return list(surfaces)
-    raise InvalidInputError("expected a Surface, a list of Surfaces or a Case, got "
-                            f"{type(part).__name__}", "part")
-
-
 def _as_poses(path, axis) -> np.ndarray:
     """(k, 4, 4) stylus -> world poses from points (tip centres) or poses."""
     P = as_float_array(path, "path")
@@ -251,24 +239,6 @@ def _frame_with_z(z) -> np.ndarray:
     return np.column_stack([x, np.cross(z, x), z])
 
 
-def _rotation_of(R) -> tuple[np.ndarray, float]:
-    """Unit axis and angle in [0, pi] of a rotation matrix."""
-    c = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    s = np.linalg.norm(w) / 2.0
-    angle = math.atan2(s, c)
-    if angle < 1e-14:
-        return np.array([0.0, 0.0, 1.0]), 0.0
-    if s > 1e-6:
-        return w / (2.0 * s), angle
-    # angle near pi: axis from the symmetric part
-    B = (R + np.eye(3)) / 2.0
-    k = np.sqrt(np.clip(np.diag(B), 0.0, None))
-    i = int(np.argmax(k))
-    k = B[i] / k[i]
-    return k / np.linalg.norm(k), angle
-
-
 class _Motion:
     """The rigid motion of one segment: world point x at s = 0 -> its place at s."""
 
@@ -276,7 +246,9 @@ class _Motion:
         M = T1 @ np.linalg.inv(T0)
         self.R = M[:3, :3]
         self.t = M[:3, 3]
-        k, ang = _rotation_of(self.R)
+        rv = Rotation.from_matrix(self.R).as_rotvec()    # angle in [0, pi]
+        ang = float(np.linalg.norm(rv))
+        k = rv / ang if ang >= 1e-14 else np.array([0.0, 0.0, 1.0])
         self.axis, self.angle = k, ang
         if ang < 1e-12:
             self.kind = "rest" if np.linalg.norm(self.t) <= 1e-15 * scale else "translation"
@@ -379,7 +351,7 @@ def probe_clearance(part, stylus: Stylus, path, *, axis=(0.0, 0.0, 1.0), margin=
     Clearance
     """
     t_start = time.perf_counter()
-    surfaces = _part_surfaces(part)
+    surfaces = as_surfaces(part, "part")
     if not isinstance(stylus, Stylus):
         raise InvalidInputError(f"expected a geomkit.Stylus, got {type(stylus).__name__}",
                                 "stylus")

@@ -30,22 +30,20 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from geomkit.tolerances import ALIGN_RCOND, ALIGN_STEP_TOL
+from geomkit.nurbs.surface import as_surfaces
 from geomkit.query import results as R
 from geomkit.errors import InvalidInputError
-from geomkit.exchange.points import as_points
+from geomkit.exchange.points import as_measured_points
 from geomkit.query.projection import project_points
 
-__all__ = ["deviation", "DeviationReport", "align_rigid", "ALIGN_MAX_ITER"]
+__all__ = ["deviation", "DeviationReport", "align_rigid", "deviation_chunk", "ALIGN_MAX_ITER",
+           "COLUMNS"]
 
 ALIGN_MAX_ITER = 60
 """Alignment iterations at most."""
-ALIGN_STEP_TOL = 1e-12
-"""Alignment stops when the largest point displacement of a step is below this times
-the model size."""
-ALIGN_RCOND = 1e-8
-"""Motions whose least-squares sensitivity is below this fraction of the largest (rotation
-measured in model-size units) are left free: the surface does not fix them."""
 
 
 @dataclass(eq=False)
@@ -120,15 +118,6 @@ def _as_tolerance(tolerance):
     return (lo, hi)
 
 
-def _rodrigues(w: np.ndarray) -> np.ndarray:
-    th = float(np.linalg.norm(w))
-    if th == 0.0:
-        return np.eye(3)
-    k = w / th
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(th) * K + (1 - math.cos(th)) * (K @ K)
-
-
 def _apply(T: np.ndarray, P: np.ndarray) -> np.ndarray:
     return P @ T[:3, :3].T + T[:3, 3]
 
@@ -143,7 +132,7 @@ def _side(normals, pr_normal):
 def _step(c, x) -> np.ndarray:
     """4x4 rigid step: rotation ``x[:3]`` (Rodrigues vector) about ``c``, then
     translation ``x[3:]``."""
-    Rk = _rodrigues(x[:3])
+    Rk = Rotation.from_rotvec(x[:3]).as_matrix()
     step = np.eye(4)
     step[:3, :3] = Rk
     step[:3, 3] = c - Rk @ c + x[3:]
@@ -170,9 +159,8 @@ def align_rigid(surfaces, points, normals=None, probe_radius: float = 0.0,
         of the last iteration), ``iterations``, ``rank`` (of the last system; < 6 when
         the surface leaves motions free) and ``converged``.
     """
-    P0, N = as_points(points, normals)
-    from geomkit.query.projection import _as_surfaces
-    surfs = _as_surfaces(surfaces)
+    P0, N = as_measured_points(points, normals)
+    surfs = as_surfaces(surfaces)
     size = max(s.size for s in surfs)
     T = np.eye(4)
     rms_before = None
@@ -280,7 +268,7 @@ def deviation(surfaces, points, normals=None, probe_radius: float = 0.0,
     (1, 1)
     """
     t0 = time.perf_counter()
-    P0, N = as_points(points, normals)
+    P0, N = as_measured_points(points, normals)
     probe_radius, max_distance = _check_settings(probe_radius, max_distance)
     tol = _as_tolerance(tolerance)
     md = None if max_distance is None else max_distance + probe_radius
@@ -354,3 +342,38 @@ def _alignment_info(st, align_info, seconds) -> dict:
                            "converged": align_info["converged"]}
     st["seconds"] = seconds
     return st
+
+
+# ------------------------------------------------------------ chunks
+COLUMNS = ("index", "x", "y", "z", "ax", "ay", "az", "foot_x", "foot_y", "foot_z", "u",
+           "v", "surface", "nx", "ny", "nz", "signed_distance", "deviation", "status",
+           "edge")
+"""Per-point columns, those of :func:`geomkit.report.files.write_deviation_csv`."""
+
+
+def deviation_chunk(projector, P0, N, T, probe_radius, max_distance, offset):
+    """Deviation columns of one chunk of points (row ``offset`` onwards).
+
+    Returns
+    -------
+    dict
+        ``{column: (m,) array}`` for :data:`COLUMNS` (status as int8 codes), the
+        values of :func:`geomkit.jobs.deviation.deviation` for these points.
+    """
+    aligned = T is not None
+    P = _apply(T, P0) if aligned else P0
+    Nt = None if N is None else (N @ T[:3, :3].T if aligned else N)
+    md = None if max_distance is None else max_distance + probe_radius
+    [pr] = projector.iter_project(P, md, chunk_size=max(1, P.shape[0]))
+    dev, status, edge = _compensate(pr, Nt, probe_radius, max_distance)
+    m = P0.shape[0]
+    out = {"index": np.arange(offset, offset + m, dtype=np.int64)}
+    for k, name in enumerate("xyz"):
+        out[name] = P0[:, k]
+        out["a" + name] = P[:, k]
+        out["foot_" + name] = pr.point[:, k]
+        out["n" + name] = pr.normal[:, k]
+    out.update(u=pr.uv[:, 0], v=pr.uv[:, 1], surface=pr.surface.astype(np.int64),
+               signed_distance=pr.signed_distance, deviation=dev, status=status,
+               edge=edge.astype(np.int8))
+    return {c: np.ascontiguousarray(out[c]) for c in COLUMNS}

@@ -9,7 +9,7 @@
   the workers; results are handed back in chunk order (a reorder buffer keyed by the
   chunk index), so every row is written exactly once and in file order, even when a
   worker dies and the scheduler reruns its tasks (``retries`` for task errors).
-* Each task runs :func:`geomkit.jobs.stream.deviation_chunk`: the values equal the
+* Each task runs :func:`geomkit.jobs.deviation.deviation_chunk`: the values equal the
   single-process run's bit for bit on the same machine type.
 
 Progress: the Dask dashboard (``client.dashboard_link``) shows the tasks; the CLI
@@ -21,6 +21,8 @@ from __future__ import annotations
 import uuid
 
 from geomkit.errors import MissingDependencyError
+from geomkit.jobs.deviation import deviation_chunk
+from geomkit.query.projection import Projector
 
 __all__ = ["run_chunks", "make_client", "WINDOW", "RETRIES"]
 
@@ -54,9 +56,6 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
 
 
 def _task(surfaces, key, P, N, T, probe_radius, max_distance, offset):
-    from geomkit.query.projection import Projector
-    from geomkit.jobs.stream import deviation_chunk
-
     pr = _PROJECTORS.get(key)
     if pr is None:
         _PROJECTORS.clear()  # one nominal at a time per worker process

@@ -21,13 +21,12 @@ import math
 
 import numpy as np
 
+from geomkit.tolerances import PERCENTILE_REL_ERROR
 from geomkit.query import results as R
 from geomkit.errors import InvalidInputError
 
 __all__ = ["DeviationStats", "PERCENTILE_REL_ERROR", "PERCENTILES"]
 
-PERCENTILE_REL_ERROR = 1e-4
-"""Relative value error α of the reported percentiles."""
 PERCENTILES = (1, 5, 25, 50, 75, 95, 99)
 
 

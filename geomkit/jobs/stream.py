@@ -18,10 +18,12 @@ import time
 
 import numpy as np
 
-from geomkit.jobs.deviation import _apply, _as_tolerance, _check_settings, _compensate, align_rigid
+from geomkit.jobs.deviation import (COLUMNS, _as_tolerance, _check_settings,
+                                    align_rigid, deviation_chunk)
+from geomkit.jobs.distributed import run_chunks
 from geomkit.jobs.stats import DeviationStats
 from geomkit.errors import InvalidInputError, MissingDependencyError
-from geomkit.query.projection import _cached_projector
+from geomkit.query.projection import cached_projector
 from geomkit.query.results import STATUS_NAMES
 from geomkit.exchange.scans import DEFAULT_CHUNK, iter_scan
 
@@ -29,40 +31,6 @@ __all__ = ["stream_deviation", "COLUMNS", "ALIGN_SAMPLE"]
 
 ALIGN_SAMPLE = 200_000
 """Points at most in the alignment subsample of a streamed scan."""
-COLUMNS = ("index", "x", "y", "z", "ax", "ay", "az", "foot_x", "foot_y", "foot_z", "u",
-           "v", "surface", "nx", "ny", "nz", "signed_distance", "deviation", "status",
-           "edge")
-"""Per-point columns, those of :func:`geomkit.report.files.write_deviation_csv`."""
-
-
-def deviation_chunk(projector, P0, N, T, probe_radius, max_distance, offset):
-    """Deviation columns of one chunk of points (row ``offset`` onwards).
-
-    Returns
-    -------
-    dict
-        ``{column: (m,) array}`` for :data:`COLUMNS` (status as int8 codes), the
-        values of :func:`geomkit.jobs.deviation.deviation` for these points.
-    """
-    aligned = T is not None
-    P = _apply(T, P0) if aligned else P0
-    Nt = None if N is None else (N @ T[:3, :3].T if aligned else N)
-    md = None if max_distance is None else max_distance + probe_radius
-    [pr] = projector.iter_project(P, md, chunk_size=max(1, P.shape[0]))
-    dev, status, edge = _compensate(pr, Nt, probe_radius, max_distance)
-    m = P0.shape[0]
-    out = {"index": np.arange(offset, offset + m, dtype=np.int64)}
-    for k, name in enumerate("xyz"):
-        out[name] = P0[:, k]
-        out["a" + name] = P[:, k]
-        out["foot_" + name] = pr.point[:, k]
-        out["n" + name] = pr.normal[:, k]
-    out.update(u=pr.uv[:, 0], v=pr.uv[:, 1], surface=pr.surface.astype(np.int64),
-               signed_distance=pr.signed_distance, deviation=dev, status=status,
-               edge=edge.astype(np.int8))
-    return {c: np.ascontiguousarray(out[c]) for c in COLUMNS}
-
-
 # ------------------------------------------------------------------ writers
 class CSVWriter:
     """Per-point CSV rows appended chunk by chunk (through pyarrow's C++ CSV writer
@@ -125,7 +93,7 @@ class ParquetWriter:
     """Per-point rows as Parquet row groups (one per chunk), via pyarrow."""
 
     def __init__(self, fh):
-        pq = _pyarrow_parquet()
+        pq = pyarrow_parquet()
         self.fh = fh
         self.pq = pq
         self.w = None
@@ -141,7 +109,7 @@ class ParquetWriter:
             self.w.close()
 
 
-def _pyarrow_parquet():
+def pyarrow_parquet():
     try:
         import pyarrow.parquet as pq
     except ImportError:
@@ -208,7 +176,7 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     if fmt not in WRITERS:
         raise InvalidInputError(f"expected one of {', '.join(WRITERS)}, got {fmt!r}",
                                 "format")
-    projector = _cached_projector(surfaces, None)
+    projector = cached_projector(surfaces, None)
     T, align_info = None, None
     if align:
         Ps, Ns, k = _align_sample(scan, chunk_size)
@@ -220,7 +188,6 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     stats = DeviationStats(tol)
     chunks = iter_scan(scan, chunk_size)
     if client is not None:
-        from geomkit.jobs.distributed import run_chunks
 
         results = run_chunks(client, projector.surfaces, chunks, T, probe_radius,
                              max_distance)

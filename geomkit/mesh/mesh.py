@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Mesh"]
+from geomkit.errors import InvalidInputError
+from geomkit.outputs import atomic_write, check_target
+
+__all__ = ["Mesh", "export_mesh", "MESH_FORMATS"]
+
+MESH_FORMATS = (".stl", ".ply", ".obj")
 
 
 @dataclass(eq=False)
@@ -64,5 +70,21 @@ class Mesh:
     def export(self, path, overwrite: bool = False):
         """Write STL / PLY / OBJ (by extension) through trimesh; never overwrites
         an existing file unless ``overwrite=True``."""
-        from geomkit.exchange.cases import export_mesh
         return export_mesh(self, path, overwrite)
+
+
+def export_mesh(mesh: Mesh, path, overwrite: bool = False) -> Path:
+    """Write a :class:`Mesh` as STL (binary), PLY (binary) or OBJ, by extension.
+
+    Written atomically; an existing file is kept unless ``overwrite=True``.
+    """
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MESH_FORMATS:
+        raise InvalidInputError(f"unknown mesh format {p.suffix!r}; use one of "
+                                f"{', '.join(MESH_FORMATS)}", "path")
+    check_target(p, overwrite)
+    data = mesh.to_trimesh().export(file_type=ext[1:])
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    return atomic_write(p, lambda fh: fh.write(data))

@@ -45,15 +45,16 @@ import warnings
 
 import numpy as np
 
+from geomkit.tolerances import WELD_REL
 from geomkit.mesh import quadtree as qt
-from geomkit._kernels.surface import _surface_points_range, surface_points
+from geomkit._kernels.surface import surface_points_range, surface_points
 from geomkit._kernels.tess import triangle_deviation
 from geomkit._kernels.tess_lattice import cell_triangles
 from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, planar_trimmed
 from geomkit.validate import as_int
 from geomkit.errors import InvalidInputError, ToleranceNotMetWarning
 from geomkit.mesh.mesh import Mesh
-from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.surface import Surface, as_surfaces
 
 __all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET"]
 
@@ -80,15 +81,13 @@ cost ~0.2 ms)."""
 MAX_ROUNDS = 60
 """Rounds of measure-and-split; a mesh that still has a triangle above ``tol`` after
 them warns (:class:`~geomkit.errors.ToleranceNotMetWarning`).  Typical: 1-5."""
-WELD_REL = 1e-10
-"""Domain-boundary vertices closer than ``WELD_REL * surface.size`` in 3-D are merged."""
 
 
 # ------------------------------------------------------------------ triangles
 _EDGE_T = np.linspace(0.0, 1.0, 17)  # samples along each domain edge
 
 
-def _closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
+def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     (u0, u1), (v0, v1) = s.domain
     eps = 1e-10 * size
     v = v0 + (v1 - v0) * _EDGE_T
@@ -118,7 +117,7 @@ def _points(s: Surface, uv: np.ndarray) -> np.ndarray:
     uv = np.ascontiguousarray(uv, dtype=np.float64)
     out = np.empty((uv.shape[0], 3))
     if uv.shape[0] <= SERIAL_POINTS:  # in this thread: a dispatch costs more
-        _surface_points_range(0, uv.shape[0], s.homogeneous, s.degree_u, s.degree_v,
+        surface_points_range(0, uv.shape[0], s.homogeneous, s.degree_u, s.degree_v,
                               s.knots_u, s.knots_v, uv, out)
     else:
         surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
@@ -389,7 +388,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             welded = _weld_grid(s, u, v, diag, size)
             V, F, UV, good = welded if welded is not None else \
                 _weld(s, tri_uv, size, near_uv=False)
-            closed = _closed_directions(s, size)
+            closed = closed_directions(s, size)
             dropped = len(good) - int(np.count_nonzero(good))
             stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
                      "collapsed_dropped": dropped,
@@ -402,7 +401,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     cells = lat.roots()
     trim = TrimPolylines(s, trim_target * tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
-    closed = _closed_directions(s, size)
+    closed = closed_directions(s, size)
     force = None
     known = None
     fanned = set()  # cells whose split failed the measurement: centre fan instead
@@ -491,20 +490,16 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
         Faces keep the trim edges and are oriented with ``S_u x S_v``; vertices are
         shared across seams and poles of one surface, not between surfaces.
     """
-    return _tessellate(surfaces, tol, max_angle, max_edge, samples_per_edge, TRIM_TARGET)
+    return tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
+                                  TRIM_TARGET)
 
 
-def _tessellate(surfaces, tol, max_angle, max_edge, samples_per_edge, trim_target) -> Mesh:
+def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
+                           trim_target) -> Mesh:
     """:func:`tessellate` with the trim polylines' chord error target (a fraction of
     ``tol``) chosen: the projector's candidate mesh asks for finer ones (its bounds
     carry this error)."""
-    if isinstance(surfaces, Surface):
-        surfaces = [surfaces]
-    if not isinstance(surfaces, (list, tuple)) or not surfaces \
-            or not all(isinstance(s, Surface) for s in surfaces):
-        raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
-                                f"{type(surfaces).__name__}", "surfaces")
-    surfaces = list(surfaces)
+    surfaces = as_surfaces(surfaces)
     try:
         tol = float(tol)
     except (TypeError, ValueError):

@@ -18,12 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from geomkit.tolerances import AFFINE_REL
 from geomkit._kernels.tess_trim import trim_polyline
 from geomkit.nurbs.surface import Surface
 
-AFFINE_REL = 1e-14
-"""A net is affine when its residual from the best affine image of the Greville
-abscissae is at most ``AFFINE_REL * size`` (rounding of the stored coordinates)."""
 
 
 class TrimPolylines:

@@ -3,7 +3,8 @@
 Every function takes a :class:`~geomkit.Surface` and parameters ``uv`` of shape
 (..., 2) and returns arrays with the same leading shape; a single (2,) parameter pair
 is the n = 1 case.  Work runs in parallel numba kernels (The NURBS Book A2.1–A2.3,
-A3.5, A3.6, A4.3, A4.4).
+A3.5, A3.6, A4.3, A4.4), called by the :class:`~geomkit.Surface` methods of the same
+names.
 
 Parameters within ``DOMAIN_TOL`` of the domain are clamped onto it; anything further
 out raises :class:`~geomkit.errors.InvalidInputError` naming the first offending row.
@@ -13,39 +14,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit import tolerances as tols
-from geomkit._kernels import surface as K
-from geomkit.validate import as_int, as_points
-from geomkit.errors import InvalidInputError
-from geomkit.nurbs.surface import Surface
+from geomkit.nurbs import surface as _surface
+from geomkit.nurbs.surface import (NORMAL_LIMIT, NORMAL_NUDGED, NORMAL_REGULAR,
+                                   NORMAL_UNDEFINED, Surface, check_surface)
 
-__all__ = ["evaluate", "derivatives", "normals", "check_uv", "DEGENERATE_REL"]
-
-DEGENERATE_REL = 1e-12
-"""``|Su x Sv| <= DEGENERATE_REL * max(|Su|, |Sv|)**2`` marks a degenerate point (pole)."""
-
-NORMAL_REGULAR, NORMAL_LIMIT, NORMAL_NUDGED, NORMAL_UNDEFINED = 0, 1, 2, 3
+__all__ = ["evaluate", "derivatives", "normals", "check_uv",
+           "NORMAL_REGULAR", "NORMAL_LIMIT", "NORMAL_NUDGED", "NORMAL_UNDEFINED"]
 
 
 def check_uv(surface: Surface, uv, field: str = "uv") -> tuple[np.ndarray, tuple]:
     """Validate parameters: returns (n, 2) float64 clamped to the domain, leading shape."""
-    if not isinstance(surface, Surface):
-        raise InvalidInputError(f"expected a geomkit.Surface, got {type(surface).__name__}",
-                                "surface")
-    arr, lead = as_points(uv, 2, field)
-    (u0, u1), (v0, v1) = surface.domain
-    eu = tols.DOMAIN_TOL * (u1 - u0)
-    ev = tols.DOMAIN_TOL * (v1 - v0)
-    bad = ((arr[:, 0] < u0 - eu) | (arr[:, 0] > u1 + eu)
-           | (arr[:, 1] < v0 - ev) | (arr[:, 1] > v1 + ev))
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise InvalidInputError(
-            f"row {i} = ({arr[i, 0]!r}, {arr[i, 1]!r}) is outside the parameter domain "
-            f"[{u0}, {u1}] x [{v0}, {v1}] ({int(bad.sum())} row(s) outside)", field)
-    np.clip(arr[:, 0], u0, u1, out=arr[:, 0])
-    np.clip(arr[:, 1], v0, v1, out=arr[:, 1])
-    return arr, lead
+    return _surface.check_uv(check_surface(surface), uv, field)
 
 
 def evaluate(surface: Surface, uv) -> np.ndarray:
@@ -60,14 +39,10 @@ def evaluate(surface: Surface, uv) -> np.ndarray:
     Returns
     -------
     (..., 3) float
-        S(u, v), exact up to floating-point rounding (A4.3 on homogeneous points).
+        S(u, v), exact up to floating-point rounding (The NURBS Book A4.3 on
+        homogeneous points).
     """
-    arr, lead = check_uv(surface, uv)
-    out = np.empty((arr.shape[0], 3))
-    if arr.shape[0]:
-        K.surface_points(surface.homogeneous, surface.degree_u, surface.degree_v,
-                         surface.knots_u, surface.knots_v, arr, out)
-    return out.reshape(lead + (3,))
+    return check_surface(surface).evaluate(uv)
 
 
 def derivatives(surface: Surface, uv, order: int = 1) -> np.ndarray:
@@ -83,15 +58,7 @@ def derivatives(surface: Surface, uv, order: int = 1) -> np.ndarray:
         (the left one at the upper domain end); across a C0 knot (a crease) the two
         one-sided derivatives differ.
     """
-    order = as_int(order, "order", minimum=0)
-    if order > 8:
-        raise InvalidInputError(f"order must be <= 8, got {order}", "order")
-    arr, lead = check_uv(surface, uv)
-    out = np.empty((arr.shape[0], order + 1, order + 1, 3))
-    if arr.shape[0]:
-        K.surface_derivatives(surface.homogeneous, surface.degree_u, surface.degree_v,
-                              surface.knots_u, surface.knots_v, arr, order, out)
-    return out.reshape(lead + (order + 1, order + 1, 3))
+    return check_surface(surface).derivatives(uv, order)
 
 
 def normals(surface: Surface, uv, return_status: bool = False):
@@ -116,15 +83,4 @@ def normals(surface: Surface, uv, return_status: bool = False):
     -------
     (..., 3) float, unit vectors (and the status array when asked).
     """
-    arr, lead = check_uv(surface, uv)
-    out = np.empty((arr.shape[0], 3))
-    status = np.zeros(arr.shape[0], dtype=np.int8)
-    (u0, u1), (v0, v1) = surface.domain
-    if arr.shape[0]:
-        K.surface_normals(surface.homogeneous, surface.degree_u, surface.degree_v,
-                          surface.knots_u, surface.knots_v, arr, u0, u1, v0, v1,
-                          DEGENERATE_REL, out, status)
-    out = out.reshape(lead + (3,))
-    if return_status:
-        return out, status.reshape(lead)
-    return out
+    return check_surface(surface).normals(uv, return_status)

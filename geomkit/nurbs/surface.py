@@ -1,8 +1,11 @@
-"""geomkit's data types: exact NURBS surfaces with trims, and their Bézier patches.
+"""The exact NURBS surface, optionally trimmed, and its Bézier patches.
 
-Types hold validated, C-contiguous, read-only float64 arrays and no algorithms; the
-methods hand off to the domain modules (:mod:`geomkit.nurbs.evaluation`,
-:mod:`geomkit.nurbs.trimming`, :mod:`geomkit.nurbs.bezier`, :mod:`geomkit.exchange.cases`).
+A :class:`Surface` holds validated, C-contiguous, read-only float64 arrays; its
+methods (evaluation, derivatives, normals, trim classification, Bézier extraction)
+call the numba kernels directly.  The free functions of
+:mod:`geomkit.nurbs.evaluation`, :mod:`geomkit.nurbs.trimming` and
+:mod:`geomkit.nurbs.bezier` are the documented entry points; they check their
+argument and call these methods.
 """
 
 from __future__ import annotations
@@ -12,228 +15,85 @@ from dataclasses import dataclass
 import numpy as np
 
 from geomkit import tolerances as tols
-from geomkit._kernels.bezier import insert_knot
-from geomkit.validate import as_float_array, as_int, check_knots
-from geomkit.errors import InvalidSurfaceError, InvalidTrimError
+from geomkit._kernels import surface as K
+from geomkit._kernels.bezier import decompose
+from geomkit._kernels.trim import BOUNDARY, INSIDE, OUTSIDE, classify_points
+from geomkit.validate import as_float_array, as_int, as_points, check_knots
+from geomkit.errors import InvalidInputError, InvalidSurfaceError, InvalidTrimError
+from geomkit.nurbs import serial
+from geomkit.nurbs.trims import (TrimCurve, TrimLoop, check_loop, clamp_knots, pack_segments,
+                                 parse_loop, readonly)
 
-__all__ = ["Surface", "TrimCurve", "TrimLoop", "BezierPatches"]
+__all__ = ["Surface", "TrimCurve", "TrimLoop", "BezierPatches", "check_uv", "check_surface",
+           "as_surfaces",
+           "NORMAL_REGULAR", "NORMAL_LIMIT", "NORMAL_NUDGED", "NORMAL_UNDEFINED"]
+
+NORMAL_REGULAR, NORMAL_LIMIT, NORMAL_NUDGED, NORMAL_UNDEFINED = 0, 1, 2, 3
+"""Status codes of :meth:`Surface.normals`."""
 
 
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    a.setflags(write=False)
+def check_uv(surface: "Surface", uv, field: str = "uv") -> tuple[np.ndarray, tuple]:
+    """Validate parameters: returns (n, 2) float64 clamped to the domain, leading shape.
+
+    Parameters within ``DOMAIN_TOL`` of the domain are clamped onto it; anything further
+    out raises :class:`~geomkit.errors.InvalidInputError` naming the first offending row.
+    """
+    arr, lead = as_points(uv, 2, field)
+    (u0, u1), (v0, v1) = surface.domain
+    eu = tols.DOMAIN_TOL * (u1 - u0)
+    ev = tols.DOMAIN_TOL * (v1 - v0)
+    bad = ((arr[:, 0] < u0 - eu) | (arr[:, 0] > u1 + eu)
+           | (arr[:, 1] < v0 - ev) | (arr[:, 1] > v1 + ev))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InvalidInputError(
+            f"row {i} = ({arr[i, 0]!r}, {arr[i, 1]!r}) is outside the parameter domain "
+            f"[{u0}, {u1}] x [{v0}, {v1}] ({int(bad.sum())} row(s) outside)", field)
+    np.clip(arr[:, 0], u0, u1, out=arr[:, 0])
+    np.clip(arr[:, 1], v0, v1, out=arr[:, 1])
+    return arr, lead
+
+
+def check_surface(surface, field: str = "surface") -> "Surface":
+    """``surface`` if it is a :class:`Surface`, else InvalidInputError naming ``field``."""
+    if not isinstance(surface, Surface):
+        raise InvalidInputError(f"expected a geomkit.Surface, got {type(surface).__name__}",
+                                field)
+    return surface
+
+
+def as_surfaces(x, field: str = "surfaces") -> list:
+    """The surfaces of a query: one :class:`Surface`, a non-empty list or tuple of them,
+    or an object holding them in a ``surfaces`` list (a :class:`~geomkit.Case`, a CAD
+    read).  Anything else is an InvalidInputError naming ``field`` (or the element)."""
+    if isinstance(x, Surface):
+        return [x]
+    if not isinstance(x, (list, tuple)) and isinstance(getattr(x, "surfaces", None), list):
+        x = x.surfaces
+    if isinstance(x, (list, tuple)) and x:
+        for i, s in enumerate(x):
+            check_surface(s, f"{field}[{i}]")
+        return list(x)
+    raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
+                            f"{type(x).__name__}"
+                            + (" (empty)" if isinstance(x, (list, tuple)) else ""), field)
+
+
+def _net(a):
+    """Control rows for ``decompose``: C-contiguous and writable (a copy of a read-only
+    surface net), as :func:`geomkit.nurbs.trims.pack_segments` passes its curves'; knots
+    go read-only (:func:`_knots`).  numba compiles a read-only and a writable array
+    argument separately: one argument kind per parameter, one compiled ``decompose``."""
+    a = np.ascontiguousarray(a)
+    return a if a.flags.writeable else a.copy()
+
+
+def _knots(a):
+    a = np.ascontiguousarray(a)
+    if a.flags.writeable:
+        a = a.view()
+        a.setflags(write=False)
     return a
-
-
-def _clamp(Pw: np.ndarray, p: int, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Clamp an unclamped knot vector by knot insertion; the curve is unchanged.
-
-    ``Pw`` (n, dim) homogeneous rows.  Inserts the domain ends ``U[p]`` and ``U[n]``
-    until they have multiplicity ``p`` and drops the parts outside the domain.
-    """
-    n = Pw.shape[0]
-    a, b = U[p], U[n]
-    if np.all(U[: p + 1] == a) and np.all(U[n:] == b):
-        return Pw, U
-    for end in (a, b):
-        s = int(np.count_nonzero(U == end))
-        if s < p:
-            Pw, U = insert_knot(np.ascontiguousarray(Pw), p, U, end, p - s)
-    first_a = int(np.nonzero(U == a)[0][0])
-    start = first_a + int(np.count_nonzero(U == a)) - 1 - p  # span of a, minus p
-    first_b = int(np.nonzero(U == b)[0][0])
-    newU = U[start: first_b + p + 1].copy()
-    newU[: p + 1] = a
-    newU[-(p + 1):] = b
-    return np.ascontiguousarray(Pw[start: first_b]), newU
-
-
-@dataclass(frozen=True, eq=False)
-class TrimCurve:
-    """A 2-D NURBS curve in a surface's parameter plane (one piece of a trim loop).
-
-    Attributes
-    ----------
-    degree : int
-    knots : (n + degree + 1,) float, clamped.
-    control_points : (n, 2) float, in (u, v).
-    weights : (n,) float, all 1 for a polyline or plain B-spline.
-    """
-
-    degree: int
-    knots: np.ndarray
-    control_points: np.ndarray
-    weights: np.ndarray
-
-    @classmethod
-    def create(cls, degree, knots, control_points, weights=None, field="trim") -> "TrimCurve":
-        """Validate and build a trim curve (unclamped knot vectors are clamped)."""
-        p = as_int(degree, f"{field}.degree", minimum=1, error=InvalidTrimError)
-        P = as_float_array(control_points, f"{field}.control_points", shape=(None, 2),
-                           error=InvalidTrimError)
-        n = P.shape[0]
-        if n < p + 1:
-            raise InvalidTrimError(f"{n} control points but degree {p} needs at least {p + 1}",
-                                   f"{field}.control_points")
-        U = check_knots(knots, p, n, f"{field}.knots", InvalidTrimError)
-        if weights is None:
-            w = np.ones(n)
-        else:
-            w = as_float_array(weights, f"{field}.weights", shape=(n,), error=InvalidTrimError)
-            if np.any(w <= 0):
-                i = int(np.argmin(w))
-                raise InvalidTrimError(f"weights must be > 0, weight[{i}] = {float(w[i])!r}",
-                                       f"{field}.weights")
-        Pw = np.empty((n, 3))
-        Pw[:, :2] = P * w[:, None]
-        Pw[:, 2] = w
-        Pw, U = _clamp(Pw, p, U)
-        w = Pw[:, 2].copy()
-        return cls(p, _readonly(U), _readonly(Pw[:, :2] / w[:, None]), _readonly(w))
-
-    @classmethod
-    def polyline(cls, points, field="trim") -> "TrimCurve":
-        """A polyline (k, 2) as a degree-1 curve with one knot per vertex (chord length)."""
-        P = as_float_array(points, field, shape=(None, 2), error=InvalidTrimError)
-        if P.shape[0] < 2:
-            raise InvalidTrimError(f"a polyline needs at least 2 points, got {P.shape[0]}", field)
-        seg = np.hypot(*np.diff(P, axis=0).T)
-        keep = np.concatenate([[True], seg > 0])  # drop repeated vertices
-        P = P[keep]
-        if P.shape[0] < 2:
-            raise InvalidTrimError("degenerate polyline: all points coincide", field)
-        t = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(P, axis=0).T))])
-        t /= t[-1]
-        U = np.concatenate([[0.0], t, [1.0]])
-        return cls(1, _readonly(U), _readonly(P), _readonly(np.ones(P.shape[0])))
-
-    @property
-    def is_polyline(self) -> bool:
-        return self.degree == 1 and bool(np.all(self.weights == 1.0))
-
-    @property
-    def start(self) -> np.ndarray:
-        return self.control_points[0]
-
-    @property
-    def end(self) -> np.ndarray:
-        return self.control_points[-1]
-
-    @property
-    def homogeneous(self) -> np.ndarray:
-        """(n, 3) homogeneous control points ``(w u, w v, w)``."""
-        Pw = np.empty((self.control_points.shape[0], 3))
-        Pw[:, :2] = self.control_points * self.weights[:, None]
-        Pw[:, 2] = self.weights
-        return Pw
-
-    def to_dict(self) -> dict:
-        """The ``geomkit-case/1`` form of this piece."""
-        if self.is_polyline:
-            return {"degree": 1, "knots": self.knots.tolist(),
-                    "control_points": self.control_points.tolist()}
-        return {"degree": self.degree, "knots": self.knots.tolist(),
-                "control_points": self.control_points.tolist(),
-                "weights": self.weights.tolist()}
-
-
-@dataclass(frozen=True, eq=False)
-class TrimLoop:
-    """A closed chain of trim curves, in order; the end of each piece meets the next."""
-
-    pieces: tuple
-
-    @property
-    def is_polyline(self) -> bool:
-        return all(c.is_polyline for c in self.pieces)
-
-    def to_case(self):
-        """The ``geomkit-case/1`` form: a point list for a single polyline piece,
-        a curve dict for a single NURBS piece, else a list of curve dicts."""
-        if len(self.pieces) == 1:
-            c = self.pieces[0]
-            return c.control_points.tolist() if c.is_polyline else c.to_dict()
-        return [c.to_dict() for c in self.pieces]
-
-
-def _parse_loop(loop, field) -> TrimLoop:
-    if isinstance(loop, TrimLoop):
-        return loop
-    if isinstance(loop, (TrimCurve, dict)):
-        raw = [loop]
-    elif isinstance(loop, (list, tuple)) and loop and isinstance(loop[0], (TrimCurve, dict)):
-        raw = list(loop)
-    else:
-        raw = [("polyline", loop)]
-    pieces = []
-    for k, item in enumerate(raw):
-        f = field if len(raw) == 1 else f"{field}[{k}]"
-        if isinstance(item, TrimCurve):
-            pieces.append(item)
-        elif isinstance(item, tuple) and item[0] == "polyline":
-            pieces.append(TrimCurve.polyline(item[1], f))
-        elif isinstance(item, dict):
-            missing = [key for key in ("degree", "knots", "control_points") if key not in item]
-            if missing:
-                raise InvalidTrimError(f"trim curve is missing {', '.join(missing)}", f)
-            pieces.append(TrimCurve.create(item["degree"], item["knots"], item["control_points"],
-                                           item.get("weights"), f))
-        else:
-            raise InvalidTrimError(f"expected a polyline or a NURBS curve dict, got "
-                                   f"{type(item).__name__}", f)
-    return TrimLoop(tuple(pieces))
-
-
-def _first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
-    """A point of ``curve`` outside ``box`` (u0, u1, v0, v1), or None if it stays in.
-
-    Exact up to ``tol``: Bézier pieces whose control points lie in the box are inside
-    (convex hull property); others are split until a piece end point is found
-    outside or the piece is smaller than ``tol``.
-    """
-    from geomkit._kernels.bezier import de_casteljau_split, decompose
-
-    xy = curve.control_points  # the curve lies in their convex hull (weights > 0)
-    if ((xy[:, 0] >= box[0]) & (xy[:, 0] <= box[1]) & (xy[:, 1] >= box[2])
-            & (xy[:, 1] <= box[3])).all():
-        return None
-    Q, _ = decompose(curve.homogeneous, curve.degree, curve.knots)
-    stack = list(Q)
-    while stack:
-        piece = stack.pop()
-        xy = piece[:, :2] / piece[:, 2:3]
-        if ((xy[:, 0] >= box[0]) & (xy[:, 0] <= box[1]) & (xy[:, 1] >= box[2])
-                & (xy[:, 1] <= box[3])).all():
-            continue
-        for end in (xy[0], xy[-1]):
-            if not (box[0] <= end[0] <= box[1] and box[2] <= end[1] <= box[3]):
-                return end
-        if np.ptp(xy, axis=0).max() <= tol:
-            continue
-        left = np.empty_like(piece)
-        right = np.empty_like(piece)
-        de_casteljau_split(piece, 0.5, left, right)
-        stack += [left, right]
-    return None
-
-
-def _loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
-    """Points along a loop (for validation only: area, domain containment)."""
-    from geomkit._kernels.bezier import curve_points  # local: keeps import graph one-way
-
-    out = []
-    for c in loop.pieces:
-        if c.is_polyline:
-            out.append(c.control_points)
-            continue
-        t = np.unique(np.concatenate([
-            np.linspace(a, b, per_segment, endpoint=False)
-            for a, b in zip(c.knots[c.degree:-c.degree - 1], c.knots[c.degree + 1:-c.degree])
-            if b > a] + [c.knots[-1:]]))
-        res = np.empty((t.shape[0], 1, 2))
-        curve_points(c.homogeneous, c.degree, c.knots, t, 0, res)
-        out.append(res[:, 0, :])
-    return np.concatenate(out)
 
 
 class Surface:
@@ -306,21 +166,21 @@ class Surface:
         Pw[..., :3] = P * w[..., None]
         Pw[..., 3] = w
         # clamp unclamped knot vectors (u: rows are curves; v: transpose)
-        flat, U = _clamp(Pw.reshape(nu, nv * 4), p, U)
+        flat, U = clamp_knots(Pw.reshape(nu, nv * 4), p, U)
         Pw = flat.reshape(-1, nv, 4)
         nu = Pw.shape[0]
-        flat, V = _clamp(np.ascontiguousarray(Pw.transpose(1, 0, 2)).reshape(nv, nu * 4), q, V)
+        flat, V = clamp_knots(np.ascontiguousarray(Pw.transpose(1, 0, 2)).reshape(nv, nu * 4), q, V)
         Pw = np.ascontiguousarray(flat.reshape(-1, nu, 4).transpose(1, 0, 2))
         self.degree_u = p
         self.degree_v = q
-        self.knots_u = _readonly(U)
-        self.knots_v = _readonly(V)
+        self.knots_u = readonly(U)
+        self.knots_v = readonly(V)
         if Pw.shape[:2] == P.shape[:2]:  # not re-clamped: keep the input exactly
-            self.control_points = _readonly(P)
+            self.control_points = readonly(P)
         else:
-            self.control_points = _readonly(Pw[..., :3] / Pw[..., 3:4])
-        self.weights = _readonly(Pw[..., 3]) if rational else None
-        self._Pw = _readonly(Pw)
+            self.control_points = readonly(Pw[..., :3] / Pw[..., 3:4])
+        self.weights = readonly(Pw[..., 3]) if rational else None
+        self._Pw = readonly(Pw)
         self._cache = {}
         self.name = name
         self.approx_error = err
@@ -335,37 +195,12 @@ class Surface:
         if not isinstance(trim, (list, tuple)):
             raise InvalidTrimError(f"expected a list of loops, got {type(trim).__name__}", "trim")
         (u0, u1), (v0, v1) = self.domain
-        size = max(u1 - u0, v1 - v0)
-        close = tols.CLOSURE_TOL * size
+        close = tols.CLOSURE_TOL * max(u1 - u0, v1 - v0)
         loops = []
         for k, raw in enumerate(trim):
             field = f"trim[{k}]"
-            loop = _parse_loop(raw, field)
-            pcs = loop.pieces
-            for i, c in enumerate(pcs):
-                nxt = pcs[(i + 1) % len(pcs)]
-                gap = float(np.hypot(*(c.end - nxt.start)))
-                if gap > close:
-                    if len(pcs) == 1:
-                        what = (f"loop is open: it ends at {c.end.tolist()}, {gap:.3g} away "
-                                f"from its start {nxt.start.tolist()}")
-                    else:
-                        j = (i + 1) % len(pcs)
-                        what = (f"pieces do not join: piece {i} ends at {c.end.tolist()} but "
-                                f"piece {j} starts at {nxt.start.tolist()}, {gap:.3g} away")
-                    raise InvalidTrimError(f"{what} (closure tolerance {close:.3g})", field)
-            box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
-            for c in loop.pieces:
-                bad = _first_point_outside(c, box, close)
-                if bad is not None:
-                    raise InvalidTrimError(
-                        f"loop leaves the parameter domain [{u0}, {u1}] x [{v0}, {v1}] at "
-                        f"({bad[0]:.6g}, {bad[1]:.6g})", field)
-            pts = _loop_samples(loop)
-            x, y = pts[:, 0], pts[:, 1]
-            area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-            if abs(area) <= (close * close) or np.unique(np.round(pts / close), axis=0).shape[0] < 3:
-                raise InvalidTrimError(f"degenerate loop: enclosed area {area:.3g} in UV", field)
+            loop = parse_loop(raw, field)
+            check_loop(loop, self.domain, close, field)
             loops.append(loop)
         return tuple(loops)
 
@@ -417,50 +252,123 @@ class Surface:
 
     # --------------------------------------------------------------- methods
     def evaluate(self, uv) -> np.ndarray:
-        """Points S(u, v); see :func:`geomkit.nurbs.evaluation.evaluate`."""
-        from geomkit.nurbs.evaluation import evaluate
-        return evaluate(self, uv)
+        """Points S(u, v), (..., 3): see :func:`geomkit.evaluate`."""
+        arr, lead = check_uv(self, uv)
+        out = np.empty((arr.shape[0], 3))
+        if arr.shape[0]:
+            K.surface_points(self._Pw, self.degree_u, self.degree_v, self.knots_u,
+                             self.knots_v, arr, out)
+        return out.reshape(lead + (3,))
 
     def derivatives(self, uv, order: int = 1) -> np.ndarray:
-        """Partial derivatives; see :func:`geomkit.nurbs.evaluation.derivatives`."""
-        from geomkit.nurbs.evaluation import derivatives
-        return derivatives(self, uv, order)
+        """Partial derivatives, (..., order+1, order+1, 3): see :func:`geomkit.derivatives`."""
+        order = as_int(order, "order", minimum=0)
+        if order > 8:
+            raise InvalidInputError(f"order must be <= 8, got {order}", "order")
+        arr, lead = check_uv(self, uv)
+        out = np.empty((arr.shape[0], order + 1, order + 1, 3))
+        if arr.shape[0]:
+            K.surface_derivatives(self._Pw, self.degree_u, self.degree_v, self.knots_u,
+                                  self.knots_v, arr, order, out)
+        return out.reshape(lead + (order + 1, order + 1, 3))
 
     def normals(self, uv, return_status: bool = False):
-        """Unit normals; see :func:`geomkit.nurbs.evaluation.normals`."""
-        from geomkit.nurbs.evaluation import normals
-        return normals(self, uv, return_status)
+        """Unit normals (and their status codes): see :func:`geomkit.normals`."""
+        arr, lead = check_uv(self, uv)
+        out = np.empty((arr.shape[0], 3))
+        status = np.zeros(arr.shape[0], dtype=np.int8)
+        (u0, u1), (v0, v1) = self.domain
+        if arr.shape[0]:
+            K.surface_normals(self._Pw, self.degree_u, self.degree_v, self.knots_u,
+                              self.knots_v, arr, u0, u1, v0, v1, tols.DEGENERATE_NORMAL,
+                              out, status)
+        out = out.reshape(lead + (3,))
+        if return_status:
+            return out, status.reshape(lead)
+        return out
+
+    def trim_segments(self) -> tuple:
+        """The trim loops packed as rational Bézier segments (computed once and kept):
+        see :func:`geomkit.nurbs.trims.pack_segments`."""
+        cached = self._cache.get("trim_segments")
+        if cached is None:
+            cached = self._cache["trim_segments"] = pack_segments(self.trim)
+        return cached
 
     def classify_uv(self, uv, tol: float | None = None) -> np.ndarray:
-        """Inside/outside/boundary codes; see :func:`geomkit.nurbs.trimming.classify_uv`."""
-        from geomkit.nurbs.trimming import classify_uv
-        return classify_uv(self, uv, tol)
+        """``INSIDE`` / ``OUTSIDE`` / ``ON_BOUNDARY`` codes: see :func:`geomkit.classify_uv`."""
+        arr, lead = as_points(uv, 2, "uv")
+        (u0, u1), (v0, v1) = self.domain
+        if tol is None:
+            tol = tols.TRIM_TOL * max(u1 - u0, v1 - v0)
+        tol = float(tol)
+        if not np.isfinite(tol) or tol < 0:
+            raise InvalidInputError(f"must be a finite number >= 0, got {tol!r}", "tol")
+        # the domain rectangle
+        du = np.minimum(arr[:, 0] - u0, u1 - arr[:, 0])
+        dv = np.minimum(arr[:, 1] - v0, v1 - arr[:, 1])
+        d = np.minimum(du, dv)
+        out = np.where(d < -tol, OUTSIDE, np.where(d <= tol, BOUNDARY, INSIDE)).astype(np.int8)
+        if self.trim and arr.shape[0]:
+            seg, deg, lp, nloops = self.trim_segments()
+            res = np.empty(arr.shape[0], dtype=np.int8)
+            classify_points(seg, deg, lp, nloops, arr, tol, res)
+            # outside the trim wins; on a trim curve wins over inside
+            out = np.where((out == OUTSIDE) | (res == OUTSIDE), OUTSIDE,
+                           np.where((res == BOUNDARY) | (out == BOUNDARY), BOUNDARY, INSIDE))
+            out = out.astype(np.int8)
+        return out.reshape(lead)
 
     def bezier_patches(self) -> "BezierPatches":
-        """Bézier extraction; see :func:`geomkit.nurbs.bezier.bezier_patches`.  Computed once
-        per surface and kept (the patches are read-only): repeated distance queries and
-        sections of one surface (a probe path against a part) do not extract again."""
+        """Split into rational Bézier patches (knot insertion, The NURBS Book A5.6),
+        one per non-empty knot cell.  Computed once per surface and kept (the patches
+        are read-only): repeated distance queries and sections of one surface (a probe
+        path against a part) do not extract again.
+
+        Returns
+        -------
+        BezierPatches
+            ``homogeneous`` (nsu, nsv, p+1, q+1, 4); patch (i, j) covers
+            ``[u_breaks[i], u_breaks[i+1]] x [v_breaks[j], v_breaks[j+1]]`` and
+            evaluates exactly like the surface there.  Trims are ignored (patches cover
+            the domain).
+        """
         bp = self._cache.get("bezier_patches")
         if bp is None:
-            from geomkit.nurbs.bezier import bezier_patches
-            bp = self._cache["bezier_patches"] = bezier_patches(self)
+            bp = self._cache["bezier_patches"] = self._extract_patches()
         return bp
 
+    def _extract_patches(self) -> "BezierPatches":
+        p, q = self.degree_u, self.degree_v
+        Pw = self._Pw
+        nu, nv = Pw.shape[:2]
+        # u direction: each row index i is a control point of a curve in R^(nv*4)
+        Qu, ub = decompose(_net(Pw.reshape(nu, nv * 4)), p, _knots(self.knots_u))
+        nsu = Qu.shape[0]
+        rows = Qu.reshape(nsu * (p + 1), nv, 4)
+        # v direction: columns become control points of curves in R^(nsu*(p+1)*4)
+        cols = np.ascontiguousarray(rows.transpose(1, 0, 2)).reshape(nv, -1)
+        Qv, vb = decompose(_net(cols), q, _knots(self.knots_v))
+        nsv = Qv.shape[0]
+        H = Qv.reshape(nsv, q + 1, nsu, p + 1, 4).transpose(2, 0, 3, 1, 4)
+        H = np.ascontiguousarray(H)
+        for a in (H, ub, vb):
+            a.setflags(write=False)
+        return BezierPatches(H, ub, vb)
+
+    # ---------------------------------------------------------- plain data
     def to_geomdl(self):
         """A ``geomdl`` surface (``BSpline.Surface`` or ``NURBS.Surface``); trims dropped."""
-        from geomkit.exchange.cases import to_geomdl
-        return to_geomdl(self)
+        return serial.surface_to_geomdl(self)
 
     @classmethod
     def from_geomdl(cls, obj) -> "Surface":
         """Build from a ``geomdl`` B-spline or NURBS surface."""
-        from geomkit.exchange.cases import from_geomdl
-        return from_geomdl(obj)
+        return cls(**serial.geomdl_kwargs(obj))
 
     def to_dict(self) -> dict:
         """The ``geomkit-case/1`` form of this surface."""
-        from geomkit.exchange.cases import surface_to_dict
-        return surface_to_dict(self)
+        return serial.surface_to_dict(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -47,15 +47,16 @@ import time
 
 import numpy as np
 
+from geomkit.tolerances import HULL_ROUNDING
 from geomkit._kernels import distance as _dk
 from geomkit._kernels.bezier import de_casteljau_split
 from geomkit.errors import InvalidInputError
 from geomkit.query.projection import _pack
 from geomkit.query.results import SurfaceDistance
-from geomkit.nurbs.trimming import _segments
-from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.surface import as_surfaces
+from geomkit.nurbs.trims import concat_segments
 
-__all__ = ["surface_distance", "MAX_PAIRS", "MAX_NEWTON", "ROUNDING"]
+__all__ = ["surface_distance", "MAX_PAIRS", "MAX_NEWTON", "HULL_ROUNDING"]
 
 MAX_PAIRS = 200_000
 """Default cap on examined sub-patch pairs (bounds the time and memory of a curved
@@ -65,24 +66,6 @@ TRIM_PIECES = 32
 "crossed by the trim" only when one of these small boxes meets it)."""
 MAX_NEWTON = 256
 """Newton runs at most (one per upper-bound improvement)."""
-ROUNDING = 1e-14
-"""Floating-point allowance (relative to the scene size) subtracted from the hull
-lower bound: de Casteljau subdivision and the slab projections are exact up to a few
-ulps of the coordinates."""
-
-
-def _as_scene(x, field) -> list[Surface]:
-    if isinstance(x, Surface):
-        return [x]
-    if isinstance(x, (list, tuple)) and x:
-        for i, s in enumerate(x):
-            if not isinstance(s, Surface):
-                raise InvalidInputError(f"expected a geomkit.Surface, got {type(s).__name__}",
-                                        f"{field}[{i}]")
-        return list(x)
-    raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
-                            f"{type(x).__name__}" + (" (empty)" if isinstance(x, (list, tuple))
-                                                     else ""), field)
 
 
 def _approx_error(scene) -> float:
@@ -105,37 +88,21 @@ run).  False: every scene runs the general one (the tests compare the two)."""
 
 
 def _pack_trims(surfaces):
-    pieces = []
-    pmax = 1
-    for s in surfaces:
-        if s.is_trimmed:
-            seg, deg, lp, nl = _segments(s)
-            pieces.append((seg, deg, lp, nl))
-            pmax = max(pmax, seg.shape[1] - 1)
-        else:
-            pieces.append(None)
-    total = sum(p[0].shape[0] for p in pieces if p is not None)
-    seg_all = np.ones((max(total, 1), pmax + 1, 3))
-    seg_deg = np.ones(max(total, 1), dtype=np.int64)
-    seg_loop = np.zeros(max(total, 1), dtype=np.int64)
-    boxes = []
+    """All surfaces' trim segments (:func:`geomkit.nurbs.trims.concat_segments`), the UV
+    boxes of their sub-arcs (kept on each surface) and ``meta[s] = (offset, count,
+    loops, first box, boxes)``."""
+    seg_all, seg_deg, seg_loop, off = concat_segments(surfaces, min_rows=1)
     meta = np.zeros((len(surfaces), 5), dtype=np.int64)
-    o = 0
-    for i, p in enumerate(pieces):
-        if p is None:
+    boxes = []
+    for i, s in enumerate(surfaces):
+        if not s.is_trimmed:
             continue
-        seg, deg, lp, nl = p
-        S = seg.shape[0]
-        seg_all[o:o + S, : seg.shape[1]] = seg
-        seg_deg[o:o + S] = deg
-        seg_loop[o:o + S] = lp
-        pb = surfaces[i]._cache.get("distance_trim_boxes")
+        pb = s._cache.get("distance_trim_boxes")
         if pb is None:
-            pb = _trim_boxes(seg, deg)
-            surfaces[i]._cache["distance_trim_boxes"] = pb
-        meta[i] = (o, S, nl, len(boxes), len(pb))
+            seg, deg, _, _ = s.trim_segments()
+            pb = s._cache["distance_trim_boxes"] = _trim_boxes(seg, deg)
+        meta[i] = (off[i, 0], off[i, 1], off[i, 2], len(boxes), len(pb))
         boxes += pb
-        o += S
     seg_box = np.array(boxes) if boxes else np.zeros((1, 4))
     return seg_all, seg_deg, seg_loop, seg_box, meta
 
@@ -199,7 +166,7 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
         scene, so the interval bounds the distance of the *true* faces; ``distance``
         and the points stay those of the faces given, and ``certified`` is then False
         when the widened interval is wider than ``tol``.  Both ends carry a rounding
-        allowance of ``ROUNDING`` times the scene's size: a ``tol`` below twice that
+        allowance of ``HULL_ROUNDING`` times the scene's size: a ``tol`` below twice that
         (``stats["rounding_floor"]``) cannot be certified, and the search then stops
         at an interval of about 1.5 times the floor instead of spending ``max_pairs``.
     max_pairs : int >= 1
@@ -226,8 +193,8 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
     True
     """
     t0 = time.perf_counter()
-    A = _as_scene(a, "a")
-    B = _as_scene(b, "b")
+    A = as_surfaces(a, "a")
+    B = as_surfaces(b, "b")
     try:
         tol = float(tol)
     except (TypeError, ValueError):
@@ -243,7 +210,7 @@ def surface_distance(a, b, tol: float = 1e-9, max_pairs: int = MAX_PAIRS) -> Sur
     hi = np.max([s.bounds[1] for s in surfaces], axis=0)
     size = float(np.linalg.norm(hi - lo))
     scale = max(size, float(np.abs(np.concatenate([lo, hi])).max()), 1e-300)
-    rounding = ROUNDING * scale
+    rounding = HULL_ROUNDING * scale
     # both ends carry the allowance: the hull bound below, the evaluated points above,
     # so no interval narrower than 2 * rounding can be stated.  Below that floor the
     # search aims at rounding (the answer is not certified whatever it costs: a finer

@@ -32,26 +32,25 @@ import time
 
 import numpy as np
 
+from geomkit.tolerances import DEFAULT_MESH_TOL, NEWTON_STEP_TOL, TIE_TOL
 from geomkit.query import results as R
 from geomkit._kernels import project as _pk
 from geomkit._kernels import project_finish as _pf
 from geomkit._kernels import trim_feet as _tf
 from geomkit import tolerances as tols
 from geomkit.errors import InvalidInputError
-from geomkit.nurbs.evaluation import DEGENERATE_REL
 from geomkit.query.projection_cert import pack_span_bounds
-from geomkit.query.projection_trim import (TRIM_SAMPLES, TRIM_STARTS, _TrimData,
-                                           _trim_boundary_triangles, cert_boxes)
+from geomkit.query.projection_trim import _TrimData, _trim_boundary_triangles, cert_boxes
 from geomkit.query.results import Projection
-from geomkit.mesh.tessellate import SAMPLES_PER_EDGE, _closed_directions, _tessellate
-from geomkit.nurbs.trimming import BOUNDARY, INSIDE, OUTSIDE, _segments
-from geomkit.nurbs.surface import Surface
+from geomkit.mesh.tessellate import (SAMPLES_PER_EDGE, closed_directions,
+                                     tessellate_with_target)
+from geomkit.nurbs.trimming import BOUNDARY, INSIDE, OUTSIDE
+from geomkit.nurbs.surface import as_surfaces
+from geomkit.nurbs.trims import concat_segments
 from geomkit.query.voxel import VoxelGrid, sliver_voxel_size
 
 __all__ = ["Projector", "project_points", "DEFAULT_MESH_TOL", "DEVIATION_SAFETY"]
 
-DEFAULT_MESH_TOL = 2e-3
-"""Default candidate mesh chord tolerance, relative to the largest surface size."""
 DEVIATION_SAFETY = 2.0
 """The triangles' measured deviations are multiplied by this in the candidate search
 (they are measured at samples, not proven)."""
@@ -60,8 +59,6 @@ PROJ_TRIM_TARGET = 0.05
 the mesh tolerance (tessellate's own target is :data:`geomkit.mesh.tessellate.TRIM_TARGET`);
 triangles along a trim curve carry it in their bound, so a finer polyline means fewer
 near-tie candidates on parts whose triangles mostly border a trim curve."""
-STEP_TOL = 1e-12
-"""Newton stops when the 3-D step is below this times the model size."""
 MAX_STARTS = 16
 """Newton runs per point in the first pass (a point left with an untried candidate
 that could hold a nearer point is run again with :data:`RERUN_STARTS`)."""
@@ -81,10 +78,6 @@ trying every candidate is counted in ``stats["not_proven"]``."""
 RERUN_BUDGET = 1 << 20
 """Points x starts per batch of the last pass (bounds its working memory)."""
 CHUNK_SIZE = 1 << 16
-TIE_TOL = 1e-12
-"""Feet whose distances differ by less than this times max(model size, distance) are
-a tie (one point on an edge shared by two faces), resolved to the lowest surface
-index."""
 
 
 def _morton_order(P, origin, h):
@@ -110,16 +103,6 @@ def _groups(keys, mask):
     k = k[order]
     cut = np.flatnonzero(np.diff(k)) + 1
     return [(int(k[a]), idx[a:b]) for a, b in zip(np.r_[0, cut], np.r_[cut, idx.size])]
-
-
-def _as_surfaces(surfaces) -> list[Surface]:
-    if isinstance(surfaces, Surface):
-        return [surfaces]
-    if isinstance(surfaces, (list, tuple)) and surfaces and \
-            all(isinstance(s, Surface) for s in surfaces):
-        return list(surfaces)
-    raise InvalidInputError("expected a Surface or a non-empty list of Surfaces, got "
-                            f"{type(surfaces).__name__}", "surfaces")
 
 
 def _pack(surfaces):
@@ -168,31 +151,13 @@ def _c0_breaks(surfaces):
 def _pack_trims(surfaces):
     """Trim segments of all surfaces for the kernel's foot classification
     (:func:`geomkit._kernels.foot_class._foot_class`): ``tseg`` (S, pmax+1, 3), ``tdeg``,
-    ``tloop`` (S,), ``toff[s] = (offset, count, loops)`` and the band ``ttol[s]``
+    ``tloop`` (S,), ``toff[s] = (offset, count, loops)``
+    (:func:`geomkit.nurbs.trims.concat_segments`) and the band ``ttol[s]``
     (:func:`geomkit.nurbs.trimming.classify_uv`'s default)."""
-    parts = [_segments(s) if s.is_trimmed else None for s in surfaces]
-    p1 = max([2] + [t[0].shape[1] for t in parts if t is not None])
-    toff = np.zeros((len(surfaces), 3), dtype=np.int64)
-    ttol = np.zeros(len(surfaces))
-    seg, deg, lp, o = [], [], [], 0
-    for i, (s, t) in enumerate(zip(surfaces, parts)):
-        (u0, u1), (v0, v1) = s.domain
-        ttol[i] = tols.TRIM_TOL * max(u1 - u0, v1 - v0)
-        if t is None:
-            continue
-        q = np.ones((t[0].shape[0], p1, 3))
-        q[:, :t[0].shape[1]] = t[0]
-        seg.append(q)
-        deg.append(t[1])
-        lp.append(t[2])
-        toff[i] = (o, q.shape[0], t[3])
-        o += q.shape[0]
-    if not seg:
-        return (np.ones((0, p1, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64), toff,
-                ttol)
-    return (np.ascontiguousarray(np.concatenate(seg)),
-            np.ascontiguousarray(np.concatenate(deg), dtype=np.int64),
-            np.ascontiguousarray(np.concatenate(lp), dtype=np.int64), toff, ttol)
+    seg, deg, lp, toff = concat_segments(surfaces)
+    ttol = np.array([tols.TRIM_TOL * max(s.domain[0][1] - s.domain[0][0],
+                                         s.domain[1][1] - s.domain[1][0]) for s in surfaces])
+    return seg, deg, lp, toff, ttol
 
 
 class Projector:
@@ -215,7 +180,7 @@ class Projector:
     def __init__(self, surfaces, mesh_tol: float | None = None,
                  voxel_size: float | None = None):
         t0 = time.perf_counter()
-        self.surfaces = _as_surfaces(surfaces)
+        self.surfaces = as_surfaces(surfaces)
         self.size = max(s.size for s in self.surfaces)
         if mesh_tol is None:
             mesh_tol = DEFAULT_MESH_TOL * self.size
@@ -226,7 +191,7 @@ class Projector:
         # coarser candidate meshes let near-tie basins slip past the candidate limit
         # (seen at 2.5x the default on freeform_1): the default is also the maximum
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
-        self.mesh = _tessellate(self.surfaces, mesh_tol, None, None, SAMPLES_PER_EDGE,
+        self.mesh = tessellate_with_target(self.surfaces, mesh_tol, None, None, SAMPLES_PER_EDGE,
                                 PROJ_TRIM_TARGET)
         self.grid = VoxelGrid(self.mesh, voxel_size if voxel_size is not None
                               else sliver_voxel_size(self.mesh))
@@ -257,7 +222,7 @@ class Projector:
         self.closed = np.zeros((len(self.surfaces), 2), dtype=np.int64)
         self.free_edges = np.ones((len(self.surfaces), 4), dtype=bool)
         for i, s in enumerate(self.surfaces):
-            cu, cv = _closed_directions(s, s.size)
+            cu, cv = closed_directions(s, s.size)
             self.closed[i] = (cu, cv)
             H = s.homogeneous
             X = H[..., :3] / H[..., 3:]
@@ -402,7 +367,7 @@ class Projector:
             fp = np.empty((idx.size, 3))
             fnr = np.empty((idx.size, 3))
             _pf.foot_frames(q, np.ascontiguousarray(surf[idx], dtype=np.int64), Pw, U, V,
-                            meta, dom, DEGENERATE_REL, fp, fnr)
+                            meta, dom, tols.DEGENERATE_NORMAL, fp, fnr)
             foot[idx] = fp
             nrm[idx] = fnr
         for si, sel in _groups(surf, live):
@@ -491,7 +456,7 @@ class Projector:
                      chunk_size: int = CHUNK_SIZE, progress=None, tol: float | None = None):
         """Project in chunks, yielding one :class:`Projection` per chunk (bounded
         memory for any number of points, e.g. a ``numpy.memmap``)."""
-        step_tol = STEP_TOL * self.size if tol is None else float(tol)
+        step_tol = NEWTON_STEP_TOL * self.size if tol is None else float(tol)
         if not (math.isfinite(step_tol) and step_tol > 0):
             raise InvalidInputError(f"must be a finite number > 0, got {tol!r}", "tol")
         arr = points if isinstance(points, np.ndarray) else np.asarray(points, dtype=float)
@@ -540,8 +505,8 @@ class Projector:
         return out
 
 
-def _cached_projector(surfaces, mesh_tol) -> Projector:
-    surfaces = _as_surfaces(surfaces)
+def cached_projector(surfaces, mesh_tol) -> Projector:
+    surfaces = as_surfaces(surfaces)
     key = ("projector", tuple(id(s) for s in surfaces), mesh_tol)
     cache = surfaces[0]._cache
     pr = cache.get(key)
@@ -571,7 +536,7 @@ def project_points(surfaces, points, max_distance: float | None = None, *,
         Called after each chunk.
     tol : float, optional
         Newton stops when its 3-D step is below ``tol`` (model units); default
-        :data:`STEP_TOL` times the model size.  The distance error is of the order of
+        :data:`NEWTON_STEP_TOL` times the model size.  The distance error is of the order of
         ``tol**2 / radius of curvature`` at an orthogonal foot, and the foot moves by
         up to ``tol``.
 
@@ -592,5 +557,5 @@ def project_points(surfaces, points, max_distance: float | None = None, *,
     >>> [round(float(d), 9) for d in pr.signed_distance]
     [3.0, -10.0]
     """
-    pr = _cached_projector(surfaces, mesh_tol)
+    pr = cached_projector(surfaces, mesh_tol)
     return pr.project(points, max_distance, chunk_size, progress, tol)

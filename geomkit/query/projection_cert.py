@@ -21,7 +21,7 @@ are proven, not sampled:
   term bounded by the above (for a non-rational surface the weight terms vanish).
 
 The homogeneous bounds carry an absolute allowance for the rounding of the
-subdivision (``ROUND_ABS`` times the net's magnitude over the sub-span's width, per
+subdivision (``CERT_ROUNDING`` times the net's magnitude over the sub-span's width, per
 order) and every bound a relative ``ROUND``.  Finer sub-spans give tighter bounds
 (the control net converges to the surface quadratically); the count per surface
 follows its number of candidate triangles (:func:`pack_span_bounds`).
@@ -33,12 +33,11 @@ import math
 
 import numpy as np
 
+from geomkit.tolerances import CERT_ROUNDING
 from geomkit.nurbs.bezier import bezier_patches
 
 ROUND = 1.0 + 1e-12
 """Relative inflation of every bound."""
-ROUND_ABS = 1e-13
-"""Absolute rounding allowance of the subdivided nets, relative to their magnitude."""
 MAX_SUBSPANS = 64
 """Largest number of sub-spans per direction of one surface."""
 
@@ -72,7 +71,7 @@ def _bound(Q, c, h, order, mag):
     if Q.shape[1] == 0 or Q.shape[2] == 0:
         return np.zeros(n), np.zeros(n)
     xyz = Q[..., :3] - c[:, None, None, :] * Q[..., 3:4]
-    slack = ROUND_ABS * mag / h ** order
+    slack = CERT_ROUNDING * mag / h ** order
     return (np.sqrt((xyz ** 2).sum(axis=-1)).max(axis=(1, 2)) + slack,
             np.abs(Q[..., 3]).max(axis=(1, 2)) + slack)
 

@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 
 from geomkit._kernels import trim_feet as _tf
 from geomkit.nurbs.evaluation import evaluate
-from geomkit.nurbs.trimming import INSIDE, _segments
+from geomkit.nurbs.trimming import INSIDE
 from geomkit.nurbs.surface import Surface
 
 TRIM_SAMPLES = 32
@@ -53,7 +53,7 @@ class _TrimData:
     """Trim segments of one surface and dense samples on their images."""
 
     def __init__(self, s: Surface):
-        seg, deg, _, _ = _segments(s)
+        seg, deg, _, _ = s.trim_segments()
         self.seg = np.ascontiguousarray(seg)
         self.deg = deg
         M = seg.shape[0] * TRIM_SAMPLES
@@ -211,7 +211,7 @@ def cert_boxes(mesh, surfaces, trimmed, ttol) -> np.ndarray:
         if not free.any():
             continue
         tri, a, b = tri[free], a[free], b[free]
-        seg, deg, _, _ = _segments(s)
+        seg, deg, _, _ = s.trim_segments()
         seg = np.ascontiguousarray(seg)
         Sa, Ta = _seeds(seg, deg, a)
         Sb, Tb = _seeds(seg, deg, b)
@@ -303,7 +303,7 @@ def _deep(mesh, surfaces, trimmed, ttol, box, bedge, arcs):
     for si in np.flatnonzero(trimmed):
         s = surfaces[si]
         (u0, u1), (v0, v1) = s.domain
-        seg, deg, _, _ = _segments(s)
+        seg, deg, _, _ = s.trim_segments()
         O = _segment_hulls(seg, deg, np.ones(seg.shape[0], bool))
         if arcs is not None and si in arcs[8]:
             tri, hull, found, sg, t0, t1, gseg, gdeg, seg_of = arcs

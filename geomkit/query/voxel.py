@@ -262,5 +262,5 @@ class VoxelGrid:
 def nearest_triangles(mesh_a, mesh_b, voxel_size: float | None = None,
                       method: str = "best_first", stop: str = "bound") -> MeshNearest:
     """For each triangle of ``mesh_a``, the nearest triangle of ``mesh_b`` (Paper 1,
-    steps 2–5, with the stop rule fixed).  See :meth:`VoxelGrid.nearest_triangles`."""
+    steps 2–5, searching until no unopened cell can hold a nearer triangle).  See :meth:`VoxelGrid.nearest_triangles`."""
     return VoxelGrid(mesh_b, voxel_size).nearest_triangles(mesh_a, method, stop)

@@ -12,19 +12,16 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.units import unit_label
+
 WORST_N = 10
 """Worst points called out by name in the deviation reports."""
 
 
 # ------------------------------------------------------------------------ units
-def unit_name(units: str | None) -> str:
-    """``"mm"`` or, when the model does not say, ``"model units"``."""
-    return units.strip() if units and units.strip() else "model units"
-
-
 def axis_label(name: str, units: str | None) -> str:
     """``"x [mm]"``."""
-    return f"{name} [{unit_name(units)}]"
+    return f"{name} [{unit_label(units)}]"
 
 
 def fmt(x, digits: int = 4) -> str:
@@ -159,10 +156,10 @@ def header(title: str, part=None, units=None, tolerance=None, model_note=None,
         rows["SHA-256"] = sha256(p) or "- (not a file)"
     rows["date"] = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
     rows["geomkit"] = __version__
-    rows["units"] = unit_name(units)
+    rows["units"] = unit_label(units)
     if tolerance is not None:
         lo, hi = tolerance
-        rows["tolerance"] = f"[{lo:g}, {hi:g}] {unit_name(units)}"
+        rows["tolerance"] = f"[{lo:g}, {hi:g}] {unit_label(units)}"
     if model_note:
         rows["model"] = str(model_note)
     for k, v in (extra or {}).items():

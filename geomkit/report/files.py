@@ -8,7 +8,7 @@ Every writer takes ``units`` (e.g. ``"mm"``; None: "model units"): CSV files get
 and JSON.
 
 Every file is written through a temporary file in the target folder and renamed into
-place (:func:`geomkit.exchange.cases._atomic_write`), so an interrupted run never leaves a
+place (:func:`geomkit.outputs.atomic_write`), so an interrupted run never leaves a
 half-written file under a final name; existing files are kept unless
 ``overwrite=True``.  :func:`prepare_outputs` checks the whole set of targets (folder
 writable, nothing overwritten, no input among them) before any work starts; the jobs
@@ -26,9 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.units import unit_label
+from geomkit.nurbs.surface import as_surfaces
 from geomkit.report import common as rc
 from geomkit.errors import InvalidInputError
-from geomkit.exchange.cases import _atomic_write
+from geomkit.outputs import atomic_write, check_target, json_safe
 from geomkit.query.results import STATUS_NAMES
 
 __all__ = ["prepare_outputs", "write_deviation_csv", "write_json", "plot_deviation_map",
@@ -82,13 +84,6 @@ def prepare_outputs(folder, names, overwrite: bool = False, inputs=()) -> dict:
     return targets
 
 
-def _check_target(path, overwrite):
-    p = Path(path)
-    if p.exists() and not overwrite:
-        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
-    return p
-
-
 def _fmt(x) -> str:
     x = float(x)
     return repr(x) if math.isfinite(x) else ""
@@ -96,7 +91,7 @@ def _fmt(x) -> str:
 
 def _csv_units(units) -> str:
     """The ``units`` cell: the unit name, quoted if it holds a comma."""
-    u = rc.unit_name(units)
+    u = unit_label(units)
     return f'"{u}"' if ("," in u or '"' in u) else u
 
 
@@ -107,7 +102,7 @@ def write_deviation_csv(rep, path, overwrite: bool = False, units: str | None = 
     edge, units`` (empty cells where there is no foot; ``units`` names the length unit
     of every coordinate and distance, "model units" when unknown).  ``model_note`` is
     not written (a CSV has no place for it; the summary JSON carries it)."""
-    p = _check_target(path, overwrite)
+    p = check_target(path, overwrite)
     head = ("index,x,y,z,ax,ay,az,foot_x,foot_y,foot_z,u,v,surface,nx,ny,nz,"
             "signed_distance,deviation,status,edge,units")
     lines = [head]
@@ -125,24 +120,7 @@ def write_deviation_csv(rep, path, overwrite: bool = False, units: str | None = 
                  str(int(bool(rep.edge[i]))), u]
         lines.append(",".join(vals))
     data = ("\n".join(lines) + "\n").encode("utf-8")
-    return _atomic_write(p, lambda fh: fh.write(data))
-
-
-def _clean(obj):
-    """JSON-safe: NaN / inf -> None, numpy scalars -> Python."""
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
+    return atomic_write(p, lambda fh: fh.write(data))
 
 
 def write_json(doc: dict, path, overwrite: bool = False, units: str | None = None,
@@ -151,22 +129,22 @@ def write_json(doc: dict, path, overwrite: bool = False, units: str | None = Non
     ``model_note``, when given, are added as fields of the same names unless ``doc``
     has them (a ``units`` the caller wants to show as "model units" should be put in
     ``doc`` so that what is printed and what is written agree)."""
-    p = _check_target(path, overwrite)
+    p = check_target(path, overwrite)
     doc = dict(doc)
     if units is not None:
-        doc.setdefault("units", rc.unit_name(units))
+        doc.setdefault("units", unit_label(units))
     if model_note:
         doc.setdefault("model_note", model_note)
-    data = json.dumps(_clean(doc), indent=1, allow_nan=False).encode("utf-8")
-    return _atomic_write(p, lambda fh: fh.write(data))
+    data = json.dumps(json_safe(doc), indent=1, allow_nan=False).encode("utf-8")
+    return atomic_write(p, lambda fh: fh.write(data))
 
 
 def _save_fig(fig, path, overwrite, dpi=120) -> Path:
-    p = _check_target(path, overwrite)
+    p = check_target(path, overwrite)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     data = buf.getvalue()
-    return _atomic_write(p, lambda fh: fh.write(data))
+    return atomic_write(p, lambda fh: fh.write(data))
 
 
 def _figure(**kw):
@@ -193,10 +171,9 @@ def _few_ticks(ax, n=5, spans=None):
 
 
 def _nominal_mesh(surfaces, mesh_tol=None):
-    from geomkit.query.projection import _as_surfaces
     from geomkit.mesh.tessellate import tessellate
 
-    surfs = _as_surfaces(surfaces)
+    surfs = as_surfaces(surfaces)
     size = max(s.size for s in surfs)
     return tessellate(surfs, mesh_tol or 5e-3 * size), size
 
@@ -259,7 +236,7 @@ def plot_deviation_map(rep, surfaces, path, overwrite: bool = False, mesh_tol=No
     sc = deviation_map_axes(fig, ax, rep, mesh, units)
     _colorbar(fig, sc, ax, rep, units, shrink=0.7, pad=0.1)
     s = rep.stats
-    u = rc.unit_name(units)
+    u = unit_label(units)
     ax.set_title(_title(f"{s['valid']} points: min {s['min']:.4g}, max {s['max']:.4g}, "
                         f"rms {s['rms']:.4g} {u}", model_note), fontsize=10)
     return _save_fig(fig, path, overwrite)
@@ -382,7 +359,7 @@ def write_clearance_csv(res, path_points, path, overwrite: bool = False,
     ``parameter``, the closest part point, ``surface``, ``first_contact`` (empty when
     clear), ``passed``, ``certified``, each stylus piece's clearance and ``units`` (the
     length unit of coordinates and clearances, "model units" when unknown)."""
-    p = _check_target(path, overwrite)
+    p = check_target(path, overwrite)
     names = list(res.component_names)
     head = ["segment", "x0", "y0", "z0", "x1", "y1", "z1", "motion", "clearance",
             "lower_bound", "component", "parameter", "part_x", "part_y", "part_z",
@@ -401,7 +378,7 @@ def write_clearance_csv(res, path_points, path, overwrite: bool = False,
         vals += [_fmt(c) for c in res.per_component[i]] + [u]
         lines.append(",".join(vals))
     data = ("\n".join(lines) + "\n").encode("utf-8")
-    return _atomic_write(p, lambda fh: fh.write(data))
+    return atomic_write(p, lambda fh: fh.write(data))
 
 
 def clearance_counts(res, probing=()) -> dict:

@@ -5,7 +5,7 @@ clearance jobs.
 Each page opens with a header table (part file and its SHA-256, date, geomkit version,
 units, tolerances, model note), then the job's figures (3-D views can be turned and
 zoomed; hovering a point shows its values) and tables.  Written atomically like every
-report file (:func:`geomkit.exchange.cases._atomic_write`); an existing file is kept unless
+report file (:func:`geomkit.outputs.atomic_write`); an existing file is kept unless
 ``overwrite=True``.
 """
 
@@ -16,9 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.units import unit_label
 from geomkit.report import common as rc
-from geomkit.exchange.cases import _atomic_write
-from geomkit.report.files import _check_target, clearance_counts, clearance_title
+from geomkit.outputs import atomic_write, check_target
+from geomkit.report.files import clearance_counts, clearance_title
 
 __all__ = ["deviation_html", "section_html", "clearance_html"]
 
@@ -87,12 +88,12 @@ class _Page:
         self._js = False
 
     def write(self, path, overwrite) -> Path:
-        p = _check_target(path, overwrite)
+        p = check_target(path, overwrite)
         doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head>"
                "<body>\n" + "\n".join(self.blocks) + "\n</body></html>\n")
         data = doc.encode("utf-8")
-        return _atomic_write(p, lambda fh: fh.write(data))
+        return atomic_write(p, lambda fh: fh.write(data))
 
 
 def _go():
@@ -138,7 +139,7 @@ def deviation_html(rep, surfaces, path, overwrite: bool = False, units: str | No
 
     go = _go()
     mesh, _ = _nominal_mesh(surfaces, mesh_tol)
-    u = rc.unit_name(units)
+    u = unit_label(units)
     page = _Page("Deviation report", rc.header("deviation", part, units, rep.tolerance,
                                                None, extra), model_note)
     m = rc.colour_range(rep)
@@ -232,7 +233,7 @@ def deviation_html(rep, surfaces, path, overwrite: bool = False, units: str | No
 def _histogram(rep, units, m, bins: int = 40):
     go = _go()
     v = rep.deviation[np.isfinite(rep.deviation)]
-    u = rc.unit_name(units)
+    u = unit_label(units)
     cnt, edges = np.histogram(v, bins=bins) if v.size else (np.zeros(0), np.zeros(1))
     mid = 0.5 * (edges[1:] + edges[:-1])
     fig = go.Figure(go.Bar(x=mid, y=cnt, width=np.diff(edges),
@@ -274,7 +275,7 @@ def section_html(sections, path, overwrite: bool = False, units: str | None = No
 
     go = _go()
     sections = list(sections)
-    u = rc.unit_name(units)
+    u = unit_label(units)
     page = _Page("Section report", rc.header("section", part, units, tolerance, None,
                                              extra), model_note)
     shown = sections[:24]
@@ -424,7 +425,7 @@ def clearance_html(res, surfaces, path_points, path, overwrite: bool = False,
 
     go = _go()
     mesh, size = _nominal_mesh(surfaces, mesh_tol)
-    u = rc.unit_name(units)
+    u = unit_label(units)
     T = np.asarray(path_points, float)
     ex = dict(extra or {})
     ex.setdefault("margin", f"{res.margin:g} {u}")

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.units import unit_label
 from geomkit.report import common as rc
-from geomkit.exchange.cases import _atomic_write
-from geomkit.report.files import (_check_target, _colorbar, _figure, _few_ticks, _nominal_mesh,
+from geomkit.outputs import atomic_write, check_target
+from geomkit.report.files import (_colorbar, _figure, _few_ticks, _nominal_mesh,
                                   _scatter_deviation, clearance_axes, clearance_title,
                                   deviation_map_axes, histogram_axes, section_figure)
 
@@ -25,13 +26,13 @@ ORTHO = (("top (x-y)", 0, 1, 2), ("front (x-z)", 0, 2, 1), ("side (y-z)", 1, 2, 
 def _write(pages, path, overwrite, title) -> Path:
     from matplotlib.backends.backend_pdf import PdfPages
 
-    p = _check_target(path, overwrite)
+    p = check_target(path, overwrite)
     buf = io.BytesIO()
     with PdfPages(buf, metadata={"Title": title, "Creator": "geomkit"}) as pdf:
         for fig in pages:
             pdf.savefig(fig)
     data = buf.getvalue()
-    return _atomic_write(p, lambda fh: fh.write(data))
+    return atomic_write(p, lambda fh: fh.write(data))
 
 
 def _text_table(ax, rows, title=None, col_widths=(0.42, 0.58), fontsize=8):
@@ -66,7 +67,7 @@ def deviation_pdf(rep, surfaces, path, overwrite: bool = False, units: str | Non
     tolerance band one colour."""
     mesh, _ = _nominal_mesh(surfaces, mesh_tol)
     head = rc.header("deviation", part, units, rep.tolerance, None, extra)
-    u = rc.unit_name(units)
+    u = unit_label(units)
     p1 = _header_page("Deviation report", head, model_note)
     ax = p1.add_axes([0.06, 0.36, 0.42, 0.32])
     _text_table(ax, rc.deviation_table(rep), f"statistics [{u}]", (0.55, 0.45))
@@ -119,7 +120,7 @@ def section_pdf(sections, path, overwrite: bool = False, units: str | None = Non
     """Header page with the table of planes (curves, residuals), then the sections in
     each plane's own coordinates."""
     sections = list(sections)
-    u = rc.unit_name(units)
+    u = unit_label(units)
     p1 = _header_page("Section report", rc.header("section", part, units, None, None, extra),
                       model_note)
     rows = [(rc.plane_name(s.plane), f"{len(s.curves)} curve(s), {sum(s.closed)} closed; "
@@ -138,7 +139,7 @@ def clearance_pdf(res, path, overwrite: bool = False, units: str | None = None,
     """One page: header (with stylus, margin), the certified clearance chart and the
     table of moves (certified interval, result, first contact)."""
     ex = dict(extra or {})
-    u = rc.unit_name(units)
+    u = unit_label(units)
     ex.setdefault("margin", f"{res.margin:g} {u}")
     if stylus is not None:
         ex.setdefault("stylus", ", ".join(f"{k} {v:g}" for k, v in stylus.to_dict().items()

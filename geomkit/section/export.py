@@ -14,12 +14,11 @@ from __future__ import annotations
 import io
 import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from geomkit.errors import InvalidInputError, MissingDependencyError
-from geomkit.exchange.cases import _atomic_write
+from geomkit.outputs import atomic_write, check_target
 
 
 @dataclass(eq=False)
@@ -135,13 +134,6 @@ def fit_curves(section, tol: float) -> list:
     return out
 
 
-def _target(path, overwrite):
-    p = Path(path)
-    if p.exists() and not overwrite:
-        raise FileExistsError(f"{p}: exists; pass overwrite=True to replace it")
-    return p
-
-
 def _units(section, units):
     """The section's length unit: ``units`` if given, else the section's ``units``
     attribute (None: unknown)."""
@@ -153,7 +145,7 @@ def to_csv(section, path, overwrite=False, units=None):
     ``units`` names the length unit of x, y, z ("model units" when unknown)."""
     from geomkit.units import unit_label
 
-    p = _target(path, overwrite)
+    p = check_target(path, overwrite)
     u = unit_label(_units(section, units))
     u = f'"{u}"' if ("," in u or '"' in u) else u
     lines = ["curve,index,x,y,z,u,v,surface,units"]
@@ -167,7 +159,7 @@ def to_csv(section, path, overwrite=False, units=None):
                      f"{float(uv[0])!r},{float(uv[1])!r},"
                      f"{int(section.points_surface[i])},{u}")
     text = "\n".join(lines) + "\n"
-    return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
+    return atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def read_csv(path):
@@ -188,7 +180,7 @@ def to_dxf(section, path, fit_tol=None, overwrite=False, units=None):
         import ezdxf
     except ImportError as exc:  # pragma: no cover - declared dependency
         raise MissingDependencyError("to_dxf needs ezdxf (pip install ezdxf)") from exc
-    p = _target(path, overwrite)
+    p = check_target(path, overwrite)
     code = dxf_insunits(_units(section, units))
     doc = ezdxf.new("R2010", units=code)
     doc.header["$INSUNITS"] = code
@@ -207,12 +199,12 @@ def to_dxf(section, path, fit_tol=None, overwrite=False, units=None):
     buf = io.StringIO()
     doc.write(buf)
     text = buf.getvalue()
-    return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
+    return atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def to_json(section, path, fit_tol=None, overwrite=False):
     """geomdl curve JSON (``exchange.import_json`` reads it back)."""
-    p = _target(path, overwrite)
+    p = check_target(path, overwrite)
     data = []
     if fit_tol is None:
         for X, closed in zip(section.curves, section.closed):
@@ -226,7 +218,7 @@ def to_json(section, path, fit_tol=None, overwrite=False):
             data.append(_geomdl_curve(fc.degree, fc.knots, fc.control_points))
     doc = {"shape": {"type": "curve", "count": len(data), "data": data}}
     text = json.dumps(doc, indent=1)
-    return _atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
+    return atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def _geomdl_curve(degree, knots, P):

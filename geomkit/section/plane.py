@@ -32,7 +32,7 @@ from geomkit.section.trace import _Eval, trace_surface
 from geomkit.validate import as_float_array
 from geomkit.errors import InvalidInputError
 from geomkit.nurbs.trimming import OUTSIDE
-from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.surface import as_surfaces
 
 __all__ = ["plane_section", "Section", "as_plane"]
 
@@ -177,7 +177,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     InvalidInputError
         Naming ``surfaces``, ``plane`` or ``tol``.
     """
-    surfs = _as_surfaces(surfaces)
+    surfs = as_surfaces(surfaces)
     abcd = as_plane(plane)
     try:
         tol = float(tol)
@@ -239,19 +239,6 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
                    surfaces=surfs, gap=gap, max_gap_bridged=bridged[0],
                    approx_error=max((getattr(s, "approx_error", 0.0) for s in surfs),
                                     default=0.0))
-
-
-def _as_surfaces(surfaces) -> list:
-    if isinstance(surfaces, Surface):
-        return [surfaces]
-    if isinstance(surfaces, (list, tuple)) and surfaces:
-        for i, s in enumerate(surfaces):
-            if not isinstance(s, Surface):
-                raise InvalidInputError(f"expected a geomkit.Surface, got {type(s).__name__}",
-                                        f"surfaces[{i}]")
-        return list(surfaces)
-    raise InvalidInputError(f"expected a Surface or a non-empty list of Surfaces, got "
-                            f"{type(surfaces).__name__}", "surfaces")
 
 
 def _points(ev, uv, sid):

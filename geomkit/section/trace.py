@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from geomkit.tolerances import EDGE_ROOT_TOL
 from geomkit._kernels import section as K
 from geomkit._kernels.surface import surface_points
 
-TTOL = 1e-15          # edge-root bracket, in the edge parameter t in [0, 1]
 MAX_ROUNDS = 60       # chord-refinement rounds (each halves the open segments)
 
 
@@ -47,7 +47,7 @@ class _Eval:
         b = np.ascontiguousarray(b, dtype=np.float64)
         t = np.empty(a.shape[0])
         K.edge_roots(*self.args, a, b, np.ascontiguousarray(fa), np.ascontiguousarray(fb),
-                     TTOL, t)
+                     EDGE_ROOT_TOL, t)
         return a + t[:, None] * (b - a)
 
     def project(self, uv, maxstep, ftol, maxit=40):

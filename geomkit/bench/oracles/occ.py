@@ -11,7 +11,7 @@ shared conversion helpers in :mod:`geomkit.bench.oracles.occ_common`; this modul
 them, so ``occ.make_face`` etc. keep working.
 
 Open CASCADE comes from the optional ``cadquery-ocp`` wheel (``import OCP``).
-It is imported lazily inside each function through :func:`_require_ocp`, so
+It is imported lazily inside each function through :func:`require_ocp`, so
 importing this module never fails; use :data:`HAVE_OCP` to skip tests.
 
 Conventions
@@ -36,9 +36,9 @@ import time
 
 import numpy as np
 
-from geomkit.bench.oracles.occ_common import (HAVE_OCP, _array1_double, _array1_int, _cast,
-                                              _gp_pnt, _knots_to_occ, _ocp_array, _require_ocp,
-                                              _xyz)
+from geomkit.cad.occ import (HAVE_OCP, array1_double, array1_int, cast_shape,
+                             gp_pnt, knots_to_occ, ocp_array, require_ocp,
+                             xyz)
 from geomkit.bench.oracles.occ_faces import (area, face_from_surface, face_surface, is_valid,
                                              make_face, make_surface)
 
@@ -85,7 +85,7 @@ def evaluate(surf, uv) -> np.ndarray:
     -------
     (n, 3) ndarray of float
     """
-    _require_ocp("evaluate")
+    require_ocp("evaluate")
     uv = _as_uv(uv)
     out = np.empty((uv.shape[0], 3))
     for i, (u, v) in enumerate(uv):
@@ -107,7 +107,7 @@ def derivatives1(surf, uv) -> np.ndarray:
     (n, 3, 3) ndarray of float
         ``out[i, 0] = S``, ``out[i, 1] = dS/du``, ``out[i, 2] = dS/dv``.
     """
-    _require_ocp("derivatives1")
+    require_ocp("derivatives1")
     from OCP.gp import gp_Pnt, gp_Vec
 
     uv = _as_uv(uv)
@@ -132,7 +132,7 @@ def _faces_of(shape):
 
     exp = TopExp_Explorer(shape, TopAbs_FACE)
     while exp.More():
-        yield _cast("Face", exp.Current())
+        yield cast_shape("Face", exp.Current())
         exp.Next()
 
 
@@ -176,7 +176,7 @@ def mesh(
     seconds : float
         Wall time of the ``BRepMesh_IncrementalMesh`` call only.
     """
-    _require_ocp("mesh")
+    require_ocp("mesh")
     from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
@@ -246,13 +246,13 @@ def _project_one(target, point, include_boundary: bool, tol: float, cache: dict)
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
     from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 
-    P = _gp_pnt(point)
+    P = gp_pnt(point)
     best = (np.inf, np.full(3, np.nan), (np.nan, np.nan))
     if _is_geom_surface(target):
         u0, u1, v0, v1 = target.Bounds()
         proj = GeomAPI_ProjectPointOnSurf(P, target, u0, u1, v0, v1)
         if proj.IsDone() and proj.NbPoints() > 0:
-            best = (float(proj.LowerDistance()), _xyz(proj.NearestPoint()),
+            best = (float(proj.LowerDistance()), xyz(proj.NearestPoint()),
                     tuple(map(float, proj.LowerDistanceParameters())))
         if not include_boundary and np.isfinite(best[0]):
             return best
@@ -280,7 +280,7 @@ def _project_one(target, point, include_boundary: bool, tol: float, cache: dict)
         else:
             q = ShapeAnalysis_Surface(surf).ValueOfUV(foot, tol)
             uv = (q.X(), q.Y())
-        best = (d, _xyz(foot), uv)
+        best = (d, xyz(foot), uv)
     return best
 
 
@@ -311,7 +311,7 @@ def project_point(surf_or_face, point, include_boundary: bool = True, tol: float
     uv : tuple (u, v) or (n, 2) ndarray
         Parameters of ``foot``.
     """
-    _require_ocp("project_point")
+    require_ocp("project_point")
     pts = np.asarray(point, dtype=np.float64)
     single = pts.ndim == 1
     pts = pts.reshape(-1, 3) if pts.size % 3 == 0 else None
@@ -349,7 +349,7 @@ def distance_shapes(shape_a, shape_b, deflection: float | None = None):
     seconds : float
         Wall time of ``Perform`` only.
     """
-    _require_ocp("distance_shapes")
+    require_ocp("distance_shapes")
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
     dss = BRepExtrema_DistShapeShape()
@@ -362,7 +362,7 @@ def distance_shapes(shape_a, shape_b, deflection: float | None = None):
     seconds = time.perf_counter() - t0
     if not dss.IsDone() or dss.NbSolution() == 0:
         raise RuntimeError("BRepExtrema_DistShapeShape failed")
-    return float(dss.Value()), _xyz(dss.PointOnShape1(1)), _xyz(dss.PointOnShape2(1)), seconds
+    return float(dss.Value()), xyz(dss.PointOnShape1(1)), xyz(dss.PointOnShape2(1)), seconds
 
 
 # ---------------------------------------------------------------------------
@@ -443,7 +443,7 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     seconds : float
         Wall time of the section ``Build`` only.
     """
-    _require_ocp("section")
+    require_ocp("section")
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Section
@@ -470,7 +470,7 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     pieces = []
     exp = TopExp_Explorer(result, TopAbs_EDGE)
     while exp.More():
-        edge = _cast("Edge", exp.Current())
+        edge = cast_shape("Edge", exp.Current())
         exp.Next()
         if BRep_Tool.Degenerated_s(edge):
             continue
@@ -478,7 +478,7 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
         disc = GCPnts_QuasiUniformDeflection(ad, float(deflection))
         if not disc.IsDone() or disc.NbPoints() < 2:
             continue
-        pts = np.array([_xyz(disc.Value(i)) for i in range(1, disc.NbPoints() + 1)])
+        pts = np.array([xyz(disc.Value(i)) for i in range(1, disc.NbPoints() + 1)])
         if edge.Orientation() == TopAbs_REVERSED:
             pts = pts[::-1]
         pieces.append(pts)
@@ -488,6 +488,6 @@ def section(shape, plane_abcd, deflection: float = 1e-3, approximation: bool = T
     vtol = 1e-7
     vexp = TopExp_Explorer(result, TopAbs_VERTEX)
     while vexp.More():
-        vtol = max(vtol, BRep_Tool.Tolerance_s(_cast("Vertex", vexp.Current())))
+        vtol = max(vtol, BRep_Tool.Tolerance_s(cast_shape("Vertex", vexp.Current())))
         vexp.Next()
     return _chain(pieces, 2.0 * vtol + 1e-9), seconds

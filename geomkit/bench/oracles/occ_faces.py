@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit.bench.oracles.occ_common import (_array1_double, _array1_int, _cast, _knots_to_occ,
-                                              _ocp_array, _require_ocp, _xyz)
+from geomkit.cad.occ import (array1_double, array1_int, cast_shape, knots_to_occ,
+                             ocp_array, require_ocp, xyz)
 
 # ---------------------------------------------------------------------------
 # 1. surfaces
@@ -43,8 +43,8 @@ def make_surface(degree_u, degree_v, knots_u, knots_v, control_points, weights=N
     ImportError
         If cadquery-ocp is not installed.
     """
-    _require_ocp("make_surface")
-    Array2_double, Array2_gp_Pnt = _ocp_array("Array2_double"), _ocp_array("Array2_gp_Pnt")
+    require_ocp("make_surface")
+    Array2_double, Array2_gp_Pnt = ocp_array("Array2_double"), ocp_array("Array2_gp_Pnt")
     from OCP.Geom import Geom_BSplineSurface
     from OCP.gp import gp_Pnt
 
@@ -55,15 +55,15 @@ def make_surface(degree_u, degree_v, knots_u, knots_v, control_points, weights=N
     if not np.all(np.isfinite(cp)):
         raise ValueError("control_points must be finite")
     nu, nv = cp.shape[:2]
-    uk, um = _knots_to_occ(knots_u, p, nu, "knots_u")
-    vk, vm = _knots_to_occ(knots_v, q, nv, "knots_v")
+    uk, um = knots_to_occ(knots_u, p, nu, "knots_u")
+    vk, vm = knots_to_occ(knots_v, q, nv, "knots_v")
 
     poles = Array2_gp_Pnt(1, nu, 1, nv)
     for i in range(nu):
         for j in range(nv):
             x, y, z = cp[i, j]
             poles.SetValue(i + 1, j + 1, gp_Pnt(float(x), float(y), float(z)))
-    args = (_array1_double(uk), _array1_double(vk), _array1_int(um), _array1_int(vm), p, q)
+    args = (array1_double(uk), array1_double(vk), array1_int(um), array1_int(vm), p, q)
     if weights is None:
         return Geom_BSplineSurface(poles, *args, False, False)
     w = np.asarray(weights, dtype=np.float64)
@@ -80,7 +80,7 @@ def make_surface(degree_u, degree_v, knots_u, knots_v, control_points, weights=N
 
 def _make_pcurve(piece):
     """2-D NURBS piece dict -> (Geom2d_BSplineCurve, C0 break parameters)."""
-    Array1_gp_Pnt2d = _ocp_array("Array1_gp_Pnt2d")
+    Array1_gp_Pnt2d = ocp_array("Array1_gp_Pnt2d")
     from OCP.Geom2d import Geom2d_BSplineCurve
     from OCP.gp import gp_Pnt2d
 
@@ -94,13 +94,13 @@ def _make_pcurve(piece):
     if cp.ndim != 2 or cp.shape[1] != 2:
         raise ValueError(f"trim piece control_points must be (k, 2), got {cp.shape}")
     k = cp.shape[0]
-    knots, mults = _knots_to_occ(piece["knots"], deg, k, "trim piece knots")
+    knots, mults = knots_to_occ(piece["knots"], deg, k, "trim piece knots")
     poles = Array1_gp_Pnt2d(1, k)
     for i in range(k):
         poles.SetValue(i + 1, gp_Pnt2d(float(cp[i, 0]), float(cp[i, 1])))
     w = piece.get("weights")
     if w is None:
-        curve = Geom2d_BSplineCurve(poles, _array1_double(knots), _array1_int(mults), deg, False)
+        curve = Geom2d_BSplineCurve(poles, array1_double(knots), array1_int(mults), deg, False)
     else:
         w = np.asarray(w, dtype=np.float64).ravel()
         if w.shape != (k,):
@@ -108,7 +108,7 @@ def _make_pcurve(piece):
         if np.any(w <= 0):
             raise ValueError("trim piece weights must be > 0")
         curve = Geom2d_BSplineCurve(
-            poles, _array1_double(w), _array1_double(knots), _array1_int(mults), deg, False
+            poles, array1_double(w), array1_double(knots), array1_int(mults), deg, False
         )
     # split at C0 knots (multiplicity == degree) so every edge is at least C1:
     # polylines become one edge per segment, which BuildCurves3d handles exactly.
@@ -144,7 +144,7 @@ def _make_wire(surf, curves, tol: float):
 
     def on_surf(curve, t):
         uv = curve.Value(t)
-        return _xyz(surf.Value(uv.X(), uv.Y()))
+        return xyz(surf.Value(uv.X(), uv.Y()))
 
     # vertex j joins the end of segment j-1 and the start of segment j
     builder = BRep_Builder()
@@ -186,7 +186,7 @@ def is_valid(shape) -> bool:
     -------
     bool
     """
-    _require_ocp("is_valid")
+    require_ocp("is_valid")
     from OCP.BRepCheck import BRepCheck_Analyzer
 
     return bool(BRepCheck_Analyzer(shape).IsValid())
@@ -199,7 +199,7 @@ def _fix_face(face, tol: float):
     sff.SetPrecision(tol)
     sff.SetMaxTolerance(max(1e3 * tol, 1e-4))
     sff.Perform()
-    return _cast("Face", sff.Face())
+    return cast_shape("Face", sff.Face())
 
 
 def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
@@ -237,7 +237,7 @@ def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
     RuntimeError
         If Open CASCADE cannot build a valid face.
     """
-    _require_ocp("face_from_surface")
+    require_ocp("face_from_surface")
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.BRepLib import BRepLib
     from OCP.GeomAbs import GeomAbs_C1
@@ -267,7 +267,7 @@ def face_from_surface(surf, trim=None, tol: float = 1e-7, check: bool = True):
             w = _make_wire(surf, curves, tol)
             want_ccw = True if li == 0 else flip_holes  # holes: CW unless flipped
             if (signed > 0) != want_ccw:
-                w = _cast("Wire", w.Reversed())  # Reversed() returns a TopoDS_Shape
+                w = cast_shape("Wire", w.Reversed())  # Reversed() returns a TopoDS_Shape
             wires.append(w)
         mf = BRepBuilderAPI_MakeFace(surf, wires[0], True)
         if not mf.IsDone():
@@ -334,10 +334,10 @@ def face_surface(face):
     -------
     OCP.Geom.Geom_Surface
     """
-    _require_ocp("face_surface")
+    require_ocp("face_surface")
     from OCP.BRep import BRep_Tool
 
-    return BRep_Tool.Surface_s(_cast("Face", face))
+    return BRep_Tool.Surface_s(cast_shape("Face", face))
 
 
 def area(face, eps: float = 1e-10) -> float:
@@ -356,7 +356,7 @@ def area(face, eps: float = 1e-10) -> float:
         Area in model units squared (negative if a face's loops are wound
         against its orientation).
     """
-    _require_ocp("area")
+    require_ocp("area")
     from OCP.BRepGProp import BRepGProp
     from OCP.GProp import GProp_GProps
 

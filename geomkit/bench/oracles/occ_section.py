@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from geomkit.bench.oracles.occ_common import HAVE_OCP, _require_ocp, _xyz
+from geomkit.cad.occ import HAVE_OCP, require_ocp, xyz
 
 __all__ = ["HAVE_OCP", "intss"]
 
@@ -24,7 +24,7 @@ def intss(geom_surface, plane_abcd, tol: float = 1e-7, deflection: float = 1e-3)
         ``GCPnts_QuasiUniformDeflection(deflection)``; empty if none.
     seconds : float, wall time of ``GeomAPI_IntSS.Perform`` only.
     """
-    _require_ocp("intss")
+    require_ocp("intss")
     from OCP.GCPnts import GCPnts_QuasiUniformDeflection
     from OCP.Geom import Geom_Plane
     from OCP.GeomAdaptor import GeomAdaptor_Curve
@@ -43,5 +43,5 @@ def intss(geom_surface, plane_abcd, tol: float = 1e-7, deflection: float = 1e-3)
         ad = GeomAdaptor_Curve(inter.Line(i))
         disc = GCPnts_QuasiUniformDeflection(ad, float(deflection))
         if disc.IsDone() and disc.NbPoints() >= 2:
-            out.append(np.array([_xyz(disc.Value(k)) for k in range(1, disc.NbPoints() + 1)]))
+            out.append(np.array([xyz(disc.Value(k)) for k in range(1, disc.NbPoints() + 1)]))
     return out, seconds

@@ -14,10 +14,18 @@ import math
 
 import numpy as np
 
-from geomkit.cad.analytic import (angle_to_param, arc_curve, extrude, line_curve, revolve, ruled,
-                                  transform_curve, turn_into)
+from geomkit.tolerances import JOIN_TOL, RULED_ARC_TOL
+from geomkit._kernels.bezier import insert_knot
+from geomkit.cad.analytic import (angle_to_param, arc_curve, curve_derivs, extrude, line_curve,
+                                  revolve, ruled, transform_curve, turn_into)
 from geomkit.cad.conic import conic_arc
+from geomkit.cad.iges.file import integer as i_
+from geomkit.cad.iges.file import real as f_
+from geomkit.cad.iges.file import units
 from geomkit.cad.loops import Unsupported
+from geomkit.cad.offset import offset_args
+from geomkit.errors import FileFormatError
+from geomkit.nurbs.surface import Surface
 
 READ_SURFACES = {128: "rational B-spline surface", 114: "parametric spline surface",
                  120: "surface of revolution",
@@ -27,19 +35,9 @@ READ_CURVES = {110: "line", 100: "circular arc", 104: "conic arc",
                126: "rational B-spline curve", 112: "parametric spline curve"}
 
 
-def f_(x: str) -> float:
-    return float(x.replace("D", "E").replace("d", "e")) if x else 0.0
-
-
-def i_(x: str) -> int:
-    return int(float(x)) if x else 0
-
-
 def numbers(rd, de: int, first: int, n: int) -> list:
     """``n`` real parameters of entity ``de`` from index ``first``; a missing or
     non-numeric one is a :class:`~geomkit.errors.FileFormatError` naming the entity."""
-    from geomkit.errors import FileFormatError
-
     r = rd.rec(de)
     t = rd.type_of(de)
     if len(r) < first + n:
@@ -55,8 +53,6 @@ def numbers(rd, de: int, first: int, n: int) -> list:
 def restrict(p, U, Pw, t0, t1):
     """A NURBS curve (any dimension, homogeneous ``Pw``) restricted to ``[t0, t1]``
     exactly, by knot insertion (The NURBS Book A5.1)."""
-    from geomkit._kernels.bezier import insert_knot
-
     U = np.asarray(U, float)
     n = Pw.shape[0]
     lo, hi = U[p], U[n]
@@ -76,6 +72,26 @@ def restrict(p, U, Pw, t0, t1):
     newU[: p + 1] = t0
     newU[-(p + 1):] = t1
     return newU, Pw[start: first_b]
+
+
+def bspline126(r) -> tuple:
+    """The fields of a 126 (rational B-spline curve) parameter record ``r``:
+    ``(degree, knots, weights, control points (K+1, 3), (t0, t1))``; the weights are all 1
+    when the file marks the curve polynomial (PROP3 = 1)."""
+    K, M = i_(r[1]), i_(r[2])
+    prop3 = i_(r[5])
+    A = K + M + 1
+    a = 7
+    knots = np.array([f_(x) for x in r[a: a + A + 1]])
+    a += A + 1
+    W = np.array([f_(x) for x in r[a: a + K + 1]])
+    a += K + 1
+    P = np.array([f_(x) for x in r[a: a + 3 * (K + 1)]]).reshape(K + 1, 3)
+    a += 3 * (K + 1)
+    t0, t1 = f_(r[a]), f_(r[a + 1])
+    if prop3 == 1:
+        W = np.ones(K + 1)
+    return M, knots, W, P, (t0, t1)
 
 
 def curve3d(rd, de: int):
@@ -103,19 +119,7 @@ def curve3d(rd, de: int):
         c, fmap, rng = conic_arc(v[:6], v[6], v[7:9], v[9:11], form,
                                  f"{rd.path}: entity 104 at DE {de}")
     elif t == 126:
-        K, M = i_(r[1]), i_(r[2])
-        prop3 = i_(r[5])
-        A = K + M + 1
-        a = 7
-        knots = np.array([f_(x) for x in r[a: a + A + 1]])
-        a += A + 1
-        W = np.array([f_(x) for x in r[a: a + K + 1]])
-        a += K + 1
-        P = np.array([f_(x) for x in r[a: a + 3 * (K + 1)]]).reshape(K + 1, 3)
-        a += 3 * (K + 1)
-        t0, t1 = f_(r[a]), f_(r[a + 1])
-        if prop3 == 1:
-            W = np.ones(K + 1)
+        M, knots, W, P, (t0, t1) = bspline126(r)
         U, Pw = restrict(M, knots, np.column_stack([P * W[:, None], W]), t0, t1)
         c, fmap, rng = (M, U, Pw), None, (float(U[M]), float(U[-M - 1]))
     elif t == 112:
@@ -155,12 +159,6 @@ def _spline112(r):
     return 3, np.array(knots), np.column_stack([P, np.ones(len(P))])
 
 
-JOIN_TOL = 1e-7
-"""Neighbouring 114 patches must meet within this x the surface size, or within the
-file's resolution (global parameter 19) when that is larger: real files round the
-coefficients (seen: 7.9e-7 in a file of resolution 1e-4).  Where the patches do not
-meet exactly, the first patch's boundary is kept and the gap is stated as the face's
-``approx_error``."""
 
 
 def _spline114(rd, de: int):
@@ -169,8 +167,6 @@ def _spline114(rd, de: int):
     TU(i)``, ``t = v - TV(j)`` (IGES 5.3: coefficients ``AX, BX, ..., SX``); its
     power form becomes its Bezier form (:func:`_bezier3` in ``u`` then ``v``) and the
     breakpoints become triple knots, so the surface is the file's, to rounding."""
-    from geomkit.errors import FileFormatError
-
     what = f"{rd.path}: entity 114 at DE {de}"
     r = rd.rec(de)
     try:
@@ -189,8 +185,6 @@ def _spline114(rd, de: int):
         raise FileFormatError(f"{what}: breakpoints not increasing (u {TU.tolist()}, "
                               f"v {TV.tolist()})")
     base = M + N + 2
-    from geomkit.cad.iges.file import units
-
     res = units(rd.glob)[1] or 0.0
     worst = 0.0
     P = np.full((3 * M + 1, 3 * N + 1, 3), np.nan)
@@ -278,8 +272,6 @@ def surface(rd, de: int):
         c1, c2 = _compatible(c1, c2, de)
         args, fu, fv = ruled(c1, c2), g1, None
     elif t == 140:
-        from geomkit.nurbs.surface import Surface
-        from geomkit.cad.offset import offset_args
 
         base_de = i_(r[5])
         bargs, fu, fv = surface(rd, base_de)
@@ -298,19 +290,12 @@ def surface(rd, de: int):
     return args, fu, fv
 
 
-RULED_ARC_TOL = 1e-9
-"""A 118 of form 0 (rulings at equal relative arc length) is read as form 1 (equal
-relative parameter) when neither curve's relative arc length strays from its relative
-entity parameter by more than this x the model size, or the file's resolution when that
-is larger (the rulings' ends then move by at most that along the curves)."""
 
 
 def _arc_fraction(c, g, n: int = 256):
     """Relative arc length of the normalised curve ``c`` at the entity parameters
     ``e = 0, 1/n, ..., 1`` (``g`` maps them to the NURBS parameter), and its length.
     Gauss-Legendre (10 points) on 8 pieces between consecutive samples and knots."""
-    from geomkit.cad.brep import _curve_derivs
-
     p, U, Pw = c
     e = np.linspace(0.0, 1.0, n + 1)
     t = e if g is None else np.asarray(g(e), float)
@@ -320,7 +305,7 @@ def _arc_fraction(c, g, n: int = 256):
     cuts = br[:-1, None] + np.diff(br)[:, None] * np.linspace(0.0, 1.0, 9)[None, :]
     lo, hi = cuts[:, :-1].ravel(), cuts[:, 1:].ravel()
     q = 0.5 * (lo + hi)[:, None] + 0.5 * (hi - lo)[:, None] * x[None, :]
-    speed = np.linalg.norm(_curve_derivs(c, q.ravel(), 1)[:, 1], axis=1).reshape(q.shape)
+    speed = np.linalg.norm(curve_derivs(c, q.ravel(), 1)[:, 1], axis=1).reshape(q.shape)
     piece = 0.5 * (hi - lo) * (speed @ w)
     cum = np.concatenate([[0.0], np.cumsum(piece.reshape(len(br) - 1, 8).sum(axis=1))])
     at = cum[np.searchsorted(br, t)]
@@ -334,8 +319,6 @@ def _equal_arc_length(rd, de, *curves):
     both curves run at constant speed in their parameters (lines, circular arcs).
     Otherwise there is no exact NURBS: Unsupported, never a silently different surface.
     The achieved error (how far a ruling's end moves along its curve) is stated."""
-    from geomkit.cad.iges.file import units
-
     size = max(float(np.ptp(np.asarray(c[2])[:, :3] / np.asarray(c[2])[:, 3:], axis=0).max())
                for c, _ in curves) or 1.0
     tol = max(RULED_ARC_TOL * size, units(rd.glob)[1] or 0.0)
@@ -354,8 +337,6 @@ def _equal_arc_length(rd, de, *curves):
 
 def _compatible(c1, c2, de):
     """Two curves of equal degree brought to one knot vector (knot insertion)."""
-    from geomkit._kernels.bezier import insert_knot
-
     (p, U1, P1), (q, U2, P2) = c1, c2
     if p != q:
         raise Unsupported(f"ruled surface DE {de} between curves of degree {p} and {q} "

@@ -6,7 +6,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from geomkit.errors import FileFormatError
-from geomkit.cad.iges.entities import f_ as _f
+
+def real(x: str) -> float:
+    """An IGES real as written (``1.5D2``, ``1.5E2`` or empty for 0)."""
+    return float(x.replace("D", "E").replace("d", "e")) if x else 0.0
+
+
+def integer(x: str) -> int:
+    """An IGES integer as written (``3``, ``3.`` or empty for 0)."""
+    return int(float(x)) if x else 0
+
 
 UNIT_FLAGS = {1: "in", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um",
               10: "cm", 11: "uin"}
@@ -124,7 +133,7 @@ def units(gf: list):
                 units = None
     if len(gf) >= 19 and gf[18]:
         try:
-            res = _f(gf[18])
+            res = real(gf[18])
         except ValueError:
             res = None
     return units, res

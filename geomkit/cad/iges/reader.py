@@ -46,17 +46,22 @@ from typing import NamedTuple
 
 import numpy as np
 
+from geomkit.tolerances import EDGE_TOL, PCURVE_TOL, SAME_POINT_TOL, TRIM_CLIP_TOL
 from geomkit.cad.iges.entities import Unsupported as _Skip
-from geomkit.cad.iges.entities import f_ as _f
-from geomkit.cad.iges.entities import i_ as _i
-from geomkit.cad.iges.entities import restrict, surface as _surface_entity
+from geomkit.cad.iges.file import integer as _i
+from geomkit.cad.iges.file import real as _f
+from geomkit.cad.iges.entities import bspline126, curve3d, restrict
+from geomkit.cad.iges.entities import surface as _surface_entity
 from geomkit.cad.brep import ANALYTIC, curve_loop_141, curve_loop_142, edge_loop_508, face_surface
-from geomkit.cad.loops import GAP_TOL, clip_to_domain, close_gaps  # noqa: F401 (GAP_TOL re-exported)
+from geomkit.cad.loops import clip_to_domain, close_gaps
 from geomkit.cad.iges.file import UNIT_FLAGS  # noqa: F401 (re-exported)
 from geomkit.cad.iges.file import directory as _directory
 from geomkit.cad.iges.file import param_records as _param_records
 from geomkit.cad.iges.file import units as _units
 from geomkit.cad.uvmap import map_pcurve
+from geomkit.cad.edgeproj import edge_uv
+from geomkit.cad.loops import reverse
+from geomkit.nurbs.evaluation import evaluate
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
 from geomkit.nurbs.surface import Surface, TrimCurve
 
@@ -198,8 +203,6 @@ class _Reader:
                 out += self.pcurve_pieces(_i(r[2 + k]), where)
             return out
         if t in (100, 104):  # arcs and conics in the (u, v) plane: exact rational
-            from geomkit.cad.iges.entities import curve3d
-
             (p, U, Pw), _, _ = curve3d(self, de)
             w = Pw[:, 3]
             return [TrimCurve.create(p, U, Pw[:, :2] / w[:, None],
@@ -210,21 +213,8 @@ class _Reader:
             p1 = [_f(r[4]), _f(r[5])]
             return [TrimCurve.polyline([p0, p1], f"{where}.line@{de}")]
         if t == 126:
-            K, M = _i(r[1]), _i(r[2])
-            prop3 = _i(r[5])
-            N = 1 + K - M
-            A = N + 2 * M
-            a = 7
-            knots = np.array([_f(x) for x in r[a: a + A + 1]])
-            a += A + 1
-            W = np.array([_f(x) for x in r[a: a + K + 1]])
-            a += K + 1
-            P = np.array([_f(x) for x in r[a: a + 3 * (K + 1)]]).reshape(K + 1, 3)
-            a += 3 * (K + 1)
-            v0, v1 = _f(r[a]), _f(r[a + 1])
-            w = None if prop3 == 1 or np.all(W == W[0]) else W
-            if w is None:
-                w = np.ones(K + 1)
+            M, knots, W, P, (v0, v1) = bspline126(r)
+            w = W if np.any(W != W[0]) else np.ones(len(W))
             U, Pw = restrict(M, knots, np.column_stack([P[:, :2] * w[:, None], w]), v0, v1)
             w = Pw[:, 2]
             return [TrimCurve.create(M, U, Pw[:, :2] / w[:, None],
@@ -245,7 +235,6 @@ class _Reader:
     def loop508(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         """A 508 loop from its edges' pcurves (each reversed where the loop runs
         against its edge; vertex entries dropped: poles are bridged)."""
-        from geomkit.cad.loops import reverse
 
         r = self.rec(de)
         n, a, pieces = _i(r[1]), 2, []
@@ -264,12 +253,10 @@ class _Reader:
     def projected508(self, de: int, where: str, domain, base):
         """A 508 loop whose edges have no pcurves: its 3-D edges projected onto
         ``base`` within the model resolution (:func:`geomkit.cad.edgeproj.edge_uv`)."""
-        from geomkit.cad.iges.file import units
-        from geomkit.cad.edgeproj import EDGE_TOL, edge_uv
 
         if base is None:
             raise _Skip(f"loop 508 at DE {de}: an edge has no parameter-space curve")
-        res = units(self.glob)[1]
+        res = _units(self.glob)[1]
         P = base.control_points.reshape(-1, 3)
         size = float(np.linalg.norm(np.ptp(P, axis=0)))
         tol = max(res or 0.0, EDGE_TOL * size)
@@ -279,7 +266,6 @@ class _Reader:
 
     def loop141(self, de: int, where: str, domain=None, fu=None, fv=None, base=None):
         """A 141 boundary from its parameter-space curves (``SENSE = 2``: reversed)."""
-        from geomkit.cad.loops import reverse
 
         if self.type_of(de) != 141:
             raise _Skip(f"boundary DE {de} is entity {self.type_of(de)}, expected 141")
@@ -318,10 +304,10 @@ class _Reader:
         return Surface(*args, loops, name=where)
 
     def _clip(self, pieces, domain):
-        """Snap control points within ``CLIP_TOL`` outside the domain onto it."""
+        """Snap control points within ``TRIM_CLIP_TOL`` outside the domain onto it."""
         if domain is None:
             return pieces
-        out, moves = clip_to_domain(pieces, domain, CLIP_TOL)
+        out, moves = clip_to_domain(pieces, domain, TRIM_CLIP_TOL)
         self.clipped += len(moves)
         return out
 
@@ -332,8 +318,6 @@ class _Reader:
             return pieces
         same = None
         if base is not None:
-            from geomkit.nurbs.evaluation import evaluate
-
             P = base.control_points.reshape(-1, 3)
             eps = SAME_POINT_TOL * float(np.ptp(P, axis=0).max())
             (u0, u1), (v0, v1) = domain
@@ -347,14 +331,6 @@ class _Reader:
         return out
 
 
-PCURVE_TOL = 1e-10
-"""UV error (relative to the domain size) allowed where a pcurve is re-fitted through a
-reparametrisation of its surface."""
-SAME_POINT_TOL = 1e-9
-"""Two UV points whose model points are this close (x the surface size) are one point:
-a gap between them (a pole) is bridged whatever its size in UV."""
-CLIP_TOL = 1e-7
-"""Trim control points this close outside the domain (relative) are moved onto it."""
 
 
 def read_iges(path, skip_invalid: bool = False,

@@ -1,0 +1,132 @@
+"""Tessellation's per-call fast paths give the same meshes as the general code.
+
+* meshes of small cases against a reference written by the code before the fast
+  paths (tests/data/tess_fastpath_reference.npz: geomkit at 7ea6120): same faces,
+  vertices, UVs and stated deviations;
+* the uniform grid's weld from grid indices against the general weld (unique UVs,
+  KD-tree of boundary vertices), poles and seams included;
+* the boundary-pair pre-test (oblique projection) against brute force;
+* the knot breakpoints and span samples against ``np.unique`` / ``np.linspace``.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from geomkit.mesh import quadtree as qt
+from geomkit import samples
+from geomkit import tolerances as tols
+from geomkit.mesh.trim_polylines import _span_samples
+from geomkit.mesh.tessellate import tessellate
+
+from helpers.paths import DATA
+
+T = importlib.import_module("geomkit.mesh.tessellate")  # the module, not the function
+REF = DATA / "tess_fastpath_reference.npz"
+FIELDS = ("faces", "face_surface", "vertex_surface", "vertices", "uv", "face_uv",
+          "face_deviation")
+
+
+def _same(a, b):
+    """Equal arrays: integers exactly, floats to a few rounding units of their scale
+    (the reference was written on this project's machine; another CPU may round
+    fused multiply-adds differently)."""
+    assert a.shape == b.shape and a.dtype == b.dtype
+    if a.dtype.kind in "iu":
+        return np.array_equal(a, b)
+    scale = max(1.0, float(np.abs(b).max())) if b.size else 1.0
+    return bool(np.all(np.abs(a - b) <= 1e-12 * scale))
+
+
+@pytest.mark.parametrize("key", ["cylinder_quarter_1e-02", "cylinder_quarter_1e-03",
+                                 "plate_with_hole_1e-02", "offset_planes_1e-02",
+                                 "sphere_1e-01", "torus_1e-01", "crease_3e-02"])
+def test_meshes_match_the_reference_before_the_fast_paths(key):
+    ref = np.load(REF)
+    name, tol = key.rsplit("_", 1)
+    mesh = tessellate(samples.load(name), float(tol))
+    for f in FIELDS:
+        assert _same(getattr(mesh, f), ref[f"{key}/{f}"]), f
+    assert all(st.get("uniform_grid") or st.get("planar_trimmed") or st.get("affine_plane")
+               for st in mesh.stats["surfaces"])  # the fast paths were taken
+
+
+def _grid(name, tol):
+    s = samples.load(name)[0]
+    ub = T._breakpoints(s.knots_u, s.degree_u)
+    vb = T._breakpoints(s.knots_v, s.degree_v)
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    g = qt.uniform_grid(s, ub, vb, m, T.SAMPLES_PER_EDGE, tol, T.CELL_TARGET * tol,
+                        T.EXACT_ABOVE * tol, T.GRID_CELLS)
+    assert g is not None
+    return s, g
+
+
+@pytest.mark.parametrize("name,tol", [("sphere", 1e-1), ("torus", 1e-1),
+                                      ("cylinder_quarter", 1e-2), ("crease", 3e-2),
+                                      ("saddle", 1e-2), ("freeform_1", 1e-1),
+                                      ("wave_seed003", 3e-1)])
+def test_grid_weld_matches_the_general_weld(name, tol):
+    """Poles (sphere: faces collapse), seams (sphere, torus) and open surfaces."""
+    s, (tri_uv, dev, cells, (u, v, diag)) = _grid(name, tol)
+    got = T._weld_grid(s, u, v, diag, s.size)
+    want = T._weld(s, tri_uv, s.size, near_uv=False)
+    assert got is not None
+    for a, b in zip(got, want):
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+    # the grid's triangles are the cells' two halves on the grid lines
+    assert len(tri_uv) == 2 * len(cells) == 2 * (len(u) - 1) * (len(v) - 1)
+    if name == "sphere":
+        assert not got[3].all()  # faces collapsed at the poles were found
+
+
+def test_boundary_pairs_match_brute_force():
+    rng = np.random.default_rng(7)
+    size, r = 1.0, tols.WELD_REL * 1.0
+    for trial in range(40):
+        n = int(rng.integers(2, 60))
+        P = rng.random((n, 3))
+        if trial % 4 == 0:  # points on an axis-aligned line and plane (equal coordinates)
+            P[:, 1:] = 0.5
+        elif trial % 4 == 1:
+            P[:, 2] = 0.25
+        if trial % 2:  # plant near and exact coincidences
+            k = int(rng.integers(1, n // 2 + 1))
+            i = rng.choice(n, size=k, replace=False)
+            j = rng.choice(n, size=k, replace=False)
+            P[j] = P[i] + rng.normal(size=(k, 3)) * r * rng.choice([0.0, 0.3, 3.0], size=(k, 1))
+        bnd = np.sort(rng.choice(n + 5, size=n, replace=False))
+        Q = np.zeros((n + 5, 3))
+        Q[bnd] = P
+        got = {tuple(sorted(p)) for p in T._boundary_pairs(Q, bnd, size).tolist()}
+        d = np.linalg.norm(P[:, None] - P[None], axis=2)
+        want = {(int(bnd[a]), int(bnd[b])) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
+        assert got == want, trial
+
+
+def test_breakpoints_and_span_samples_match_numpy():
+    rng = np.random.default_rng(3)
+    for name in samples.names():
+        for s in samples.load(name):
+            for U, p in ((s.knots_u, s.degree_u), (s.knots_v, s.degree_v)):
+                assert np.array_equal(T._breakpoints(U, p), np.unique(U[p: len(U) - p]))
+    for n in range(2, 30):
+        t = np.unique(np.cumsum(rng.random(n) * rng.choice([1e-7, 1.0, 1e4], n)) - 3.0)
+        want = np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])])
+        assert np.array_equal(_span_samples(t, 5).ravel(), want)
+
+
+def test_boundary_pairs_far_from_the_origin():
+    """Coordinates of 1e6 with pairs at 0.5 r: the projections' rounding (~1e-10)
+    is the order of r itself; the pre-test must still leave them to the tree."""
+    rng = np.random.default_rng(11)
+    P = 1e6 + rng.random((30, 3))
+    r = tols.WELD_REL * 1.0
+    P[20:] = P[:10] + rng.normal(size=(10, 3)) * (0.5 * r / np.sqrt(3) / 3)
+    got = {tuple(sorted(p)) for p in T._boundary_pairs(P, np.arange(30), 1.0).tolist()}
+    d = np.linalg.norm(P[:, None] - P[None], axis=2)
+    want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
+    assert got == want and len(want) >= 5
