@@ -15,8 +15,8 @@ from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import evaluate_trim_curve
 from geomkit.cad.uvmap import map_pcurve
 
-__all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL"]
-
+__all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
+           "same_point_3d"]
 
 
 class Unsupported(Exception):
@@ -177,3 +177,79 @@ def _refit_clipped(c, box, eps, fit_tol):
     m, err = map_pcurve(c, lambda u: np.clip(u, u0, u1), lambda v: np.clip(v, v0, v1),
                         fit_tol / 100)
     return m, out + err
+
+
+# ------------------------------------------------------- repairs measured in 3-D
+def _extrapolation_error(base, uv, domain):
+    """First-order 3-D distance between the surface continued to ``uv`` (m, 2) and its
+    value at ``uv`` clamped to ``domain``: ``|S_u| du + |S_v| dv`` at the clamped point
+    (0 at a pole, where a whole parameter line is one point).  Returns
+    ``(clamped uv, distances)``."""
+    (u0, u1), (v0, v1) = domain
+    q = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+    d = np.abs(uv - q)
+    D = base.derivatives(q, 1)
+    err = (np.linalg.norm(D[:, 1, 0], axis=1) * d[:, 0]
+           + np.linalg.norm(D[:, 0, 1], axis=1) * d[:, 1])
+    return q, err
+
+
+def clip_in_3d(pieces, base, tol3d: float, samples: int = 257):
+    """Pieces whose points leave the domain of ``base`` (the untrimmed surface) by an
+    amount the model cannot see: each point outside is moved onto the domain edge, and
+    the move is measured in 3-D (:func:`_extrapolation_error`: the surface's speed
+    across the edge times the overshoot, 0 at a pole).  A piece whose largest move is
+    at most ``tol3d`` (the file's own tolerance) is re-fitted to its clipped points;
+    others are kept, for validation to report.  Returns ``(pieces, [3-D moves])``."""
+    (u0, u1), (v0, v1) = domain = base.domain
+    size = max(u1 - u0, v1 - v0)
+    out, moves = [], []
+    for c in pieces:
+        P = np.asarray(c.control_points)
+        if ((P[:, 0] >= u0) & (P[:, 0] <= u1) & (P[:, 1] >= v0) & (P[:, 1] <= v1)).all():
+            out.append(c)
+            continue
+        p = c.degree
+        t = np.linspace(c.knots[p], c.knots[-p - 1], samples)
+        X = evaluate_trim_curve(c, t)[:, 0, :]
+        _, err = _extrapolation_error(base, X, domain)
+        worst = float(err.max())
+        if worst > tol3d:
+            out.append(c)
+            continue
+        m, fit = map_pcurve(c, lambda u: np.clip(u, u0, u1), lambda v: np.clip(v, v0, v1),
+                            1e-9 * size)
+        out.append(m)
+        moves.append(worst + fit * _speed(base))
+    return out, moves
+
+
+def _speed(base) -> float:
+    """A bound of the surface's 3-D speed per UV unit (control net extent over the
+    smaller domain side): turns a UV fit error into a 3-D one."""
+    (u0, u1), (v0, v1) = base.domain
+    return float(base.size) / max(min(u1 - u0, v1 - v0), 1e-300) * max(base.degree_u,
+                                                                      base.degree_v)
+
+
+def same_point_3d(base, tol3d: float, samples: int = 17):
+    """``same(a, b)`` for :func:`close_gaps`: the straight UV segment from ``a`` to
+    ``b`` (clamped to the domain) maps within ``tol3d`` of one model point (a pole or
+    a degenerate edge, or a gap the file's tolerance covers).  The largest distance
+    found is kept in ``same.errors``."""
+    (u0, u1), (v0, v1) = base.domain
+
+    def same(a, b) -> bool:
+        s = np.linspace(0.0, 1.0, samples)[:, None]
+        uv = (1 - s) * np.asarray(a, float) + s * np.asarray(b, float)
+        uv = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+        X = base.evaluate(uv)
+        d = float(np.linalg.norm(X - X[0], axis=1).max())
+        d = min(d, float(np.linalg.norm(X - X[-1], axis=1).max()))
+        if d <= tol3d:
+            same.errors.append(d)
+            return True
+        return False
+
+    same.errors = []
+    return same

@@ -26,7 +26,7 @@ from geomkit.errors import (FileFormatError, InvalidInputError, InvalidSurfaceEr
                             MissingDependencyError)
 import re
 
-from geomkit.cad.loops import chain, clip_to_domain, close_gaps
+from geomkit.cad.loops import chain, clip_in_3d, clip_to_domain, same_point_3d, close_gaps
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.nurbs.surface import Surface, TrimCurve
 
@@ -47,7 +47,7 @@ def _flat_knots(knots, mults):
     return [float(k) for k, m in zip(knots, mults) for _ in range(m)]
 
 
-def _bspline_surface(bs, name, trim):
+def _bspline_surface(bs, name, trim, approx_error=0.0):
     nu, nv = bs.NbUPoles(), bs.NbVPoles()
     P = np.empty((nu, nv, 3))
     W = np.empty((nu, nv))
@@ -60,13 +60,14 @@ def _bspline_surface(bs, name, trim):
         bs = bs.Copy()
         bs.SetUNotPeriodic()
         bs.SetVNotPeriodic()
-        return _bspline_surface(bs, name, trim)
+        return _bspline_surface(bs, name, trim, approx_error)
     ku = _flat_knots([bs.UKnot(i) for i in range(1, bs.NbUKnots() + 1)],
                      [bs.UMultiplicity(i) for i in range(1, bs.NbUKnots() + 1)])
     kv = _flat_knots([bs.VKnot(i) for i in range(1, bs.NbVKnots() + 1)],
                      [bs.VMultiplicity(i) for i in range(1, bs.NbVKnots() + 1)])
     w = W if bs.IsURational() or bs.IsVRational() else None
-    return Surface(bs.UDegree(), bs.VDegree(), ku, kv, P, w, trim, name=name)
+    return Surface(bs.UDegree(), bs.VDegree(), ku, kv, P, w, trim, name=name,
+                   approx_error=approx_error)
 
 
 def _bspline_curve2d(c):
@@ -165,7 +166,8 @@ def read_step(path, skip_invalid: bool = False,
         from OCP.GeomConvert import GeomConvert
         from OCP.IFSelect import IFSelect_RetDone
         from OCP.STEPControl import STEPControl_Reader
-        from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED, TopAbs_WIRE
+        from OCP.TopAbs import (TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_VERTEX,
+                                TopAbs_WIRE)
         from OCP.TopExp import TopExp_Explorer
     except ImportError:
         raise MissingDependencyError(INSTALL_HINT) from None
@@ -178,6 +180,20 @@ def read_step(path, skip_invalid: bool = False,
         rd.SetSystemLengthUnit(mm)
     rd.TransferRoots()
     shape = rd.OneShape()
+    resolution = _resolution(p) or 0.0
+
+    def face_tolerance(face) -> float:
+        # the file's own tolerance at this face: its edges' and vertices' (OCC keeps
+        # what the file states or what the transfer needed), or the model resolution
+        tol = resolution
+        for kind in (TopAbs_EDGE, TopAbs_VERTEX):
+            tx = TopExp_Explorer(face, kind)
+            while tx.More():
+                tol = max(tol, BRep_Tool.Tolerance_s(cast_shape(
+                    "Edge" if kind == TopAbs_EDGE else "Vertex", tx.Current())))
+                tx.Next()
+        return tol
+
     surfaces, entities, skipped, gaps = [], [], [], []
     ex = TopExp_Explorer(shape, TopAbs_FACE)
     k = -1
@@ -203,7 +219,9 @@ def read_step(path, skip_invalid: bool = False,
                 if not w.IsSame(outer):
                     wires.append(w)
                 wx.Next()
-            loops = []
+            loops, repairs = [], []
+            base = _bspline_surface(bs, name, None)
+            ftol = face_tolerance(face0)
             periods = ((u1 - u0) * bs.IsUClosed(), (v1 - v0) * bs.IsVClosed())
             for w in wires:
                 pieces = []
@@ -223,10 +241,15 @@ def read_step(path, skip_invalid: bool = False,
                         pieces = chain(pieces, size, periods, domain)  # edge order, seam sides
                     pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
                     gaps += moved
-                    pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}")
+                    # what is left outside the domain or open: repaired when the
+                    # file's own tolerance covers it, measured in 3-D
+                    pieces, moved3 = clip_in_3d(pieces, base, ftol)
+                    same = same_point_3d(base, ftol)
+                    pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}", same)
                     gaps += g
+                    repairs += moved3 + same.errors
                     loops.append(pieces)
-            s = _bspline_surface(bs, name, loops or None)
+            s = _bspline_surface(bs, name, loops or None, max(repairs, default=0.0))
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: face {k}: {exc}") from None
