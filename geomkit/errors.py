@@ -17,6 +17,8 @@ __all__ = [
     "FileFormatError",
     "MissingDependencyError",
     "ToleranceNotMetWarning",
+    "MeshingError",
+    "FaceFailedWarning",
 ]
 
 
@@ -56,6 +58,15 @@ class FileFormatError(GeomkitError, ValueError):
 
 class MissingDependencyError(GeomkitError, ImportError):
     """An optional dependency needed for this operation is not installed."""
+
+
+class MeshingError(GeomkitError, RuntimeError):
+    """A face could not be triangulated (the message names the face and the cause)."""
+
+
+class FaceFailedWarning(UserWarning):
+    """One face of a model failed (e.g. its triangulation) and was left out of the
+    result; the result's stats name it and why.  The other faces are unaffected."""
 
 
 class ToleranceNotMetWarning(UserWarning):

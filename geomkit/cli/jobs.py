@@ -351,7 +351,9 @@ def _cmd_mesh(args) -> int:
             "vertices": int(mesh.vertices.shape[0]), "faces": int(mesh.faces.shape[0]),
             "units": _unit(case.units), "tol": args.tol,
             "max_deviation": mesh.max_deviation, "area": mesh.area,
-            "seconds": sum(st["seconds"] for st in mesh.stats["surfaces"])}
+            "seconds": sum(st.get("seconds", 0.0) for st in mesh.stats["surfaces"]),
+            "failed_surfaces": [i for i, st in enumerate(mesh.stats["surfaces"])
+                                if "failed" in st]}
     if args.json:
         print(json.dumps(info, indent=1))
     else:
@@ -359,6 +361,9 @@ def _cmd_mesh(args) -> int:
               f"{info['surfaces']} surface(s); measured max deviation "
               f"{info['max_deviation']:.3g} <= tol {args.tol:g} {info['units']}; "
               f"{info['seconds']:.2f} s")
+        if info["failed_surfaces"]:
+            print(f"left out ({len(info['failed_surfaces'])} surface(s) could not be "
+                  f"triangulated): {info['failed_surfaces'][:20]}")
         if note:
             print(note)
     return 0

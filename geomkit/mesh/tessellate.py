@@ -52,7 +52,8 @@ from geomkit._kernels.tess import triangle_deviation
 from geomkit._kernels.tess_lattice import cell_triangles
 from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, planar_trimmed
 from geomkit.validate import as_int
-from geomkit.errors import InvalidInputError, ToleranceNotMetWarning
+from geomkit.errors import (FaceFailedWarning, GeomkitError, InvalidInputError, MeshingError,
+                            ToleranceNotMetWarning)
 from geomkit.mesh.mesh import Mesh
 from geomkit.nurbs.surface import Surface, as_surfaces
 
@@ -175,7 +176,10 @@ def _triangulate_cut(lat, cells, cut, index, trim):
     ring_id = np.repeat(np.arange(len(cut)), np.diff(starts))
     polys = shapely.polygons(shapely.linearrings(ruv, indices=ring_id))
     pieces = shapely.intersection(polys, trim.region)
-    tri = shapely.constrained_delaunay_triangles(pieces)
+    try:
+        tri = shapely.constrained_delaunay_triangles(pieces)
+    except shapely.errors.GEOSException:
+        tri = np.array([_triangulate_piece(g) for g in pieces], dtype=object)
     parts, idx = shapely.get_parts(tri, return_index=True)
     if not len(parts):
         return np.empty((0, 3, 2)), np.empty(0, dtype=np.int64)
@@ -189,6 +193,25 @@ def _triangulate_cut(lat, cells, cut, index, trim):
     flip = area2[keep] < 0
     coords[flip] = coords[flip][:, ::-1]
     return coords, cut[idx[keep]]
+
+
+def _triangulate_piece(piece):
+    """One cut cell's piece of the trimmed region as triangles, when GEOS's constrained
+    triangulation of the batch fails on one of them ("Unable to find a convex corner"
+    on nearly collinear trim points): the piece alone, then its valid form, then an
+    unconstrained triangulation of its vertices keeping the triangles whose centre is
+    inside.  Every triangle is measured afterwards like any other, so the deviation
+    bound holds; only the last resort may leave slivers of the piece uncovered."""
+    import shapely
+
+    for g in (piece, shapely.make_valid(piece)):
+        try:
+            return shapely.constrained_delaunay_triangles(g)
+        except shapely.errors.GEOSException:
+            continue
+    tris = shapely.get_parts(shapely.delaunay_triangles(piece))
+    keep = [g for g in tris if shapely.contains(piece, shapely.centroid(g))]
+    return shapely.GeometryCollection(keep)
 
 
 class _Measured:
@@ -523,15 +546,31 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
     trim_target = float(trim_target)
     if len(surfaces) == 1:  # one surface: its arrays as they are, no concatenation
-        V, F, UV, dev, tuv, st = _tessellate_one(surfaces[0], tol, max_angle, max_edge, k,
-                                                 trim_target)
+        try:
+            V, F, UV, dev, tuv, st = _tessellate_one(surfaces[0], tol, max_angle, max_edge,
+                                                     k, trim_target)
+        except GeomkitError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - GEOS and numeric failures, named
+            raise MeshingError(f"the surface could not be triangulated "
+                               f"({type(exc).__name__}: {exc})") from exc
         return Mesh(V, F.astype(np.int64, copy=False), UV, np.zeros(len(V), dtype=np.int32),
                     np.zeros(len(F), dtype=np.int32), dev, tol, {"surfaces": [st]},
                     np.ascontiguousarray(tuv))
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        V, F, UV, dev, tuv, st = _tessellate_one(s, tol, max_angle, max_edge, k, trim_target)
+        try:
+            V, F, UV, dev, tuv, st = _tessellate_one(s, tol, max_angle, max_edge, k,
+                                                     trim_target)
+        except Exception as exc:  # noqa: BLE001 - reported: a warning and the stats
+            # one face never sinks the model: left out, named in the stats and a warning
+            why = f"{type(exc).__name__}: {exc}"
+            name = f"surface {i}" + (f" ({s.name})" if s.name else "")
+            warnings.warn(f"{name} left out of the mesh: {why}", FaceFailedWarning,
+                          stacklevel=3)
+            stats.append({"failed": why})
+            continue
         fuv.append(tuv)
         Vs.append(V)
         Fs.append(F + offset)
@@ -541,6 +580,9 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
         ds.append(dev)
         stats.append(st)
         offset += len(V)
+    if not Vs:
+        raise MeshingError("no surface could be triangulated: "
+                           + "; ".join(st["failed"] for st in stats[:3]))
     return Mesh(np.concatenate(Vs), np.concatenate(Fs).astype(np.int64), np.concatenate(UVs),
                 np.concatenate(vs), np.concatenate(fs), np.concatenate(ds), tol,
                 {"surfaces": stats}, np.ascontiguousarray(np.concatenate(fuv)))
