@@ -217,19 +217,18 @@ def clip_in_3d(pieces, base, tol3d: float, samples: int = 257):
         if worst > tol3d:
             out.append(c)
             continue
-        m, fit = map_pcurve(c, lambda u: np.clip(u, u0, u1), lambda v: np.clip(v, v0, v1),
-                            1e-9 * size)
+        m, _ = map_pcurve(c, lambda u: np.clip(u, u0, u1), lambda v: np.clip(v, v0, v1),
+                          1e-9 * size)
+        # the re-fit against its target, in 3-D: S(m(t)) against S(clip(c(t)))
+        q = m.degree
+        s = m.knots[q] + (t - t[0]) / (t[-1] - t[0]) * (m.knots[-q - 1] - m.knots[q])
+        Z = evaluate_trim_curve(m, s)[:, 0, :]
+        Z = np.column_stack([np.clip(Z[:, 0], u0, u1), np.clip(Z[:, 1], v0, v1)])
+        Y = np.column_stack([np.clip(X[:, 0], u0, u1), np.clip(X[:, 1], v0, v1)])
+        fit = float(np.linalg.norm(base.evaluate(Z) - base.evaluate(Y), axis=1).max())
         out.append(m)
-        moves.append(worst + fit * _speed(base))
+        moves.append(worst + fit)
     return out, moves
-
-
-def _speed(base) -> float:
-    """A bound of the surface's 3-D speed per UV unit (control net extent over the
-    smaller domain side): turns a UV fit error into a 3-D one."""
-    (u0, u1), (v0, v1) = base.domain
-    return float(base.size) / max(min(u1 - u0, v1 - v0), 1e-300) * max(base.degree_u,
-                                                                      base.degree_v)
 
 
 def same_point_3d(base, tol3d: float, samples: int = 17):
