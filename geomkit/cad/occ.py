@@ -65,6 +65,7 @@ _OLD_ARRAY_NAMES = {
     "Array1_double": ("OCP.TColStd", "TColStd_Array1OfReal"),
     "Array1_int": ("OCP.TColStd", "TColStd_Array1OfInteger"),
     "Array2_double": ("OCP.TColStd", "TColStd_Array2OfReal"),
+    "Array1_gp_Pnt": ("OCP.TColgp", "TColgp_Array1OfPnt"),
     "Array2_gp_Pnt": ("OCP.TColgp", "TColgp_Array2OfPnt"),
     "Array1_gp_Pnt2d": ("OCP.TColgp", "TColgp_Array1OfPnt2d"),
 }

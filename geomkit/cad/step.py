@@ -1,14 +1,22 @@
 """Reading STEP files through Open CASCADE (the optional ``cadquery-ocp`` extra).
 
-Every face is converted with ``BRepBuilderAPI_NurbsConvert``: the face's *bounded*
-patch becomes a ``Geom_BSplineSurface`` (exact for B-spline, Bezier, plane, cylinder,
-cone, sphere, torus, revolution and extrusion surfaces; offset surfaces are
-approximated by OCC) and its pcurves are re-expressed on it consistently.  Each wire's
-pcurves (``Geom2dConvert``) become a trim loop, outer wire first.  Real files' pcurves
-meet within the file's tolerance, not exactly: gaps between consecutive pieces are
-bridged by straight UV segments (counted in ``gaps_closed``, largest in ``max_gap``),
-as for IGES.  Faces that still cannot be converted are an error unless
-``skip_unsupported=True`` (then listed in ``skipped``).
+OCC reads the file and builds the B-rep; geomkit converts each face:
+
+* B-spline and Bezier faces are taken as they are, with the file's pcurves;
+* planes, cylinders, cones, spheres, tori and extrusions / revolutions of B-spline
+  curves become geomkit's own exact patches (:mod:`geomkit.cad.elementary`), the
+  file's pcurves carried onto them;
+* anything else (offset surfaces, sweeps of other curves) goes through
+  ``BRepBuilderAPI_NurbsConvert``, and the drift of OCC's re-approximated pcurves
+  from the edges' 3-D curves is measured.
+
+Each wire's pcurves become a trim loop, outer wire first.  Real files' pcurves meet
+within the file's tolerance, not exactly: gaps between consecutive pieces are bridged
+by straight UV segments (counted in ``gaps_closed``, largest in ``max_gap``), as for
+IGES; loops that leave the domain or stay open by more are repaired when the repair,
+measured in 3-D, is within the face's own tolerance.  Every conversion error, drift and
+repair is stated as the face's ``approx_error``.  Faces that still cannot be converted
+are an error unless ``skip_unsupported=True`` (then listed in ``skipped``).
 
 Coordinates stay in the file's length unit (``units``); ``resolution`` is the file's
 ``UNCERTAINTY_MEASURE_WITH_UNIT`` length value.  Face orientation is not carried
@@ -26,8 +34,10 @@ from geomkit.errors import (FileFormatError, InvalidInputError, InvalidSurfaceEr
                             MissingDependencyError)
 import re
 
+from geomkit.cad.elementary import carry_pcurve, elementary_patch
 from geomkit.cad.loops import chain, clip_in_3d, clip_to_domain, same_point_3d, close_gaps
 from geomkit.cad.iges.reader import IgesResult, Skipped
+from geomkit.mesh.tessellate import closed_directions
 from geomkit.nurbs.surface import Surface, TrimCurve
 
 __all__ = ["read_step"]
@@ -82,6 +92,26 @@ def _bspline_curve2d(c):
     return TrimCurve.create(c.Degree(), k, P, W if c.IsRational() else None)
 
 
+def _drift(edge, pcurve, first: float, last: float, base, samples: int = 9) -> float:
+    """Largest 3-D distance between ``base`` along an edge's (converted) pcurve and the
+    edge's 3-D curve at the same parameters: OCC's re-approximated pcurve's error,
+    plus the file's own edge tolerance."""
+    from OCP.BRep import BRep_Tool
+
+    from geomkit.cad.occ import xyz
+
+    c3 = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    if c3 is None or not np.allclose(BRep_Tool.Range_s(edge), (first, last), rtol=0,
+                                     atol=1e-12 * max(1.0, abs(first), abs(last))):
+        return BRep_Tool.Tolerance_s(edge)  # no 3-D curve on the same range
+    t = np.linspace(first, last, samples)
+    uv = np.array([[q.X(), q.Y()] for q in (pcurve.Value(x) for x in t)])
+    (u0, u1), (v0, v1) = base.domain
+    uv = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+    X = np.array([xyz(c3.Value(x)) for x in t])
+    return float(np.linalg.norm(base.evaluate(uv) - X, axis=1).max())
+
+
 def _wire_edges(w, face) -> list:
     """The edges of wire ``w`` in connection order (``BRepTools_WireExplorer``); when
     that walk stops early (it follows vertices within their tolerance, and a file read
@@ -104,6 +134,43 @@ def _wire_edges(w, face) -> list:
         every.append(cast_shape("Edge", ex.Current()))
         ex.Next()
     return walk if len(walk) >= len(every) else every
+
+
+def _pcurves(face) -> list:
+    """Per wire of ``face`` (outer first): ``(edge, pcurve, first, last, TrimCurve)``
+    for its edges in connection order, each TrimCurve oriented along the wire."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepTools import BRepTools
+    from OCP.Geom2d import Geom2d_TrimmedCurve
+    from OCP.Geom2dConvert import Geom2dConvert
+    from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
+    from OCP.TopExp import TopExp_Explorer
+
+    from geomkit.cad.occ import cast_shape
+
+    outer = BRepTools.OuterWire_s(face)
+    wires = [outer]
+    wx = TopExp_Explorer(face, TopAbs_WIRE)
+    while wx.More():
+        w = cast_shape("Wire", wx.Current())
+        if not w.IsSame(outer):
+            wires.append(w)
+        wx.Next()
+    out = []
+    for w in wires:
+        edges = []
+        for e in _wire_edges(w, face):
+            f, l = BRep_Tool.Range_s(e, face)
+            c2 = BRep_Tool.CurveOnSurface_s(e, face, f, l)
+            if c2 is None:
+                raise ValueError("an edge without a pcurve")
+            bc = Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(c2, f, l))
+            if e.Orientation() == TopAbs_REVERSED:
+                bc.Reverse()
+            edges.append((e, c2, f, l, _bspline_curve2d(bc)))
+        if edges:
+            out.append(edges)
+    return out
 
 
 def _file_units(rd):
@@ -161,13 +228,10 @@ def read_step(path, skip_invalid: bool = False,
         from OCP.BRep import BRep_Tool
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
         from OCP.BRepTools import BRepTools
-        from OCP.Geom2d import Geom2d_TrimmedCurve
-        from OCP.Geom2dConvert import Geom2dConvert
         from OCP.GeomConvert import GeomConvert
         from OCP.IFSelect import IFSelect_RetDone
         from OCP.STEPControl import STEPControl_Reader
-        from OCP.TopAbs import (TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_VERTEX,
-                                TopAbs_WIRE)
+        from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
         from OCP.TopExp import TopExp_Explorer
     except ImportError:
         raise MissingDependencyError(INSTALL_HINT) from None
@@ -203,37 +267,48 @@ def read_step(path, skip_invalid: bool = False,
         ex.Next()
         name = f"face{k}"
         try:
-            kind = BRep_Tool.Surface_s(face0).DynamicType().Name()
-            if kind in ("Geom_BSplineSurface", "Geom_BezierSurface"):
-                face = face0  # already bounded and exact; pcurves as in the file
-            else:  # the face's bounded patch (elementary, swept, offset, trimmed)
-                face = cast_shape("Face", BRepBuilderAPI_NurbsConvert(face0, True).Shape())
-            bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
-            u0, u1, v0, v1 = bs.Bounds()
-            domain = ((u0, u1), (v0, v1))
-            outer = BRepTools.OuterWire_s(face)
-            wires = [outer]
-            wx = TopExp_Explorer(face, TopAbs_WIRE)
-            while wx.More():
-                w = cast_shape("Wire", wx.Current())
-                if not w.IsSame(outer):
-                    wires.append(w)
-                wx.Next()
-            loops, repairs = [], []
-            base = _bspline_surface(bs, name, None)
+            surf0 = BRep_Tool.Surface_s(face0)
+            kind = surf0.DynamicType().Name()
+            face, patch, converted = face0, None, False
+            raw = _pcurves(face0)
+            if kind not in ("Geom_BSplineSurface", "Geom_BezierSurface"):
+                # plane, cylinder, cone, sphere, torus, extrusion and revolution of a
+                # B-spline: geomkit's own exact patch over the face's pcurves, which
+                # are carried onto it (measured)
+                box = None
+                if raw:
+                    P = np.concatenate([c.control_points for w in raw for *_, c in w])
+                    box = (*P.min(axis=0), *P.max(axis=0))
+                patch = elementary_patch(surf0, BRepTools.UVBounds_s(face0), name, box)
+            if patch is not None:
+                base = patch[0]
+            else:
+                if kind not in ("Geom_BSplineSurface", "Geom_BezierSurface"):
+                    # offset, other swept: OCC's bounded patch, its pcurves
+                    # re-approximated by OCC (their drift is measured below)
+                    face = cast_shape("Face",
+                                      BRepBuilderAPI_NurbsConvert(face0, True).Shape())
+                    converted = True
+                    raw = _pcurves(face)
+                bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
+                base = _bspline_surface(bs, name, None)
+            (u0, u1), (v0, v1) = domain = base.domain
+            loops, repairs = [], [] if patch is None else [patch[3]]
             ftol = face_tolerance(face0)
-            periods = ((u1 - u0) * bs.IsUClosed(), (v1 - v0) * bs.IsVClosed())
-            for w in wires:
+            if patch is None:
+                closed = bs.IsUClosed(), bs.IsVClosed()
+            else:  # a whole turn: the patch's opposite edges coincide
+                closed = closed_directions(base, base.size)
+            periods = ((u1 - u0) * closed[0], (v1 - v0) * closed[1])
+            for wire in raw:
                 pieces = []
-                for e in _wire_edges(w, face):
-                    f, l = BRep_Tool.Range_s(e, face)
-                    c2 = BRep_Tool.CurveOnSurface_s(e, face, f, l)
-                    if c2 is None:
-                        raise ValueError(f"edge without a pcurve on {name}")
-                    bc = Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(c2, f, l))
-                    if e.Orientation() == TopAbs_REVERSED:
-                        bc.Reverse()
-                    pieces.append(_bspline_curve2d(bc))
+                for e, c2, f, l, c in wire:
+                    if patch is not None:
+                        c, err = carry_pcurve(c, patch)
+                        repairs.append(err)
+                    elif converted:
+                        repairs.append(_drift(e, c2, f, l, base))
+                    pieces.append(c)
                 if pieces:
                     size = max(u1 - u0, v1 - v0)
                     if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size
@@ -249,7 +324,9 @@ def read_step(path, skip_invalid: bool = False,
                     gaps += g
                     repairs += moved3 + same.errors
                     loops.append(pieces)
-            s = _bspline_surface(bs, name, loops or None, max(repairs, default=0.0))
+            s = Surface(base.degree_u, base.degree_v, base.knots_u, base.knots_v,
+                        base.control_points, base.weights, loops or None, name=name,
+                        approx_error=max(repairs, default=0.0))
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: face {k}: {exc}") from None

@@ -28,6 +28,7 @@ _R = np.array([0.0, 1 / 3, 2 / 3, 1.0])
 _B = np.array([[(1 - r) ** 3, 3 * r * (1 - r) ** 2, 3 * r * r * (1 - r), r ** 3] for r in _R])
 _BINV = np.linalg.inv(_B)
 _CHECK = np.array([0.08, 0.17, 0.28, 0.5, 0.61, 0.75, 0.92])
+_MAX_SPANS = 20000
 _CB = np.array([[(1 - r) ** 3, 3 * r * (1 - r) ** 2, 3 * r * r * (1 - r), r ** 3] for r in _CHECK])
 
 
@@ -53,27 +54,35 @@ def map_pcurve(c: TrimCurve, fu, fv, tol: float):
     brk = np.unique(c.knots[p: c.knots.size - p])
 
     def f(t):
-        t = np.clip(np.atleast_1d(t), brk[0], brk[-1])
+        t = np.clip(t, brk[0], brk[-1])
         return _apply(evaluate_trim_curve(c, t)[:, 0, :], fu, fv)
 
-    pts, knots = [], []
-    err = 0.0
-    todo = [(float(a), float(b)) for a, b in zip(brk[:-1], brk[1:])][::-1]
-    depth = 0
-    while todo:
-        a, b = todo.pop()
+    # all spans of one halving level are fitted and checked in one evaluation
+    a, b = brk[:-1].copy(), brk[1:].copy()
+    done_a, done_bez, errs = [], [], [0.0]
+    hmin = 1e-9 * (brk[-1] - brk[0])
+    while a.size:
         h = b - a
-        bez = _BINV @ f(a + h * _R)
-        e = float(np.abs(_CB @ bez - f(a + h * _CHECK)).max())
-        if e > tol and h > 1e-9 * (brk[-1] - brk[0]) and depth < 20000:
-            todo += [(a + h / 2, b), (a, a + h / 2)]
-            depth += 1
-            continue
-        err = max(err, e)
-        if not pts:
-            pts.append(bez[0])
-            knots += [a] * 4
-        pts += [bez[1], bez[2], bez[3]]
-        knots += [b] * 3
-    knots.append(knots[-1])
-    return TrimCurve.create(3, knots, np.array(pts)), err
+        T = np.concatenate([(a[:, None] + h[:, None] * _R).ravel(),
+                            (a[:, None] + h[:, None] * _CHECK).ravel()])
+        X = f(T)
+        k = a.size
+        bez = np.einsum("ij,kjd->kid", _BINV, X[:4 * k].reshape(k, 4, 2))
+        chk = X[4 * k:].reshape(k, 7, 2)
+        e = np.abs(np.einsum("ij,kjd->kid", _CB, bez) - chk).max(axis=(1, 2))
+        split = (e > tol) & (h > hmin)
+        if sum(len(x) for x in done_a) + 2 * int(split.sum()) > _MAX_SPANS:
+            split[:] = False  # give up refining: the error found is returned
+        keep = ~split
+        done_a.append(a[keep])
+        done_bez.append(bez[keep])
+        errs.append(float(e[keep].max(initial=0.0)))
+        m = a[split] + h[split] / 2
+        a, b = np.concatenate([a[split], m]), np.concatenate([m, b[split]])
+    A = np.concatenate(done_a)
+    order = np.argsort(A, kind="stable")
+    bez = np.concatenate(done_bez)[order]
+    B = np.concatenate([A[order][1:], brk[-1:]])
+    pts = np.concatenate([bez[:1, 0], bez[:, 1:].reshape(-1, 2)])
+    knots = np.concatenate([[A[order][0]] * 4, np.repeat(B[:-1], 3), [B[-1]] * 4])
+    return TrimCurve.create(3, knots, pts), max(errs)

@@ -223,14 +223,22 @@ def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
         if c.is_polyline:
             out.append(c.control_points)
             continue
-        t = np.unique(np.concatenate([
-            np.linspace(a, b, per_segment, endpoint=False)
-            for a, b in zip(c.knots[c.degree:-c.degree - 1], c.knots[c.degree + 1:-c.degree])
-            if b > a] + [c.knots[-1:]]))
+        a, b = c.knots[c.degree:-c.degree - 1], c.knots[c.degree + 1:-c.degree]
+        a, b = a[b > a], b[b > a]  # the spans, increasing: the samples need no sort
+        r = np.arange(per_segment) / per_segment
+        t = np.concatenate([(a[:, None] + (b - a)[:, None] * r).ravel(), c.knots[-1:]])
         res = np.empty((t.shape[0], 1, 2))
         curve_points(c.homogeneous, c.degree, c.knots, t, 0, res)
         out.append(res[:, 0, :])
     return np.concatenate(out)
+
+
+def _three_distinct(q: np.ndarray) -> bool:
+    """Whether the rows of ``q`` hold at least three distinct values (O(n))."""
+    d0 = (q != q[0]).any(axis=1)
+    if not d0.any():
+        return False
+    return bool((d0 & (q != q[int(np.argmax(d0))]).any(axis=1)).any())
 
 
 def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
@@ -261,7 +269,7 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
     pts = loop_samples(loop)
     x, y = pts[:, 0], pts[:, 1]
     area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-    if abs(area) <= (close * close) or np.unique(np.round(pts / close), axis=0).shape[0] < 3:
+    if abs(area) <= (close * close) or not _three_distinct(np.round(pts / close)):
         raise InvalidTrimError(f"degenerate loop: enclosed area {area:.3g} in UV", field)
 
 
