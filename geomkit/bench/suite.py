@@ -23,7 +23,8 @@ from pathlib import Path
 from geomkit.errors import InvalidInputError
 from geomkit.bench._common import FIELDS
 
-ENGINES = ("evaluation", "tessellate", "projection", "section", "distance", "collision")
+ENGINES = ("evaluation", "tessellate", "projection", "section", "distance", "collision",
+           "parts")
 FILES = ("bench.json", "bench.md", "bench.png")
 
 #: Per engine: (module, keyword arguments of its ``sweep``) for quick and full mode.
@@ -50,10 +51,16 @@ CONFIG = {
                       tols=(1e-3, 1e-6, 1e-9, 1e-12), repeat=5)),
     "collision": ("collision", dict(tols=(1e-1, 3e-2, 1e-2), poses=100),
                   dict(tols=(1e-1, 3e-2, 1e-2, 3e-3), poses=200)),
+    "parts": ("parts", dict(),
+              dict(parts=("nx9_face_recognition_ap214.stp", "ug16_io1_ap214.stp",
+                          "sw2018_base_interface_ap203.step", "sw2013_featuretype_ap214.step",
+                          "proe_as1_ap203.stp", "euclid_screw_ap214.step",
+                          "nist_ctc_01_ap203.stp", "nist_ftc_06_ap242.stp",
+                          "nist_ftc_07_ap242.stp"))),
 }
 
 REFERENCES = {"evaluation": "occ", "tessellate": "occ", "projection": "occ", "section": "occ",
-              "distance": "occ", "collision": "coal"}
+              "distance": "occ", "collision": "coal", "parts": "occ"}
 
 
 def machine_info() -> dict:

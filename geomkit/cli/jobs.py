@@ -268,7 +268,7 @@ def _cmd_section(args) -> int:
     sections = []
     try:
         for k, pl in enumerate(planes):
-            sec = plane_section(case.surfaces, pl, args.tol)
+            sec = plane_section(case.surfaces, pl, args.tol, gap=case.gap or 0.0)
             sec.units = u  # the CSV and DXF writers state it
             sections.append(sec)
             if update:
@@ -286,13 +286,15 @@ def _cmd_section(args) -> int:
                      "closed": int(sum(sec.closed)), "points": int(len(sec.points)),
                      "curve_points": int(sum(len(c) for c in sec.curves)),
                      "max_residual": sec.max_residual,
-                     "max_chord_error": sec.max_chord_error})
+                     "max_chord_error": sec.max_chord_error,
+                     "max_gap_bridged": sec.max_gap_bridged})
     if png:
         files.append(str(plot_section(sections, targets[png], args.overwrite, **rk)))
     files += _reports.write(args, "section", targets, sections=sections,
                             surfaces=case.surfaces, part=args.surface, **rk)
     summary = {"surface_file": args.surface, "surfaces": len(case.surfaces),
-               "units": _unit(u), "model": model, "tol": args.tol, "planes": rows,
+               "units": _unit(u), "model": model, "tol": args.tol,
+               "gap": case.gap or 0.0, "planes": rows,
                "files": files + [str(targets["section_summary.json"])]}
     write_json(summary, targets["section_summary.json"], args.overwrite, **rk)
     if args.json:

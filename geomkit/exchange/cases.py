@@ -56,6 +56,10 @@ class Case:
     units: str | None = None
     skipped: list = field(default_factory=list)
     """Faces left out of a CAD read (``skip_unsupported``): ``(id, reason)`` pairs."""
+    gap: float | None = None
+    """The model's edge gap (faces sharing an edge meet within it), measured on the
+    file's topology (STEP); None when the file gives none.  Sections join curve ends
+    across it (:func:`geomkit.plane_section`'s ``gap``)."""
 
 
 # --------------------------------------------------------------------- dicts
@@ -223,7 +227,7 @@ def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
         from geomkit.cad.step import read_step as read
     res = read(p, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
     return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
-                skipped=list(res.skipped))
+                skipped=list(res.skipped), gap=getattr(res, "edge_gap", None))
 
 
 def _reader_units(units):

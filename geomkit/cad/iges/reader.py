@@ -99,6 +99,11 @@ class IgesResult:
     edge_fit_error : float, largest model-space distance between a 510 face's edges
         that carry no pcurves and their projected UV polylines (within the model
         resolution; 0 when no edge was projected).
+    edge_gap : float or None, the model's gap measured on the edges its faces share
+        (STEP: :func:`geomkit.cad.step.edge_gaps`); None when the file gives no
+        topology to measure it on.
+    edge_tolerance : float or None, the largest edge tolerance the file states (STEP,
+        as Open CASCADE keeps it).
     """
 
     surfaces: list
@@ -111,6 +116,8 @@ class IgesResult:
     resolution: float | None = None
     pcurve_error: float = 0.0
     edge_fit_error: float = 0.0
+    edge_gap: float | None = None
+    edge_tolerance: float | None = None
 
 
 class _Reader:
