@@ -214,6 +214,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     for c in curves:
         c["X"] = _points(ev, c["uv"], c["sid"])
     bridged = [0.0]
+    curves = _drop_shared_edges(curves, gap + 2 * tol)
     curves = _join(curves, max(tol, gap), bridged, exact=tol)
     if gap > 0:
         curves = _join_across_edges(curves, surfs, gap, bridged)
@@ -324,6 +325,57 @@ def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
         if not len(act):
             break
     return a
+
+
+def _near_polyline(X, Y, tol) -> bool:
+    """Every point of ``X`` (n, 3) within ``tol`` of the polyline ``Y`` (m, 3) (closed
+    polylines are passed with their first point repeated)."""
+    from scipy.spatial import cKDTree
+
+    if len(Y) == 1:
+        return bool((np.linalg.norm(X - Y[0], axis=1) <= tol).all())
+    _, j = cKDTree(Y).query(X)
+    best = np.full(len(X), np.inf)
+    for a in (np.maximum(j - 1, 0), j):   # the two segments at the nearest vertex
+        b = np.minimum(a + 1, len(Y) - 1)
+        A, AB = Y[a], Y[b] - Y[a]
+        L2 = np.einsum("ij,ij->i", AB, AB)
+        t = np.clip(np.einsum("ij,ij->i", X - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+        best = np.minimum(best, np.linalg.norm(X - (A + t[:, None] * AB), axis=1))
+    return bool((best <= tol).all())
+
+
+def _drop_shared_edges(curves, tol):
+    """Where the plane contains an edge two faces share, both faces' sections run along
+    it: the same curve twice (joined, a closed loop of zero area), or one face's piece
+    of the edge inside the other's longer one.  A curve longer than ``4 tol`` that lies
+    within ``tol`` (the model gap and two chord errors) of a curve of other faces
+    everywhere adds nothing to the section and is dropped (of two that contain each
+    other, the earlier).  Shorter pieces are kept: a sliver face narrower than the gap
+    is joined between its neighbours, not dropped."""
+    def poly(c):
+        X = c["X"]
+        return np.vstack([X, X[:1]]) if c["closed"] else X
+
+    if len(curves) < 2:
+        return curves
+    amin = np.array([c["X"].min(axis=0) for c in curves])
+    amax = np.array([c["X"].max(axis=0) for c in curves])
+    faces = [set(np.unique(c["sid"]).tolist()) for c in curves]
+    drop = set()
+    for i, a in enumerate(curves):
+        if np.linalg.norm(np.diff(a["X"], axis=0), axis=1).sum() <= 4 * tol:
+            continue
+        # the curves whose box (grown by tol) holds a's: a may lie along them
+        inside = np.flatnonzero((amin[i] >= amin - tol).all(axis=1)
+                                & (amax[i] <= amax + tol).all(axis=1))
+        for j in inside:
+            if j == i or j in drop or faces[i] & faces[j]:
+                continue
+            if _near_polyline(a["X"], poly(curves[j]), tol):
+                drop.add(i)
+                break
+    return [c for k, c in enumerate(curves) if k not in drop]
 
 
 def _join(curves, tol, bridged=None, exact=0.0):

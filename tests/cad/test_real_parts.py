@@ -1,6 +1,6 @@
 """Real parts read whole with the default options, checked against Open CASCADE.
 
-Every part in ``tests/data/parts`` (9 files from NIST, SolidWorks, NX, Unigraphics,
+Every part in ``tests/data/parts`` (11 files from NIST, SolidWorks, NX, Unigraphics,
 Pro/ENGINEER, EUCLID and Inventor; see its README) is read with the defaults, gives
 OCC's face count, and every face is checked both ways against OCC's face: points of
 geomkit's mesh lie on OCC's face, OCC's mesh nodes lie on geomkit's trimmed face, within

@@ -19,6 +19,7 @@ pytestmark = [pytest.mark.occ,
               pytest.mark.skipif(not HAVE_OCP, reason="reading STEP needs cadquery-ocp")]
 
 FTC07 = DATA / "parts" / "nist_ftc_07_ap242.stp"
+CTC05 = DATA / "parts" / "nist_ctc_05_ap203.stp"
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +102,15 @@ def test_cli_section_uses_the_file_gap(tmp_path):
     summary = json.loads((out / "section_summary.json").read_text())
     assert summary["gap"] > 0
     assert summary["planes"][0]["closed"] == summary["planes"][0]["curves"] == 7
+
+
+def test_symmetry_plane_closes_as_occ_does():
+    """NIST CTC-05 (AP203, inch) cut by its symmetry plane y = 0, which contains edges
+    that faces share (seams of split cylinders, planar faces' edges): each such edge is
+    kept once, so the outline is OCC's one closed wire (before: 16 pieces, 4 closed)."""
+    case = geomkit.load_case(CTC05)
+    b = np.array([s.bounds for s in case.surfaces])
+    tol = 1e-5 * float(np.linalg.norm(b[:, 1].max(0) - b[:, 0].min(0)))
+    sec = geomkit.plane_section(case.surfaces, [0.0, 1.0, 0.0, 0.0], tol, gap=case.gap)
+    assert (len(sec.curves), sum(sec.closed)) == _occ_wires(CTC05, (0, 1, 0), 0.0, case.gap) \
+        == (1, 1)
