@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from geomkit._kernels import trim_feet as _tf
@@ -369,7 +370,8 @@ def _deep_cells(s, O, g, G=DEEP_GRID):
     *deep* (1) when, grown by ``g`` and rounding, it meets no obstacle box of ``O``
     (k, 4) and no domain side, and its centre is INSIDE the face: then the cell holds
     no boundary point and is connected, so all of it is inside the face beyond ``g``
-    (the argument of :func:`_deep`)."""
+    (the argument of :func:`_deep`).  The same holds for each 4-connected run of such
+    cells, so one centre per run is classified."""
     (u0, u1), (v0, v1) = s.domain
     du, dv = (u1 - u0) / G, (v1 - v0) / G
     eu, ev = g + 1e-12 * (u1 - u0), g + 1e-12 * (v1 - v0)
@@ -383,12 +385,18 @@ def _deep_cells(s, O, g, G=DEEP_GRID):
     jb = np.clip(np.floor((O[:, 3] + ev - v0) / dv).astype(np.int64) + 1, 0, G - 1)
     for a, b, c, d in zip(ia, ib, ja, jb):  # one cell of slack each way (rounding)
         free[a:b + 1, c:d + 1] = False
-    out = np.zeros((G, G), dtype=np.int8)
-    i, j = np.nonzero(free)
-    if i.size:
-        uv = np.c_[u0 + (i + 0.5) * du, v0 + (j + 0.5) * dv]
-        out[i, j] = s.classify_uv(uv) == INSIDE
-    return out
+    # a 4-connected run of free cells holds no boundary point either, so all of it is
+    # inside or all outside: one centre per run is classified
+    lab, n = ndimage.label(free)
+    if n == 0:
+        return np.zeros((G, G), dtype=np.int8)
+    labels, first = np.unique(lab.ravel(), return_index=True)
+    first = first[labels > 0]
+    i, j = np.unravel_index(first, free.shape)
+    uv = np.c_[u0 + (i + 0.5) * du, v0 + (j + 0.5) * dv]
+    val = np.zeros(n + 1, dtype=np.int8)
+    val[labels[labels > 0]] = s.classify_uv(uv) == INSIDE
+    return val[lab]
 
 
 def _segment_hulls(seg, deg, sel):
