@@ -214,6 +214,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     for c in curves:
         c["X"] = _points(ev, c["uv"], c["sid"])
     bridged = [0.0]
+    curves = _split_at_poles(curves, surfs)
     curves = _drop_shared_edges(curves, gap + 2 * tol)
     curves = _join(curves, max(tol, gap), bridged, exact=tol)
     if gap > 0:
@@ -327,6 +328,75 @@ def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     return a
 
 
+def _collapsed_sides(s) -> np.ndarray:
+    """(4,) bool: which sides of the domain (u0, u1, v0, v1) map to one point (a pole,
+    a cone's apex)."""
+    P = s.control_points
+    eps = 1e-10 * s.size
+    return np.array([np.ptp(row, axis=0).max() <= eps
+                     for row in (P[0], P[-1], P[:, 0], P[:, -1])])
+
+
+def _split_at_poles(curves, surfs):
+    """Curves cut at the points where they touch a pole of their surface.
+
+    At a pole (a side of the domain that is one point) a section may turn into any
+    direction: the plane through a cone's axis meets it in two generators joined at the
+    apex, and the tracer walks them out and back (apex, base, apex, other base, apex).
+    Cut there, and a piece from the pole back to it cut again where it turns, the
+    pieces join again at the apex as the section really runs, and a piece walked twice
+    is one curve (:func:`_drop_shared_edges`)."""
+    poles = {}
+    out = []
+    for c in curves:
+        k = int(c["sid"][0])
+        if k not in poles:
+            s = surfs[k]
+            (u0, u1), (v0, v1) = s.domain
+            e = 1e-12 * max(u1 - u0, v1 - v0)
+            poles[k] = (_collapsed_sides(s), (u0, u1, v0, v1), e)
+        sides, (u0, u1, v0, v1), e = poles[k]
+        if not sides.any() or np.any(c["sid"] != k):
+            out.append(c)
+            continue
+        uv = c["uv"]
+        at = np.zeros(len(uv), bool)
+        for side, (col, val) in zip(sides, ((0, u0), (0, u1), (1, v0), (1, v1))):
+            if side:
+                at |= np.abs(uv[:, col] - val) <= e
+        cut = np.flatnonzero(at)
+        if c["closed"]:
+            if not cut.size:
+                out.append(c)
+                continue
+            r = int(cut[0])   # start at a pole, end there again
+            idx = np.r_[r:len(uv), 0:r + 1]
+            c = {**c, "closed": False, **{key: c[key][idx] for key in ("uv", "sid", "X")}}
+            cut = np.flatnonzero(at[idx])
+        cut = cut[(cut > 0) & (cut < len(c["uv"]) - 1)]
+        if not cut.size:
+            out.append(c)
+            continue
+        bounds = np.r_[0, cut, len(c["uv"]) - 1]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if b <= a:
+                continue
+            X = c["X"][a:b + 1]
+            if at[a] and at[b] and b - a >= 2:   # pole to pole: out and back, or a
+                # loop through the pole; cut at the farthest point (the turn)
+                m = a + int(np.argmax(np.linalg.norm(X - X[0], axis=1)))
+                if 0 < m - a < b - a:
+                    pieces = ((a, m), (m, b))
+                else:
+                    pieces = ((a, b),)
+            else:
+                pieces = ((a, b),)
+            for i, j in pieces:
+                out.append({**c, "closed": False,
+                            **{key: c[key][i:j + 1] for key in ("uv", "sid", "X")}})
+    return out
+
+
 def _near_polyline(X, Y, tol) -> bool:
     """Every point of ``X`` (n, 3) within ``tol`` of the polyline ``Y`` (m, 3) (closed
     polylines are passed with their first point repeated)."""
@@ -348,10 +418,11 @@ def _near_polyline(X, Y, tol) -> bool:
 def _drop_shared_edges(curves, tol):
     """Where the plane contains an edge two faces share, both faces' sections run along
     it: the same curve twice (joined, a closed loop of zero area), or one face's piece
-    of the edge inside the other's longer one.  A curve longer than ``4 tol`` that lies
-    within ``tol`` (the model gap and two chord errors) of a curve of other faces
-    everywhere adds nothing to the section and is dropped (of two that contain each
-    other, the earlier).  Shorter pieces are kept: a sliver face narrower than the gap
+    of the edge inside the other's longer one; a closed face whose seam lies in the
+    plane gives the seam twice (at both ends of its parameter range).  A curve longer
+    than ``4 tol`` that lies within ``tol`` (the model gap and two chord errors) of
+    another curve everywhere adds nothing to the section and is dropped (of two that
+    contain each other, the earlier).  Shorter pieces are kept: a sliver face narrower than the gap
     is joined between its neighbours, not dropped."""
     def poly(c):
         X = c["X"]
@@ -361,7 +432,6 @@ def _drop_shared_edges(curves, tol):
         return curves
     amin = np.array([c["X"].min(axis=0) for c in curves])
     amax = np.array([c["X"].max(axis=0) for c in curves])
-    faces = [set(np.unique(c["sid"]).tolist()) for c in curves]
     drop = set()
     for i, a in enumerate(curves):
         if np.linalg.norm(np.diff(a["X"], axis=0), axis=1).sum() <= 4 * tol:
@@ -370,7 +440,7 @@ def _drop_shared_edges(curves, tol):
         inside = np.flatnonzero((amin[i] >= amin - tol).all(axis=1)
                                 & (amax[i] <= amax + tol).all(axis=1))
         for j in inside:
-            if j == i or j in drop or faces[i] & faces[j]:
+            if j == i or j in drop:
                 continue
             if _near_polyline(a["X"], poly(curves[j]), tol):
                 drop.add(i)

@@ -58,3 +58,20 @@ def test_a_sliver_piece_is_not_taken_for_a_shared_edge():
     sec = geomkit.plane_section([A, S], [0, 0, 1, 0], 1e-6, gap=2e-3)
     assert len(sec.curves) == 1
     assert np.isclose(sec.curves[0][:, 0].max(), 1.0004)
+
+
+def test_plane_through_a_cones_axis_gives_its_two_generators():
+    """A cone cut by a plane through its axis meets it in two generators joined at the
+    apex (a pole of the patch).  The tracer walks them out and back; the section is the
+    open V from base to apex to base (NIST CTC-01 at z = -25 has such a cone)."""
+    p, q, U, V, P, W = revolve(line_curve([0, 0, 0], [2, 0, 5], 0, 1), [0, 0, 0], [0, 0, 1],
+                               0.0, 2 * np.pi)
+    cone = geomkit.Surface(p, q, U, V, P, W)     # apex at u = 0 (the meridian's start)
+    sec = geomkit.plane_section(cone, [0, 1, 0, 0], 1e-6)
+    assert len(sec.curves) == 1 and not sec.closed[0]
+    X = sec.curves[0]
+    ends = sorted([tuple(np.round(X[0], 9)), tuple(np.round(X[-1], 9))])
+    assert ends == [(-2.0, 0.0, 5.0), (2.0, 0.0, 5.0)]
+    assert np.isclose(np.linalg.norm(X, axis=1).min(), 0.0, atol=1e-12)   # through the apex
+    # each generator once: the polyline is as long as the two generators
+    assert np.isclose(np.linalg.norm(np.diff(X, axis=0), axis=1).sum(), 2 * np.hypot(2, 5))
