@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 import geomkit
-from geomkit.section.plane import EDGE_REACH
+from geomkit.section.joins import EDGE_REACH
 
 
 def _occ_faces(shape):

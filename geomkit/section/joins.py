@@ -1,0 +1,249 @@
+"""Section curves put together: cut at poles, shared edges kept once, ends joined.
+
+The pieces :func:`geomkit.plane_section` traces on each face are assembled here:
+
+1. :func:`split_at_poles` cuts curves where they touch a pole of their surface (a
+   section may turn there into any direction: a cone's two generators meet at the
+   apex);
+2. :func:`drop_shared_edges` keeps once a curve that two faces (or a closed face's two
+   seam sides) give when the plane contains the edge between them;
+3. :func:`join_ends` joins open curves whose ends coincide within the join distance,
+   nearest pair first, and closes loops;
+4. :func:`join_across_edges` joins the ends left where the plane crosses a shared edge
+   obliquely, within :data:`EDGE_REACH` times the model's gap.
+
+A curve is a dict with ``uv`` (k, 2), ``sid`` (k,) (surface of each point), ``X``
+(k, 3), ``closed`` and ``chord`` (its largest chord error).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["split_at_poles", "drop_shared_edges", "join_ends", "join_across_edges",
+           "EDGE_REACH"]
+
+
+def _collapsed_sides(s) -> np.ndarray:
+    """(4,) bool: which sides of the domain (u0, u1, v0, v1) map to one point (a pole,
+    a cone's apex)."""
+    P = s.control_points
+    eps = 1e-10 * s.size
+    return np.array([np.ptp(row, axis=0).max() <= eps
+                     for row in (P[0], P[-1], P[:, 0], P[:, -1])])
+
+
+def split_at_poles(curves, surfs):
+    """Curves cut at the points where they touch a pole of their surface.
+
+    At a pole (a side of the domain that is one point) a section may turn into any
+    direction: the plane through a cone's axis meets it in two generators joined at the
+    apex, and the tracer walks them out and back (apex, base, apex, other base, apex).
+    Cut there, and a piece from the pole back to it cut again where it turns, the
+    pieces join again at the apex as the section really runs, and a piece walked twice
+    is one curve (:func:`drop_shared_edges`)."""
+    poles = {}
+    out = []
+    for c in curves:
+        k = int(c["sid"][0])
+        if k not in poles:
+            s = surfs[k]
+            (u0, u1), (v0, v1) = s.domain
+            e = 1e-12 * max(u1 - u0, v1 - v0)
+            poles[k] = (_collapsed_sides(s), (u0, u1, v0, v1), e)
+        sides, (u0, u1, v0, v1), e = poles[k]
+        if not sides.any() or np.any(c["sid"] != k):
+            out.append(c)
+            continue
+        uv = c["uv"]
+        at = np.zeros(len(uv), bool)
+        for side, (col, val) in zip(sides, ((0, u0), (0, u1), (1, v0), (1, v1))):
+            if side:
+                at |= np.abs(uv[:, col] - val) <= e
+        cut = np.flatnonzero(at)
+        if c["closed"]:
+            if not cut.size:
+                out.append(c)
+                continue
+            r = int(cut[0])   # start at a pole, end there again
+            idx = np.r_[r:len(uv), 0:r + 1]
+            c = {**c, "closed": False, **{key: c[key][idx] for key in ("uv", "sid", "X")}}
+            cut = np.flatnonzero(at[idx])
+        cut = cut[(cut > 0) & (cut < len(c["uv"]) - 1)]
+        if not cut.size:
+            out.append(c)
+            continue
+        bounds = np.r_[0, cut, len(c["uv"]) - 1]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if b <= a:
+                continue
+            X = c["X"][a:b + 1]
+            if at[a] and at[b] and b - a >= 2:   # pole to pole: out and back, or a
+                # loop through the pole; cut at the farthest point (the turn)
+                m = a + int(np.argmax(np.linalg.norm(X - X[0], axis=1)))
+                if 0 < m - a < b - a:
+                    pieces = ((a, m), (m, b))
+                else:
+                    pieces = ((a, b),)
+            else:
+                pieces = ((a, b),)
+            for i, j in pieces:
+                out.append({**c, "closed": False,
+                            **{key: c[key][i:j + 1] for key in ("uv", "sid", "X")}})
+    return out
+
+
+def _near_polyline(X, Y, tol) -> bool:
+    """Every point of ``X`` (n, 3) within ``tol`` of the polyline ``Y`` (m, 3) (closed
+    polylines are passed with their first point repeated)."""
+    from scipy.spatial import cKDTree
+
+    if len(Y) == 1:
+        return bool((np.linalg.norm(X - Y[0], axis=1) <= tol).all())
+    _, j = cKDTree(Y).query(X)
+    best = np.full(len(X), np.inf)
+    for a in (np.maximum(j - 1, 0), j):   # the two segments at the nearest vertex
+        b = np.minimum(a + 1, len(Y) - 1)
+        A, AB = Y[a], Y[b] - Y[a]
+        L2 = np.einsum("ij,ij->i", AB, AB)
+        t = np.clip(np.einsum("ij,ij->i", X - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+        best = np.minimum(best, np.linalg.norm(X - (A + t[:, None] * AB), axis=1))
+    return bool((best <= tol).all())
+
+
+def drop_shared_edges(curves, tol):
+    """Where the plane contains an edge two faces share, both faces' sections run along
+    it: the same curve twice (joined, a closed loop of zero area), or one face's piece
+    of the edge inside the other's longer one; a closed face whose seam lies in the
+    plane gives the seam twice (at both ends of its parameter range).  A curve longer
+    than ``4 tol`` that lies within ``tol`` (the model gap and two chord errors) of
+    another curve everywhere adds nothing to the section and is dropped (of two that
+    contain each other, the earlier).  Shorter pieces are kept: a sliver face narrower than the gap
+    is joined between its neighbours, not dropped."""
+    def poly(c):
+        X = c["X"]
+        return np.vstack([X, X[:1]]) if c["closed"] else X
+
+    if len(curves) < 2:
+        return curves
+    amin = np.array([c["X"].min(axis=0) for c in curves])
+    amax = np.array([c["X"].max(axis=0) for c in curves])
+    drop = set()
+    for i, a in enumerate(curves):
+        if np.linalg.norm(np.diff(a["X"], axis=0), axis=1).sum() <= 4 * tol:
+            continue
+        # the curves whose box (grown by tol) holds a's: a may lie along them
+        inside = np.flatnonzero((amin[i] >= amin - tol).all(axis=1)
+                                & (amax[i] <= amax + tol).all(axis=1))
+        for j in inside:
+            if j == i or j in drop:
+                continue
+            if _near_polyline(a["X"], poly(curves[j]), tol):
+                drop.add(i)
+                break
+    return [c for k, c in enumerate(curves) if k not in drop]
+
+
+def join_ends(curves, tol, bridged=None, exact=0.0):
+    """Join open curves whose ends coincide within ``tol`` (seams, shared edges), the
+    nearest pair of ends first (so a sliver face's short piece is joined between its
+    neighbours rather than bridged over); close curves whose two ends meet.  An end
+    point within ``exact`` of the end it is joined to is dropped as a duplicate;
+    farther ones are kept (the curve then bridges the gap).  ``bridged[0]`` is raised
+    to the largest distance joined."""
+    bridged = [0.0] if bridged is None else bridged
+    curves = list(curves)
+    while True:
+        opens = [i for i, c in enumerate(curves) if not c["closed"]]
+        if not opens:
+            return curves
+        E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+        D = np.linalg.norm(E[:, None] - E[None], axis=2)
+        np.fill_diagonal(D, np.inf)
+        # a curve closes on itself only with > 2 points, and only where no other
+        # curve's end is as near (to within ``exact``: duplicates join first)
+        for k, i in enumerate(opens):
+            D[2 * k, 2 * k + 1] = D[2 * k + 1, 2 * k] = (
+                D[2 * k, 2 * k + 1] + exact if len(curves[i]["X"]) > 2 else np.inf)
+        a, b = divmod(int(np.argmin(D)), len(E))
+        dist = float(np.linalg.norm(E[a] - E[b]))
+        if not (np.isfinite(D[a, b]) and dist <= tol):
+            return curves
+        bridged[0] = max(bridged[0], dist)
+        i, j = opens[a // 2], opens[b // 2]
+        dup = dist <= exact
+        if i == j:
+            c = curves[i]
+            c["closed"] = True
+            if dup:
+                for k in ("uv", "sid", "X"):
+                    c[k] = c[k][:-1]
+            continue
+        A = curves[i] if a % 2 else _rev(curves[i])   # A ends at end a
+        B = _rev(curves[j]) if b % 2 else curves[j]   # B starts at end b
+        merged = {k: (np.concatenate([A[k], B[k][int(dup):]]) if k in ("uv", "sid", "X")
+                      else A[k]) for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+EDGE_REACH = 8.0
+"""Open curve ends on two faces' boundaries are joined across their shared edge when
+they are mutual nearest, each within ``gap`` of the other face's boundary and at most
+``EDGE_REACH * gap`` apart (a plane crossing an edge whose sides are ``gap`` apart at
+an angle a meets them up to ``gap / sin a`` apart: down to a = 7 degrees)."""
+
+
+def join_across_edges(curves, surfs, gap, bridged):
+    """Join the open ends :func:`join_ends` left where the plane crosses a shared edge obliquely
+    (see EDGE_REACH); ``bridged[0]`` is raised to the largest distance joined."""
+    while True:
+        ends = [(i, e) for i, c in enumerate(curves) if not c["closed"] for e in (0, -1)]
+        if len(ends) < 2:
+            return curves
+        P = np.array([curves[i]["X"][e] for i, e in ends])
+        F = np.array([int(curves[i]["sid"][e]) for i, e in ends])
+        D = np.linalg.norm(P[:, None] - P[None], axis=2)
+        D[(F[:, None] == F[None]) | (D > EDGE_REACH * gap)] = np.inf
+        np.fill_diagonal(D, np.inf)
+        best = None
+        for a, b in zip(*np.nonzero(np.isfinite(D))):
+            if a < b and np.argmin(D[a]) == b and np.argmin(D[b]) == a \
+                    and (best is None or D[a, b] < D[best]):
+                if (_to_boundary(surfs[F[b]], P[a]) <= gap
+                        and _to_boundary(surfs[F[a]], P[b]) <= gap):
+                    best = (a, b)
+        if best is None:
+            return curves
+        (i, ei), (j, ej) = ends[best[0]], ends[best[1]]
+        bridged[0] = max(bridged[0], float(D[best]))
+        if i == j:
+            curves[i]["closed"] = True
+            continue
+        A = _rev(curves[i]) if ei == 0 else curves[i]
+        B = curves[j] if ej == 0 else _rev(curves[j])
+        merged = {k: (np.concatenate([A[k], B[k]]) if k in ("uv", "sid", "X") else A[k])
+                  for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+def _to_boundary(s, p, per_piece=256):
+    """Distance of the point ``p`` to the boundary of face ``s`` (its trim loops' 3-D
+    polylines at ``per_piece`` samples per piece: within their sagitta of it)."""
+    from geomkit.cad.gaps import boundary_samples
+
+    key = ("boundary_polyline", per_piece)
+    if key not in s._cache:
+        X, _, pc = boundary_samples([s], per_piece)
+        same = pc[:-1] == pc[1:]
+        s._cache[key] = (X[:-1][same], X[1:][same])
+    A, B = s._cache[key]
+    AB = B - A
+    L2 = np.einsum("ij,ij->i", AB, AB)
+    t = np.clip(np.einsum("ij,ij->i", p - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+    return float(np.linalg.norm(A + t[:, None] * AB - p, axis=1).min())
+
+
+def _rev(c):
+    return {k: (v[::-1].copy() if k in ("uv", "sid", "X") else v) for k, v in c.items()}
