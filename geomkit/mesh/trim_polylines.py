@@ -105,7 +105,8 @@ class TrimPolylines:
             keep[:1] = True
             np.not_equal(t[1:], t[:-1], out=keep[1:])
             t = t[keep]
-            if not c.is_polyline:  # a few samples per span to start
+            if not c.is_polyline and len(t) <= SEED_SPANS:  # a few samples per span to
+                # start; a piece of many spans starts from its knots (each span short)
                 t = np.unique(_span_samples(t, 5))
             buf = np.empty((8 * len(t) + 64, 3))
             while True:
@@ -160,6 +161,13 @@ def speed_bound(s: Surface) -> float:
         h = float(d[d > 0].min())
         total += 4.0 * p * ratio * D / h
     return total
+
+
+SEED_SPANS = 16
+"""A trim piece with at most this many spans starts its adaptive polyline from 5
+samples per span; one with more (a pcurve carried through a reparametrisation, fitted
+span by span) from its knots alone: its spans are already short, and 5 per span made
+the mesh boundary dense (EUCLID screw: 2.0x the triangles)."""
 
 
 def _span_samples(t: np.ndarray, num: int) -> np.ndarray:

@@ -4,7 +4,9 @@ Every part in ``tests/data/parts`` (11 files from NIST, SolidWorks, NX, Unigraph
 Pro/ENGINEER, EUCLID and Inventor; see its README) is read with the defaults, gives
 OCC's face count, and every face is checked both ways against OCC's face: points of
 geomkit's mesh lie on OCC's face, OCC's mesh nodes lie on geomkit's trimmed face, within
-the face's own tolerance (its edges' and vertices') plus the stated ``approx_error``.
+the face's own tolerance (its edges' and vertices' as stated, or the distance
+measured between an edge's 3-D curve and the face's image of it where the file exceeds
+what it states) plus the stated ``approx_error``.
 
 NIST FTC-06 (AP242, mm): face 115 is a spherical patch whose outer wire runs along the
 pole (v = pi/2), where its pcurves leave the face's UV bounds by 0.085 in u and do not
@@ -54,11 +56,34 @@ def _occ_faces(path):
             tx = TopExp_Explorer(f, kind)
             while tx.More():
                 t = max(t, BRep_Tool.Tolerance_s(cast_shape(name, tx.Current())))
+                if kind == TopAbs_EDGE:
+                    t = max(t, _edge_deviation(cast_shape("Edge", tx.Current()), f))
                 tx.Next()
         faces.append(f)
         tols.append(t)
         ex.Next()
     return faces, tols
+
+
+def _edge_deviation(e, f, samples=33):
+    """How far the face's image of the edge (surface at the pcurve) is from the edge's
+    3-D curve, at the same parameters: a file can exceed its stated edge tolerance
+    (the Inventor face: 8.79e-3 against 7.84e-3 stated), and geomkit follows the
+    pcurve."""
+    from OCP.BRep import BRep_Tool
+
+    from geomkit.cad.occ import xyz
+
+    c3 = BRep_Tool.Curve_s(e, 0.0, 0.0)
+    a, b = BRep_Tool.Range_s(e, f)
+    c2 = BRep_Tool.CurveOnSurface_s(e, f, a, b)
+    if c3 is None or c2 is None:
+        return 0.0
+    S = BRep_Tool.Surface_s(f)
+    t = np.linspace(a, b, samples)
+    P = np.array([xyz(S.Value(c2.Value(x).X(), c2.Value(x).Y())) for x in t])
+    Q = np.array([xyz(c3.Value(x)) for x in t])
+    return float(np.linalg.norm(P - Q, axis=1).max())
 
 
 @pytest.fixture(scope="module")
