@@ -24,7 +24,10 @@ CTC05 = DATA / "parts" / "nist_ctc_05_ap203.stp"
 
 @pytest.fixture(scope="module")
 def ftc07():
-    return geomkit.load_case(FTC07)
+    """The STEP reader's result (its surfaces, edge gap and largest edge tolerance)."""
+    from geomkit.cad.step import read_step
+
+    return read_step(FTC07)
 
 
 def _occ_wires(path, normal, offset, tol):
@@ -64,11 +67,7 @@ def test_model_gap_is_measured_on_shared_edges(ftc07):
     """The gap comes from the edges two faces share (each face's own image of the
     edge), not from boundary samples of unrelated faces: within twice the largest edge
     tolerance the file states (each image is within it of the edge's 3-D curve)."""
-    from geomkit.cad.step import read_step
-
-    res = read_step(FTC07)
-    assert res.edge_gap == ftc07.gap
-    assert 0 < ftc07.gap <= 2 * res.edge_tolerance
+    assert 0 < ftc07.edge_gap <= 2 * ftc07.edge_tolerance
 
 
 def test_section_closes_across_the_gap_as_occ_does(ftc07):
@@ -78,29 +77,28 @@ def test_section_closes_across_the_gap_as_occ_does(ftc07):
     plane = [0.0, 1.0, 0.0, -y]
     tol = 1e-5 * float(np.linalg.norm(hi - lo))
     loose = geomkit.plane_section(ftc07.surfaces, plane, tol)
-    joined = geomkit.plane_section(ftc07.surfaces, plane, tol, gap=ftc07.gap)
-    wires, closed = _occ_wires(FTC07, (0, 1, 0), y, ftc07.gap)
+    joined = geomkit.plane_section(ftc07.surfaces, plane, tol, gap=ftc07.edge_gap)
+    wires, closed = _occ_wires(FTC07, (0, 1, 0), y, ftc07.edge_gap)
     assert sum(loose.closed) < len(loose.curves)          # the gap is real
     assert (len(joined.curves), sum(joined.closed)) == (wires, closed) == (7, 7)
-    assert tol < joined.max_gap_bridged <= ftc07.gap
+    assert tol < joined.max_gap_bridged <= ftc07.edge_gap
 
 
-def test_cli_section_uses_the_file_gap(tmp_path):
+def test_cli_section_uses_the_file_gap(ftc07, tmp_path, capsys):
+    """``geomkit section`` takes the gap from the file (``Case.gap``)."""
     import json
-    import subprocess
-    import sys
 
-    b = np.array([s.bounds for s in geomkit.load(FTC07)])
+    from helpers.clihelp import run_main
+
+    b = np.array([s.bounds for s in ftc07.surfaces])
     lo, hi = b[:, 0].min(0), b[:, 1].max(0)
     y = lo[1] + 0.31 * (hi[1] - lo[1])
     out = tmp_path / "sec"
-    r = subprocess.run([sys.executable, "-m", "geomkit", "section", str(FTC07),
-                        "--plane", "0", "1", "0", str(-y), "--tol", "1e-4",
-                        "--formats", "json", "-o", str(out)],
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    rc, _, err = run_main(capsys, "section", FTC07, "--plane", 0, 1, 0, -y, "--tol", 1e-4,
+                          "--formats", "json", "-o", out)
+    assert rc == 0, err
     summary = json.loads((out / "section_summary.json").read_text())
-    assert summary["gap"] > 0
+    assert summary["gap"] == ftc07.edge_gap
     assert summary["planes"][0]["closed"] == summary["planes"][0]["curves"] == 7
 
 
