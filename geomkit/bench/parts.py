@@ -40,17 +40,9 @@ QUICK = ("nx9_face_recognition_ap214.stp", "sw2013_featuretype_ap214.step",
 
 
 def _occ_read(path):
-    from OCP.STEPControl import STEPControl_Reader
+    from geomkit.cad.step import occ_shape
 
-    from geomkit.cad.step import _file_units
-
-    rd = STEPControl_Reader()
-    rd.ReadFile(str(path))
-    _, mm = _file_units(rd)
-    if mm is not None:
-        rd.SetSystemLengthUnit(mm)
-    rd.TransferRoots()
-    return rd.OneShape()
+    return occ_shape(path)[0]
 
 
 def _occ_mesh_points(shape, deflection):

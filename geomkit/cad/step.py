@@ -40,7 +40,7 @@ from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.mesh.tessellate import closed_directions
 from geomkit.nurbs.surface import Surface, TrimCurve
 
-__all__ = ["read_step"]
+__all__ = ["read_step", "occ_shape", "edge_gaps"]
 
 _UNITS = {"MILLIMETRE": ("mm", 1.0), "METRE": ("m", 1000.0), "INCH": ("in", 25.4),
           "FOOT": ("ft", 304.8), "CENTIMETRE": ("cm", 10.0), "MICROMETRE": ("um", 1e-3),
@@ -267,6 +267,23 @@ def _resolution(path: Path):
         return None
 
 
+def occ_shape(path):
+    """``(shape, units)``: Open CASCADE's B-rep of a STEP file, in the file's own length
+    unit (OCC's default would scale to mm), and that unit's name (None if unknown).
+    Raises :class:`FileFormatError` for a file OCC cannot read."""
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.STEPControl import STEPControl_Reader
+
+    rd = STEPControl_Reader()
+    if rd.ReadFile(str(path)) != IFSelect_RetDone:
+        raise FileFormatError(f"{path}: not a readable STEP file")
+    units, mm = _file_units(rd)
+    if mm is not None:
+        rd.SetSystemLengthUnit(mm)
+    rd.TransferRoots()
+    return rd.OneShape(), units
+
+
 def read_step(path, skip_invalid: bool = False,
               skip_unsupported: bool = False) -> IgesResult:
     """Read the faces of a STEP file as trimmed :class:`~geomkit.Surface` objects.
@@ -299,21 +316,13 @@ def read_step(path, skip_invalid: bool = False,
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
         from OCP.BRepTools import BRepTools
         from OCP.GeomConvert import GeomConvert
-        from OCP.IFSelect import IFSelect_RetDone
-        from OCP.STEPControl import STEPControl_Reader
+        from OCP.STEPControl import STEPControl_Reader  # noqa: F401 - the extra is there
         from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
         from OCP.TopExp import TopExp_Explorer
     except ImportError:
         raise MissingDependencyError(INSTALL_HINT) from None
     from geomkit.cad.occ import cast_shape
-    rd = STEPControl_Reader()
-    if rd.ReadFile(str(p)) != IFSelect_RetDone:
-        raise FileFormatError(f"{p}: not a readable STEP file")
-    units, mm = _file_units(rd)
-    if mm is not None:  # keep coordinates in the file's unit (OCC's default: mm)
-        rd.SetSystemLengthUnit(mm)
-    rd.TransferRoots()
-    shape = rd.OneShape()
+    shape, units = occ_shape(p)
     resolution = _resolution(p) or 0.0
 
     def face_tolerance(face) -> float:

@@ -34,21 +34,14 @@ PARTS = sorted(p.name for p in (DATA / "parts").glob("*.st*p"))
 
 def _occ_faces(path):
     from OCP.BRep import BRep_Tool
-    from OCP.STEPControl import STEPControl_Reader
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
     from OCP.TopExp import TopExp_Explorer
 
     from geomkit.cad.occ import cast_shape
-    from geomkit.cad.step import _file_units
+    from geomkit.cad.step import occ_shape
 
-    rd = STEPControl_Reader()
-    rd.ReadFile(str(path))
-    _, mm = _file_units(rd)
-    if mm is not None:
-        rd.SetSystemLengthUnit(mm)
-    rd.TransferRoots()
     faces, tols = [], []
-    ex = TopExp_Explorer(rd.OneShape(), TopAbs_FACE)
+    ex = TopExp_Explorer(occ_shape(path)[0], TopAbs_FACE)
     while ex.More():
         f = cast_shape("Face", ex.Current())
         t = 0.0

@@ -37,20 +37,14 @@ def _occ_wires(path, normal, offset, tol):
     from OCP.collections import HSequence_TopoDS_Shape
     from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
     from OCP.ShapeAnalysis import ShapeAnalysis_FreeBounds
-    from OCP.STEPControl import STEPControl_Reader
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
     from geomkit.cad.occ import cast_shape
-    from geomkit.cad.step import _file_units
+    from geomkit.cad.step import occ_shape
 
-    rd = STEPControl_Reader()
-    rd.ReadFile(str(path))
-    _, mm = _file_units(rd)
-    rd.SetSystemLengthUnit(mm)
-    rd.TransferRoots()
     n = np.asarray(normal, float)
-    sec = BRepAlgoAPI_Section(rd.OneShape(), gp_Pln(gp_Pnt(*(n * offset)), gp_Dir(*n)))
+    sec = BRepAlgoAPI_Section(occ_shape(path)[0], gp_Pln(gp_Pnt(*(n * offset)), gp_Dir(*n)))
     sec.Build()
     edges, wires = HSequence_TopoDS_Shape(), HSequence_TopoDS_Shape()
     ex = TopExp_Explorer(sec.Shape(), TopAbs_EDGE)
