@@ -132,30 +132,13 @@ def _occ_section(shape, normal, offset, deflection, gap):
     return dt, wires.Length(), closed
 
 
-def _occ_surface_of(shape):
-    """The shape's faces as one compound: the distance to a solid is 0 inside it, the
-    distance to its faces is the distance to the surface."""
-    from OCP.BRep import BRep_Builder
-    from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS_Compound
-
-    comp, b = TopoDS_Compound(), BRep_Builder()
-    b.MakeCompound(comp)
-    ex = TopExp_Explorer(shape, TopAbs_FACE)
-    while ex.More():
-        b.Add(comp, ex.Current())
-        ex.Next()
-    return comp
-
-
 def _occ_distances(shape, P):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-    from geomkit.cad.occ import gp_pnt
+    from geomkit.cad.occ import face_compound, gp_pnt
 
-    faces = _occ_surface_of(shape)
+    faces = face_compound(shape)
     return np.array([BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeVertex(gp_pnt(p)).Vertex(),
                                                 faces).Value() for p in P])
 

@@ -179,3 +179,20 @@ def gp_pnt(p):
 
 def xyz(p) -> np.ndarray:
     return np.array([p.X(), p.Y(), p.Z()])
+
+
+def face_compound(shape):
+    """The faces of an OCC shape as one compound: distances measured to it are
+    distances to the surface (to a solid they are 0 inside it)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS_Compound
+
+    comp, b = TopoDS_Compound(), BRep_Builder()
+    b.MakeCompound(comp)
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        b.Add(comp, ex.Current())
+        ex.Next()
+    return comp

@@ -95,20 +95,9 @@ def _occ_shape(path):
 
 
 def _face_compound(shape):
-    """The faces of a shape as a compound: distances to their surfaces (a solid's
-    distance is 0 inside it)."""
-    from OCP.BRep import BRep_Builder
-    from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS_Compound
+    from geomkit.cad.occ import face_compound
 
-    b, c = BRep_Builder(), TopoDS_Compound()
-    b.MakeCompound(c)
-    ex = TopExp_Explorer(shape, TopAbs_FACE)
-    while ex.More():
-        b.Add(c, ex.Current())
-        ex.Next()
-    return c
+    return face_compound(shape)
 
 
 def _occ_faces(shape) -> int:
