@@ -23,7 +23,7 @@ GROUPS = [
     ("Evaluation and trims", ["evaluate", "derivatives", "normals", "classify_uv",
                               "bezier_patches", "INSIDE", "OUTSIDE", "ON_BOUNDARY"]),
     ("Tessellation", ["tessellate", "Mesh"]),
-    ("Distances", ["project_points", "Projector", "Projection", "VoxelGrid",
+    ("Distances", ["project_points", "Projector", "PartProjector", "Projection", "VoxelGrid",
                    "nearest_triangles", "MeshNearest", "surface_distance",
                    "SurfaceDistance"]),
     ("Sections", ["plane_section", "Section"]),

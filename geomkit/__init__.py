@@ -38,7 +38,8 @@ from geomkit.jobs.clearance import Clearance, Stylus, probe_clearance
 from geomkit.collision.motion import FirstContact, ProbePath, first_contact, probe_path
 from geomkit.exchange.cases import Case, load, load_case, save
 from geomkit.exchange.points import PointSet, read_points
-from geomkit.query.projection import Projector, project_points
+from geomkit.query.projection import Projector
+from geomkit.query.projection_part import PartProjector, project_points
 from geomkit.query.results import MeshNearest, Projection, SurfaceDistance
 from geomkit.collision.scene import (CoherentPair, Scene, SceneCollisions, SceneDistances,
                                      SweepAndPrune, fit_exclusions)
@@ -63,7 +64,7 @@ __all__ = [
     "errors", "tolerances", "GeomkitError", "InvalidInputError", "InvalidSurfaceError",
     "InvalidTrimError", "DegenerateGeometryError", "FileFormatError",
     "MissingDependencyError",
-    "project_points", "Projector", "Projection", "VoxelGrid", "nearest_triangles",
+    "project_points", "Projector", "PartProjector", "Projection", "VoxelGrid", "nearest_triangles",
     "MeshNearest", "surface_distance", "SurfaceDistance",
     "plane_section", "Section",
     "deviation", "DeviationReport", "align_rigid", "read_points", "PointSet", "read_iges",

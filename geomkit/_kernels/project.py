@@ -94,7 +94,7 @@ def _project_range(i0, i1, P, V, F, fdev, face_surf, face_uv, dmax, origin, h, l
         x[2] = P[i, 2]
         k, UB, LB, ovf, pops, tested, sc = search(
             x[0], x[1], x[2], V, F, fdev, dmax, origin, h, lvl_dims, lvl_off, occ,
-            start, tris, sc, i, max_dist)
+            start, tris, sc, i, max_dist[i])
         ct, cd, cs, cw = sc[3], sc[4], sc[5], sc[6]
         out_lb[i] = LB
         out_work[i, 0] = pops
@@ -224,7 +224,7 @@ def project_batch(P, V, F, fdev, face_surf, face_uv, dmax, origin, h, lvl_dims, 
     foot in the box of a triangle with ``tbox[t, 4]`` != 0, or in a deep cell of its
     surface's grid ``gdeep`` / ``goff``, is inside without a classification).  ``out_flags[i]`` bit 0:
     more than 64 candidate triangles (the buffer grew: none is dropped); bit 1: beyond
-    ``max_dist``.  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
+    ``max_dist[i]`` (the point's own search radius).  ``out_work[i]`` = (cells opened, triangles tested, candidates, index
     of the first candidate left untried by the cap (candidates when none), candidates
     settled by the second-order certificate).
 

@@ -4,8 +4,10 @@ onto the face's surface with :func:`geomkit.project_points` and becomes a UV pol
 refined until the surface point of every segment's UV midpoint lies within ``tol`` of
 the edge curve's midpoint (``tol``: the larger of the model's resolution and
 :data:`EDGE_TOL` x the surface size; writers state resolutions, 1e-7, finer than their
-edges lie on their faces).  An edge that is not on the surface (farther than ``tol``), or whose projection
-jumps (a seam), is refused with the reason.
+edges lie on their faces).  On a surface closed in u or v (``periods``), the UV
+points are unwrapped across the seam (the polyline may then leave the domain by up
+to a period, for the loop's chaining to place).  An edge that is not on the surface
+(farther than ``tol``), or whose projection jumps, is refused with the reason.
 """
 
 from __future__ import annotations
@@ -17,17 +19,31 @@ from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.analytic import curve_eval
 from geomkit.nurbs.evaluation import evaluate
-from geomkit.query.projection import project_points
+from geomkit.query.projection_part import project_points
 
 __all__ = ["edge_uv", "EDGE_TOL"]
 
 _MAX_POINTS = 4097
 
 
-def edge_uv(base, edges, tol: float, what: str):
+def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
     """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
     (:class:`geomkit.cad.brep._Edge`) on the untrimmed ``base``, and the largest
-    model-space distance measured between a segment's UV midpoint and the edge."""
+    model-space distance measured between a segment's UV midpoint and the edge.
+    ``periods``: the UV period of each closed direction of ``base`` (0: open)."""
+    (u0, u1), (v0, v1) = base.domain
+    lo = np.array([u0, v0])
+    per = np.asarray(periods, float)
+    wrapped = per > 0
+
+    def inside(uv):  # unwrapped parameters back into the domain
+        if not wrapped.any():
+            return uv
+        out = uv.copy()
+        for c in np.flatnonzero(wrapped):
+            out[:, c] = lo[c] + np.mod(uv[:, c] - lo[c], per[c])
+        return out
+
     pieces, worst = [], 0.0
     for k, e in enumerate(edges):
         s = np.linspace(0.0, 1.0, 17)
@@ -40,9 +56,12 @@ def edge_uv(base, edges, tol: float, what: str):
                 raise Unsupported(f"{what}: edge {k} is not on the surface (a point is "
                                   f"{off:.3g} from it, tolerance {tol:.3g})")
             uv = pr.uv
+            for c in np.flatnonzero(wrapped):
+                uv[:, c] = np.unwrap(uv[:, c], period=per[c])
             sm = 0.5 * (s[1:] + s[:-1])
             Xm = curve_eval(e.curve, e.ts(sm))
-            dev = np.linalg.norm(evaluate(base, 0.5 * (uv[1:] + uv[:-1])) - Xm, axis=1)
+            dev = np.linalg.norm(evaluate(base, inside(0.5 * (uv[1:] + uv[:-1]))) - Xm,
+                                 axis=1)
             bad = dev > tol
             if not bad.any():
                 worst = max(worst, float(dev.max()), off)

@@ -287,7 +287,8 @@ def _cmd_section(args) -> int:
                      "curve_points": int(sum(len(c) for c in sec.curves)),
                      "max_residual": sec.max_residual,
                      "max_chord_error": sec.max_chord_error,
-                     "max_gap_bridged": sec.max_gap_bridged})
+                     "max_gap_bridged": sec.max_gap_bridged,
+                     "failed_faces": {int(k): v for k, v in sec.failed.items()}})
     if png:
         files.append(str(plot_section(sections, targets[png], args.overwrite, **rk)))
     files += _reports.write(args, "section", targets, sections=sections,
@@ -305,6 +306,9 @@ def _cmd_section(args) -> int:
         print(f"plane {a:.6g} {b:.6g} {c:.6g} {d:.6g}: {r['curves']} curve(s) "
               f"({r['closed']} closed), {r['curve_points']} points, {r['points']} contact "
               f"point(s), max residual {r['max_residual']:.2g} {summary['units']}")
+        if r["failed_faces"]:
+            print(f"  {len(r['failed_faces'])} face(s) left out (could not be sectioned): "
+                  + ", ".join(str(k) for k in r["failed_faces"]))
     print(f"reports: {Path(args.output)}/ ({len(summary['files'])} files; "
           f"units: {summary['units']})")
     if note:

@@ -37,7 +37,7 @@ from geomkit.jobs.warmup import start_background
 from geomkit.jobs.clearance import Stylus, probe_clearance
 from geomkit.jobs.deviation import align_rigid, deviation
 from geomkit.outputs import atomic_write
-from geomkit.query.projection import project_points
+from geomkit.query.projection_part import project_points
 from geomkit.report.files import (plot_clearance, plot_deviation_map, plot_histogram, plot_section,
                                   prepare_outputs, write_clearance_csv, write_deviation_csv,
                                   write_json, write_section)

@@ -37,7 +37,7 @@ from geomkit.nurbs.surface import as_surfaces
 from geomkit.query import results as R
 from geomkit.errors import InvalidInputError
 from geomkit.exchange.points import as_measured_points
-from geomkit.query.projection import project_points
+from geomkit.query.projection_part import project_points
 
 __all__ = ["deviation", "DeviationReport", "align_rigid", "deviation_chunk", "ALIGN_MAX_ITER",
            "COLUMNS"]
@@ -286,6 +286,8 @@ def deviation(surfaces, points, normals=None, probe_radius: float = 0.0,
                           status=status, edge=edge, transform=T, tolerance=tol,
                           probe_radius=probe_radius)
     rep.stats = _statistics(rep, align_info, max_distance, time.perf_counter() - t0)
+    rep.stats["faces_failed"] = {int(k): v for k, v in
+                                 pr.stats.get("faces_failed", {}).items()}
     return rep
 
 

@@ -22,7 +22,7 @@ import uuid
 
 from geomkit.errors import MissingDependencyError
 from geomkit.jobs.deviation import deviation_chunk
-from geomkit.query.projection import Projector
+from geomkit.query.projection_part import make_projector
 
 __all__ = ["run_chunks", "make_client", "WINDOW", "RETRIES"]
 
@@ -59,7 +59,7 @@ def _task(surfaces, key, P, N, T, probe_radius, max_distance, offset):
     pr = _PROJECTORS.get(key)
     if pr is None:
         _PROJECTORS.clear()  # one nominal at a time per worker process
-        pr = _PROJECTORS[key] = Projector(surfaces)
+        pr = _PROJECTORS[key] = make_projector(surfaces)
     return deviation_chunk(pr, P, N, T, probe_radius, max_distance, offset)
 
 

@@ -23,7 +23,7 @@ from geomkit.jobs.deviation import (COLUMNS, _as_tolerance, _check_settings,
 from geomkit.jobs.distributed import run_chunks
 from geomkit.jobs.stats import DeviationStats
 from geomkit.errors import InvalidInputError, MissingDependencyError
-from geomkit.query.projection import cached_projector
+from geomkit.query.projection_part import cached_projector
 from geomkit.query.results import STATUS_NAMES
 from geomkit.exchange.scans import DEFAULT_CHUNK, iter_scan
 
@@ -206,7 +206,10 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     st = stats.result(require_valid=require_valid)
     st.update(probe_radius=probe_radius, max_distance=max_distance,
               tolerance=list(tol) if tol else None, chunks=nchunks, chunk_size=chunk_size,
-              streamed=True, workers=_nworkers(client))
+              streamed=True, workers=_nworkers(client),
+              # faces with no candidate (failed to mesh); a cluster's workers build
+              # their own projectors, named in their warnings
+              faces_failed={int(k): v for k, v in projector.face_errors.items()})
     st["alignment"] = None
     if align_info is not None:
         st["alignment"] = {"transform": np.asarray(T).tolist(),

@@ -27,20 +27,19 @@ of ``chunk_size`` points, so memory stays bounded for any number of points
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
-from geomkit.tolerances import DEFAULT_MESH_TOL, NEWTON_STEP_TOL, TIE_TOL
+from geomkit.tolerances import DEFAULT_MESH_TOL, TIE_TOL
 from geomkit.query import results as R
 from geomkit._kernels import project as _pk
 from geomkit._kernels import project_finish as _pf
 from geomkit._kernels import trim_feet as _tf
 from geomkit import tolerances as tols
-from geomkit.errors import InvalidInputError
 from geomkit.query.projection_cert import pack_span_bounds
 from geomkit.query.projection_trim import _TrimData, _trim_boundary_triangles, cert_boxes
+from geomkit.query.projection_base import QueryBase
 from geomkit.query.results import Projection
 from geomkit.mesh.tessellate import (SAMPLES_PER_EDGE, closed_directions,
                                      tessellate_with_target)
@@ -49,7 +48,7 @@ from geomkit.nurbs.surface import as_surfaces
 from geomkit.nurbs.trims import concat_segments
 from geomkit.query.voxel import VoxelGrid, sliver_voxel_size
 
-__all__ = ["Projector", "project_points", "DEFAULT_MESH_TOL", "DEVIATION_SAFETY"]
+__all__ = ["Projector", "DEFAULT_MESH_TOL", "DEVIATION_SAFETY"]
 
 DEVIATION_SAFETY = 2.0
 """The triangles' measured deviations are multiplied by this in the candidate search
@@ -77,7 +76,6 @@ candidate (in batches of :data:`RERUN_BUDGET` point-starts); a point left open a
 trying every candidate is counted in ``stats["not_proven"]``."""
 RERUN_BUDGET = 1 << 20
 """Points x starts per batch of the last pass (bounds its working memory)."""
-CHUNK_SIZE = 1 << 16
 
 
 def _morton_order(P, origin, h):
@@ -160,7 +158,7 @@ def _pack_trims(surfaces):
     return seg, deg, lp, toff, ttol
 
 
-class Projector:
+class Projector(QueryBase):
     """Reusable projection onto fixed surfaces: the candidate mesh and voxel grid are
     built once (:func:`project_points` caches one per surface list).
 
@@ -175,24 +173,28 @@ class Projector:
     voxel_size : float, optional
         See :class:`~geomkit.VoxelGrid`; default its rule, or
         :func:`geomkit.query.voxel.sliver_voxel_size` for a mesh of slivers.
+    size : float, optional
+        The model size that relative tolerances scale with; default the largest
+        surface's (a :class:`~geomkit.query.projection_part.PartProjector` gives its
+        blocks the whole part's).
     """
 
     def __init__(self, surfaces, mesh_tol: float | None = None,
-                 voxel_size: float | None = None):
+                 voxel_size: float | None = None, size: float | None = None):
         t0 = time.perf_counter()
         self.surfaces = as_surfaces(surfaces)
-        self.size = max(s.size for s in self.surfaces)
+        self.size = max(s.size for s in self.surfaces) if size is None else float(size)
         if mesh_tol is None:
             mesh_tol = DEFAULT_MESH_TOL * self.size
-        mesh_tol = float(mesh_tol)
-        if not (math.isfinite(mesh_tol) and mesh_tol > 0):
-            raise InvalidInputError(f"must be a finite number > 0, got {mesh_tol!r}",
-                                    "mesh_tol")
+        mesh_tol = self.check_mesh_tol(mesh_tol)
         # coarser candidate meshes let near-tie basins slip past the candidate limit
         # (seen at 2.5x the default on freeform_1): the default is also the maximum
         mesh_tol = min(mesh_tol, DEFAULT_MESH_TOL * self.size)
         self.mesh = tessellate_with_target(self.surfaces, mesh_tol, None, None, SAMPLES_PER_EDGE,
                                 PROJ_TRIM_TARGET)
+        # faces the mesh left out (a FaceFailedWarning was given): no candidate there
+        self.face_errors = {i: st["failed"] for i, st in
+                            enumerate(self.mesh.stats["surfaces"]) if "failed" in st}
         self.grid = VoxelGrid(self.mesh, voxel_size if voxel_size is not None
                               else sliver_voxel_size(self.mesh))
         self.trimmed = np.array([s.is_trimmed for s in self.surfaces], dtype=np.int64)
@@ -247,14 +249,17 @@ class Projector:
                 f"candidate triangles, {self.grid!r}>")
 
     # ------------------------------------------------------------------ one chunk
-    def _chunk(self, P: np.ndarray, max_distance: float, step_tol: float,
+    def _chunk(self, P: np.ndarray, max_distance, step_tol: float,
                K: int | None = None, prev=None) -> Projection:
-        """Project the points of one chunk.  ``K`` and ``prev`` are given to a rerun:
+        """Project the points of one chunk (``max_distance``: one for all, or one per
+        point).  ``K`` and ``prev`` are given to a rerun:
         ``prev`` = (surface, uv, distance, Newton status, class, count, skip) of each
         point's feet from the earlier pass and the candidate index it stopped at; the
         rerun continues from there instead of repeating those Newton runs."""
         t0 = time.perf_counter()
         n = P.shape[0]
+        # one search radius per point (a PartProjector gives each its best so far)
+        max_distance = np.array(np.broadcast_to(max_distance, (n,)), dtype=np.float64)
         first = K is None
         if first:
             K = MAX_STARTS_TRIMMED if self.trims else MAX_STARTS
@@ -287,11 +292,12 @@ class Projector:
             fs, fuv, fd, fst, fcls, nf, skip = (a[order] for a in
                                                 (fs, fuv, fd, fst, fcls, nf, skip))
         Pk = P if order is None else np.ascontiguousarray(P[order])
+        mdk = max_distance if order is None else np.ascontiguousarray(max_distance[order])
         _pk.project_batch(Pk, g.vertices, g.faces, self.fdev, self.face_surf, self.face_uv,
                           self.dmax, *g._args(), Pw, U, V, meta, dom, self.closed,
                           self.trimmed, *self.breaks, *self.trim_pack, *self.cert_pack,
                           int(self.certify) | (2 if self.outside_rule else 0), step_tol,
-                          max_distance, K, skip, fs, fuv, fd,
+                          mdk, K, skip, fs, fuv, fd,
                           fst, fcls, nf, lb, rest, flags, work)
         if order is not None:
             inv = np.empty(n, dtype=np.int64)
@@ -441,7 +447,7 @@ class Projector:
                 batches = [rows[i:i + step] for i in range(0, rows.size, step)]
             for b in batches:
                 prev_b = (fs[b], fuv[b], fd_raw[b], fst[b], fcls[b], nf[b], work[b, 3])
-                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance, step_tol, K2,
+                sub = self._chunk(np.ascontiguousarray(P[b]), max_distance[b], step_tol, K2,
                                   prev_b)
                 for f in ("point", "uv", "surface", "distance", "signed_distance",
                           "normal", "status", "lower_bound", "residual", "feet_tried"):
@@ -451,111 +457,6 @@ class Projector:
                     out.stats[k_] += sub.stats[k_]
         return out
 
-    # ------------------------------------------------------------------ public
-    def iter_project(self, points, max_distance: float | None = None,
-                     chunk_size: int = CHUNK_SIZE, progress=None, tol: float | None = None):
-        """Project in chunks, yielding one :class:`Projection` per chunk (bounded
-        memory for any number of points, e.g. a ``numpy.memmap``)."""
-        step_tol = NEWTON_STEP_TOL * self.size if tol is None else float(tol)
-        if not (math.isfinite(step_tol) and step_tol > 0):
-            raise InvalidInputError(f"must be a finite number > 0, got {tol!r}", "tol")
-        arr = points if isinstance(points, np.ndarray) else np.asarray(points, dtype=float)
-        if arr.ndim == 0 or arr.shape[-1] != 3:
-            raise InvalidInputError(f"expected an array of shape (..., 3), got {arr.shape}",
-                                    "points")
-        arr = arr.reshape(-1, 3)
-        md = np.inf if max_distance is None else float(max_distance)
-        if math.isnan(md) or md < 0:
-            raise InvalidInputError(f"must be a number >= 0, got {max_distance!r}",
-                                    "max_distance")
-        chunk_size = int(chunk_size)
-        if chunk_size < 1:
-            raise InvalidInputError(f"must be >= 1, got {chunk_size}", "chunk_size")
-        n = arr.shape[0]
-        for a in range(0, n, chunk_size):
-            b = min(n, a + chunk_size)
-            P = np.ascontiguousarray(arr[a:b], dtype=np.float64)
-            bad = ~np.isfinite(P).all(axis=1)
-            if bad.any():
-                i = a + int(np.nonzero(bad)[0][0])
-                raise InvalidInputError(f"non-finite coordinates in row {i}: "
-                                        f"{arr[i].tolist()}", "points")
-            yield self._chunk(P, md, step_tol)
-            if progress is not None:
-                progress(b, n)
-
-    def project(self, points, max_distance: float | None = None,
-                chunk_size: int = CHUNK_SIZE, progress=None,
-                tol: float | None = None) -> Projection:
-        """Project all points; see :func:`project_points`."""
-        t0 = time.perf_counter()
-        parts = list(self.iter_project(points, max_distance, chunk_size, progress, tol))
-        if not parts:
-            e2, e3 = np.empty((0, 2)), np.empty((0, 3))
-            return Projection(e3, e2, np.empty(0, np.int32), np.empty(0), np.empty(0), e3,
-                              np.empty(0, np.int8), np.empty(0), np.empty(0),
-                              np.empty(0, np.int8), {"time": 0.0})
-        out = Projection(*(np.concatenate([getattr(p, f) for p in parts]) for f in
-                           ("point", "uv", "surface", "distance", "signed_distance",
-                            "normal", "status", "lower_bound", "residual", "feet_tried")))
-        out.stats = {k: sum(p.stats[k] for p in parts) for k in parts[0].stats}
-        out.stats.update(time=time.perf_counter() - t0, build_time=self.build_time,
-                         approx_error=self.approx_error,
-                         candidate_triangles=int(self.mesh.faces.shape[0]))
-        return out
-
-
-def cached_projector(surfaces, mesh_tol) -> Projector:
-    surfaces = as_surfaces(surfaces)
-    key = ("projector", tuple(id(s) for s in surfaces), mesh_tol)
-    cache = surfaces[0]._cache
-    pr = cache.get(key)
-    if pr is None:
-        pr = Projector(surfaces, mesh_tol)
-        cache[key] = pr
-    return pr
-
-
-def project_points(surfaces, points, max_distance: float | None = None, *,
-                   mesh_tol: float | None = None, chunk_size: int = CHUNK_SIZE,
-                   progress=None, tol: float | None = None) -> Projection:
-    """Nearest points (feet) of points on trimmed NURBS surfaces.
-
-    Parameters
-    ----------
-    surfaces : Surface or list of Surface
-    points : (..., 3) float
-    max_distance : float, optional
-        Points farther than this from every surface get status ``BEYOND`` (NaN
-        values); the search stops early for them.
-    mesh_tol : float, optional
-        Candidate mesh tolerance, see :class:`Projector` (speed only).
-    chunk_size : int
-        Points per parallel batch (bounds the working memory).
-    progress : callable(done, total), optional
-        Called after each chunk.
-    tol : float, optional
-        Newton stops when its 3-D step is below ``tol`` (model units); default
-        :data:`NEWTON_STEP_TOL` times the model size.  The distance error is of the order of
-        ``tol**2 / radius of curvature`` at an orthogonal foot, and the foot moves by
-        up to ``tol``.
-
-    Returns
-    -------
-    Projection
-        Per point: foot, (u, v), surface index, distance, signed distance, unit normal,
-        status (interior / domain edge / trim edge / beyond / failed) and a lower bound
-        from the mesh.  The foot is a point of the exact trimmed surface; the distance
-        is the minimum over all candidate basins, converged to ~1e-12 of the model
-        size (tested against analytic distances to 1e-9).
-
-    Examples
-    --------
-    >>> import geomkit
-    >>> sphere = geomkit.samples.load("sphere")[0]
-    >>> pr = geomkit.project_points(sphere, [[0, 0, 13.0], [0, 0, 0]])
-    >>> [round(float(d), 9) for d in pr.signed_distance]
-    [3.0, -10.0]
-    """
-    pr = cached_projector(surfaces, mesh_tol)
-    return pr.project(points, max_distance, chunk_size, progress, tol)
+    def _stats(self) -> dict:
+        return {"candidate_triangles": int(self.mesh.faces.shape[0]),
+                "faces_failed": dict(self.face_errors)}

@@ -347,7 +347,7 @@ def section_html(sections, path, overwrite: bool = False, units: str | None = No
 def _whiskers(sections, scan, surfaces, band, probe_radius=0.0):
     """Per section ``(foot_2d (k, 2), point_2d (k, 2), deviation (k,), scale)``."""
     from geomkit.validate import as_points
-    from geomkit.query.projection import project_points
+    from geomkit.query.projection_part import project_points
 
     if surfaces is None:
         from geomkit.errors import InvalidInputError

@@ -25,6 +25,7 @@ subdivision", extended):
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,7 +35,7 @@ from geomkit.section.joins import (drop_shared_edges, join_across_edges, join_en
                                    split_at_poles)
 from geomkit.section.trace import _Eval, trace_surface
 from geomkit.validate import as_float_array
-from geomkit.errors import InvalidInputError
+from geomkit.errors import FaceFailedWarning, InvalidInputError
 from geomkit.nurbs.trimming import OUTSIDE
 from geomkit.nurbs.surface import as_surfaces
 
@@ -72,6 +73,8 @@ class Section:
     approx_error : float, the largest ``Surface.approx_error`` of the surfaces cut: the
         section points lie on the NURBS; the surfaces they stand for are within this.
     stats : dict, counts (sub-patches, leaves, crossings) per surface.
+    failed : dict, surface index -> why it could not be sectioned (left out, with a
+        :class:`~geomkit.errors.FaceFailedWarning`; the other surfaces are unaffected).
     """
 
     curves: list
@@ -90,6 +93,7 @@ class Section:
     gap: float = 0.0
     max_gap_bridged: float = 0.0
     approx_error: float = 0.0
+    failed: dict = field(default_factory=dict)
     surfaces: list = field(default_factory=list, repr=False)
 
     def __len__(self) -> int:
@@ -195,7 +199,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
         raise InvalidInputError(f"must be a number, got {type(gap).__name__}", "gap") from None
     if not (np.isfinite(gap) and gap >= 0):
         raise InvalidInputError(f"must be a finite number >= 0, got {gap!r}", "gap")
-    curves, contacts, coplanar, stats = [], [], [], {}
+    curves, contacts, coplanar, stats, failed = [], [], [], {}, {}
     for k, s in enumerate(surfs):
         P = s.control_points.reshape(-1, 3)
         scale = float(np.abs(abcd[3]) + np.abs(P).max())
@@ -205,13 +209,22 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
             coplanar.append(k)
             continue
         min_diam = max(0.25 * tol, 1e-13 * scale)
-        chains, cuv, st = trace_surface(s, abcd, tol, zsnap, min_diam)
+        try:
+            chains, cuv, st = trace_surface(s, abcd, tol, zsnap, min_diam)
+            clipped = _clip_trims(s, abcd, chains, zsnap)
+            if len(cuv) and s.is_trimmed:
+                cuv = cuv[s.classify_uv(cuv) != OUTSIDE]
+        except Exception as exc:  # noqa: BLE001 - reported: a warning and Section.failed
+            # one face never sinks the section: left out, named
+            failed[k] = f"{type(exc).__name__}: {exc}"
+            name = f"surface {k}" + (f" ({s.name})" if s.name else "")
+            warnings.warn(f"{name} left out of the section: {failed[k]}",
+                          FaceFailedWarning, stacklevel=2)
+            continue
         stats[k] = st
-        for c in _clip_trims(s, abcd, chains, zsnap):
+        for c in clipped:
             curves.append({"uv": c["uv"], "sid": np.full(len(c["uv"]), k), "closed": c["closed"],
                            "chord": c["chord"]})
-        if len(cuv) and s.is_trimmed:
-            cuv = cuv[s.classify_uv(cuv) != OUTSIDE]
         for q in cuv:
             contacts.append((k, q))
     ev = {k: _Eval(s, abcd) for k, s in enumerate(surfs)}
@@ -242,7 +255,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
                    uv=[c["uv"] for c in curves], surface_index=[c["sid"] for c in curves],
                    points=pts, points_uv=puv, points_surface=psid, plane=abcd, tol=tol,
                    max_residual=resid, max_chord_error=chord, coplanar=coplanar, stats=stats,
-                   surfaces=surfs, gap=gap, max_gap_bridged=bridged[0],
+                   surfaces=surfs, gap=gap, max_gap_bridged=bridged[0], failed=failed,
                    approx_error=max((getattr(s, "approx_error", 0.0) for s in surfs),
                                     default=0.0))
 

@@ -158,7 +158,8 @@ def test_kernel_foot_class_equals_classify_uv():
     g = pr.grid
     pk.project_batch(P, g.vertices, g.faces, pr.fdev, pr.face_surf, pr.face_uv, pr.dmax,
                      *g._args(), *pr.packed, pr.closed, pr.trimmed, *pr.breaks,
-                     *pr.trim_pack, *pr.cert_pack, 1, NEWTON_STEP_TOL * pr.size, np.inf, K,
+                     *pr.trim_pack, *pr.cert_pack, 1, NEWTON_STEP_TOL * pr.size,
+                     np.full(n, np.inf), K,
                      np.zeros(n, dtype=np.int64), fs, fuv, fd, fst, fcls,
                      nf, np.zeros(n), np.full(n, np.inf), np.zeros(n, dtype=np.int64),
                      np.zeros((n, 5), dtype=np.int64))
