@@ -225,7 +225,7 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
         rows.append(make_row("parts", name, "project points", 2000, tp / 2000, err,
                              "OCC BRepExtrema_DistShapeShape", tpo, None, per="point",
                              repeats=k, note=f"built projector; error against OCC on 40, "
-                                             f"edge tolerance {res.edge_tolerance:.2g}"))
+                                             f"edge gap {res.edge_gap or 0.0:.2g}"))
     return rows
 
 

@@ -39,7 +39,7 @@ from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_pcurve
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
-           "face_surface"]
+           "face_surface", "analytic_pieces"]
 
 ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical surface",
             194: "right circular conical surface", 196: "spherical surface",
@@ -81,10 +81,19 @@ class Analytic:
         th = np.arctan2(y, x)
         if self.kind in ("cylinder", "cone"):
             a = z
+            if self.kind == "cone":  # beyond the apex the radius is negative: the
+                # generator there lies at the angle th + pi
+                th = np.where(self.R + z * math.tan(self.alpha) < 0, th + np.pi, th)
         elif self.kind == "sphere":
             a = np.arctan2(z, rho)
         else:
             a = np.arctan2(z, rho - self.R)
+            if self.r > self.R:  # a spindle torus: its inner (lemon) part passes the
+                # axis, its points lie at the angle th + pi
+                lemon = np.abs(np.hypot(rho + self.R, z) - self.r) < \
+                    np.abs(np.hypot(rho - self.R, z) - self.r)
+                a = np.where(lemon, np.arctan2(z, -rho - self.R), a)
+                th = np.where(lemon, th + np.pi, th)
         return np.column_stack([a, th]), rho
 
     def residual(self, P):
@@ -96,11 +105,15 @@ class Analytic:
             return np.abs(h)
         if self.kind == "cylinder":
             return np.abs(rho - self.R)
-        if self.kind == "cone":
-            return np.abs(rho - self.R - h * math.tan(self.alpha)) * math.cos(self.alpha)
+        if self.kind == "cone":  # both nappes
+            return np.abs(rho - np.abs(self.R + h * math.tan(self.alpha))) * \
+                math.cos(self.alpha)
         if self.kind == "sphere":
             return np.abs(np.hypot(rho, h) - self.R)
-        return np.abs(np.hypot(rho - self.R, h) - self.r)
+        out = np.abs(np.hypot(rho - self.R, h) - self.r)
+        if self.r > self.R:  # a spindle torus's inner part
+            out = np.minimum(out, np.abs(np.hypot(rho + self.R, h) - self.r))
+        return out
 
     def offset(self, d):
         """The surface offset by ``d`` along the radial / normal direction (exact: the
@@ -300,7 +313,7 @@ def _chain(srf, loop, size):
     return out
 
 
-def _pieces(srf, loop, chains, fu, fv, tol, size):
+def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
     pieces = []
     for e, ab in zip(loop, chains):
         if srf.kind == "plane":
@@ -324,6 +337,8 @@ def _pieces(srf, loop, chains, fu, fv, tol, size):
             else:
                 c = _fit(srf, e, ab, fu, fv, tol)
         pieces.append(c)
+    if not bridge:
+        return pieces
     out = []
     for k, c in enumerate(pieces):
         out.append(c)
@@ -337,10 +352,15 @@ def _fit(srf, e, ab, fu, fv, tol):
     """A non-iso edge: cubic interpolant of its mapped local coordinates (angles on
     the branch of the chained samples)."""
     s0 = np.linspace(0.0, 1.0, len(ab))
+    last = [None, None]  # the parameters of the last call and their local coordinates
 
     def loc(s, k):
         s = np.clip(s, 0.0, 1.0)
-        v, _ = srf.local(curve_eval(e.curve, e.ts(s)))
+        if last[0] is not None and last[0].shape == s.shape and np.array_equal(last[0], s):
+            v = last[1]  # both coordinates come from one evaluation
+        else:
+            v, _ = srf.local(curve_eval(e.curve, e.ts(s)))
+            last[:] = s, v
         x = v[:, k]
         if srf.periodic[k]:
             ref = np.interp(s, s0, ab[:, k])
@@ -357,19 +377,35 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
     """``(surface args, [loops of TrimCurve pieces], domain)`` of one face: the
     analytic surface ``srf_de`` over the range of its boundary ``loops`` (lists of
     :class:`_Edge`, outer first)."""
-    P = np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
-                        for e in lp])
-    size = float(np.ptp(P, axis=0).max()) or 1.0
     if rd.type_of(srf_de) == 140:  # offset of an analytic surface: exact, the side
         # that holds the face's edges
         r = rd.rec(srf_de)
         if rd.transform(srf_de) is not None:
             raise Unsupported(f"offset surface DE {srf_de} with its own transformation")
         base = analytic(rd, i_(r[5]))
+        P = _edge_points(loops)
         cands = [base.offset(f_(r[4])), base.offset(-f_(r[4]))]
         srf = min(cands, key=lambda c: float(c.residual(P).max()))
     else:
         srf = analytic(rd, srf_de)
+    return analytic_pieces(srf, loops, tol_rel, f"surface DE {srf_de}")
+
+
+def _edge_points(loops):
+    return np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
+                           for e in lp])
+
+
+def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,
+                    bridge: bool = True):
+    """``(surface args, [loops of TrimCurve pieces], domain)`` of a face on the
+    analytic surface ``srf`` over the range of its boundary ``loops`` (lists of
+    :class:`_Edge`, outer first) and of the ``extra`` points (k, 3) (a cone's apex,
+    a sphere's pole: their non-periodic coordinate); shared by the IGES and STEP
+    readers.  ``bridge``: consecutive pieces more than 1e-3 of the range apart are
+    joined by a UV segment (else left to the caller)."""
+    P = _edge_points(loops)
+    size = float(np.ptp(P, axis=0).max()) or 1.0
     chains = [_chain(srf, lp, size) for lp in loops]
     outer = np.concatenate(chains[0])
     for ch in chains[1:]:  # inner loops: same turn as the outer one
@@ -381,14 +417,32 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
                     ab[:, c] += k * TWO_PI
     allab = np.concatenate([np.concatenate(ch) for ch in chains])
     lo, hi = allab.min(axis=0), allab.max(axis=0)
+    if extra is not None and len(extra):
+        ab, _ = srf.local(np.asarray(extra, float).reshape(-1, 3))
+        for c in (0, 1):
+            if not srf.periodic[c]:
+                lo[c], hi[c] = min(lo[c], ab[:, c].min()), max(hi[c], ab[:, c].max())
+    if srf.kind == "plane":  # the pieces are the edges' own NURBS: a rational arc's
+        # middle control point lies beyond the arc, and trims must stay in the domain
+        Q = np.concatenate([e.curve[2][:, :3] / e.curve[2][:, 3:] for lp in loops
+                            for e in lp])
+        q, _ = srf.local(Q)
+        lo, hi = np.minimum(lo, q.min(axis=0)), np.maximum(hi, q.max(axis=0))
+    if srf.kind == "cone":  # never across the apex; an end near it is the apex
+        apex = -srf.R / math.tan(srf.alpha)
+        near = 1e-6 * max(size, abs(apex))
+        if abs(lo[0] - apex) <= near or lo[0] < apex < hi[0] and hi[0] - apex > apex - lo[0]:
+            lo[0] = apex
+        elif abs(hi[0] - apex) <= near or lo[0] < apex < hi[0]:
+            hi[0] = apex
     pad = 1e-9 * max(float(np.max(hi - lo)), 1.0)
     if srf.kind == "sphere":
         lo[0], hi[0] = max(lo[0], -math.pi / 2), min(hi[0], math.pi / 2)
     if np.any(hi - lo <= pad):
-        raise Unsupported(f"surface DE {srf_de}: its boundary spans no area")
+        raise Unsupported(f"{what}: its boundary spans no area")
     args, fu, fv = srf.build((lo[0], hi[0]), (lo[1], hi[1]))
     tol = tol_rel * float(np.max(hi - lo))
-    uv_loops = [_pieces(srf, lp, ch, fu, fv, tol, float(np.max(hi - lo)))
+    uv_loops = [_pieces(srf, lp, ch, fu, fv, tol, float(np.max(hi - lo)), bridge)
                 for lp, ch in zip(loops, chains)]
     dom = ((float(args[2][0]), float(args[2][-1])), (float(args[3][0]), float(args[3][-1])))
     return args, uv_loops, dom

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit.tolerances import GAP_TOL
+from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import evaluate_trim_curve
 from geomkit.cad.uvmap import map_pcurve
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
-           "same_point_3d"]
+           "same_point_3d", "finish_loop"]
 
 
 class Unsupported(Exception):
@@ -252,3 +252,25 @@ def same_point_3d(base, tol3d: float, samples: int = 17):
 
     same.errors = []
     return same
+
+
+def finish_loop(pieces, base, periods, ftol: float, what: str):
+    """``(pieces, gaps, repairs)``: one trim loop's pieces made a closed loop on
+    ``base``: chained (edge order, seam sides: ``periods`` of the closed directions)
+    when consecutive pieces do not meet, control points just outside the domain
+    snapped onto it, what is left outside or open repaired when the face's own
+    tolerance ``ftol`` covers it, measured in 3-D (:func:`clip_in_3d`,
+    :func:`same_point_3d`), rounding gaps bridged (:func:`close_gaps`).  ``gaps``: the
+    UV sizes of the moves and bridges; ``repairs``: the 3-D sizes of the repairs (the
+    face's ``approx_error`` holds them)."""
+    (u0, u1), (v0, v1) = domain = base.domain
+    size = max(u1 - u0, v1 - v0)
+    probe = same_point_3d(base, ftol)  # a gap at a pole is not out of order
+    if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size and not probe(a.end, b.start)
+           for a, b in zip(pieces, pieces[1:] + pieces[:1])):
+        pieces = chain(pieces, size, periods, domain)
+    pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
+    pieces, moved3 = clip_in_3d(pieces, base, ftol)
+    same = same_point_3d(base, ftol)
+    pieces, g = close_gaps(pieces, domain, what, same)
+    return pieces, moved + g, moved3 + same.errors

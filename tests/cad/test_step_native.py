@@ -1,0 +1,197 @@
+"""geomkit's own STEP reader (no Open CASCADE): the Part 21 parser, malformed files,
+every single-part test file read whole, and the hard cases checked against closed
+forms.  Face by face against Open CASCADE: ``tests/cad/test_real_parts.py`` (its
+``read_step`` default is this reader)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import geomkit
+from geomkit.cad import step as step_mod
+from geomkit.cad.p21 import DERIVED, P21, Enum, Ref, Typed
+from geomkit.cad.step import read_step
+from geomkit.cad.stepbrep import read_native
+from geomkit.errors import FileFormatError, InvalidInputError
+from helpers.paths import DATA
+
+PARTS = DATA / "parts"
+FACES = {"nist_ftc_06_ap242.stp": 187, "nist_ftc_07_ap242.stp": 306,
+         "nist_ctc_01_ap203.stp": 139, "nist_ctc_05_ap203.stp": 209,
+         "sw2013_featuretype_ap214.step": 96, "sw2018_base_interface_ap203.step": 30,
+         "nx9_face_recognition_ap214.stp": 23, "ug16_io1_ap214.stp": 17,
+         "euclid_screw_ap214.step": 10, "inventor2015_cylinder_block_face6.stp": 1,
+         "catia_v5_ventilator_swept_faces.stp": 5}
+"""Open CASCADE's face count of each single-part test file."""
+
+
+def _file(data: str) -> str:
+    return ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\n"
+            "FILE_NAME('a','t',('me'),('org'),'pp','SYS X','');\n"
+            "FILE_SCHEMA(('CONFIG_CONTROL_DESIGN'));\nENDSEC;\nDATA;\n" + data
+            + "\nENDSEC;\nEND-ISO-10303-21;\n")
+
+
+def test_parser_values():
+    p = P21(_file("#1=CARTESIAN_POINT('a;b''c',(1.,-2.5E-1,3));\n"
+                  "/* a comment; with a semicolon */\n"
+                  "#2=(NAMED_UNIT(*)SI_UNIT(.MILLI.,.METRE.)LENGTH_UNIT());\n"
+                  "#3=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-05),#2,'d',$);\n"
+                  "#4=FACE_BOUND('',#5,.T.);#5=X(.F.,.U.,());"))
+    assert p.schema == "CONFIG_CONTROL_DESIGN" and p.system == "SYS X"
+    name, a = p.get(1)
+    assert name == "CARTESIAN_POINT" and a == ["a;b'c", [1.0, -0.25, 3]]
+    assert isinstance(a[1][2], int)
+    name, parts = p.get(2)
+    assert name is None and parts["SI_UNIT"] == [Enum("MILLI"), Enum("METRE")]
+    assert parts["NAMED_UNIT"] == [DERIVED]
+    _, a = p.get(3)
+    assert isinstance(a[0], Typed) and a[0].name == "LENGTH_MEASURE" and a[0].value == 1e-5
+    assert isinstance(a[1], Ref) and a[1] == 2 and a[3] is None
+    assert p.get(4)[1][2] is True and p.get(5)[1] == [False, None, []]
+    assert p.of_type("face_bound") == [4] and p.complex_ids() == [2]
+
+
+@pytest.mark.parametrize("data, message", [
+    ("#1=LINE('',#2,#3;", "inside a parameter list"),
+    ("#1=LINE('',#2));", "unbalanced"),
+    ("#1=LINE '',#2;", "not followed by"),
+    ("#1 LINE('');", "has no '='"),
+    ("#1=LINE('');#1=LINE('');", "defined twice"),
+    ("#x=LINE('');", "bad record id"),
+    ("LINE('');", "does not start with #id"),
+    ("#1=LINE('abc);", "unmatched quote"),
+    ("#1=LINE('',@);", "unexpected"),
+    ("#1=(A(1) 2);", "complex entity"),
+])
+def test_parser_refuses_malformed_records(data, message):
+    with pytest.raises(FileFormatError, match=message):
+        p = P21(_file(data))
+        for i in list(p.names):
+            p.get(i)
+
+
+def test_parser_refuses_truncated_and_foreign_files():
+    with pytest.raises(FileFormatError, match="truncated"):
+        P21(_file("#1=LINE('');")[:-30])
+    with pytest.raises(FileFormatError, match="not a STEP file"):
+        P21("solid x\nfacet normal 0 0 1\n")
+    with pytest.raises(FileFormatError, match="#7 is referenced but not defined"):
+        P21(_file("#1=LINE('',#7);")).get(7)
+
+
+@pytest.mark.parametrize("name", sorted(FACES))
+def test_reads_every_single_part_without_open_cascade(name, monkeypatch):
+    monkeypatch.setattr(step_mod, "HAVE_OCP", False)
+    res = read_step(PARTS / name)
+    assert len(res.surfaces) == FACES[name] and not res.skipped
+    assert res.units in ("mm", "in")
+    assert res.edge_gap is None or 0 <= res.edge_gap < 1e-3 * max(s.size for s in
+                                                                  res.surfaces)
+
+
+def test_an_assembly_needs_open_cascade(monkeypatch):
+    monkeypatch.setattr(step_mod, "HAVE_OCP", False)
+    with pytest.raises(FileFormatError, match="assembly.*cadquery-ocp"):
+        read_step(PARTS / "proe_as1_ap203.stp")
+
+
+def test_reader_choice():
+    with pytest.raises(InvalidInputError, match="reader"):
+        read_step(PARTS / "ug16_io1_ap214.stp", reader="parasolid")
+    res = read_step(PARTS / "ug16_io1_ap214.stp", reader="geomkit")
+    assert len(res.surfaces) == 17
+
+
+def _area(s):
+    m = geomkit.tessellate(s, 1e-4 * s.size)
+    T = m.vertices[m.faces]
+    return 0.5 * float(np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]),
+                                      axis=1).sum())
+
+
+def _faces(path):
+    from geomkit.cad.p21 import read_p21
+    from geomkit.cad.stepbrep import _shells
+
+    p = read_p21(path)
+    return p, [f for sh in _shells(p) for f in p.get(sh)[1][1]]
+
+
+def test_band_between_two_circles():
+    """Unigraphics writes a cylinder band as two circle loops and no seam edge:
+    joined across the seam, the face is the whole band (area 2 pi R h)."""
+    path = PARTS / "ug16_io1_ap214.stp"
+    res = read_native(path)
+    p, faces = _faces(path)
+    checked = 0
+    for k, f in enumerate(faces):
+        _, a = p.get(f)
+        name, sa = p.get(a[2])
+        loops = [p.get(p.get(b)[1][1]) for b in a[1]]
+        if name != "CYLINDRICAL_SURFACE" or len(loops) != 2 or any(
+                len(lp[1][1]) != 1 for lp in loops):
+            continue
+        R = sa[2]
+        s = res.surfaces[k]
+        m = geomkit.tessellate(s, 1e-4 * s.size)
+        h = float(np.ptp(m.vertices @ _axis(p, sa[1]), axis=0))
+        assert _area(s) == pytest.approx(2 * math.pi * R * h, rel=2e-3), s.name
+        checked += 1
+    assert checked >= 3
+
+
+def _axis(p, ax):
+    _, a = p.get(ax)
+    d = np.array(p.get(a[2])[1][1], float)
+    return d / np.linalg.norm(d)
+
+
+def test_cone_closed_at_its_apex():
+    """NIST CTC-01 faces 73 and 75: a cone bounded by one circle and a vertex loop at
+    the apex: the face runs to the apex (area pi r l)."""
+    path = PARTS / "nist_ctc_01_ap203.stp"
+    res = read_native(path)
+    p, faces = _faces(path)
+    for k in (73, 75):
+        _, a = p.get(faces[k])
+        name, sa = p.get(a[2])
+        assert name == "CONICAL_SURFACE"
+        s = res.surfaces[k]
+        m = geomkit.tessellate(s, 1e-4 * s.size)
+        O = np.array(p.get(p.get(sa[1])[1][1])[1][1], float)
+        A = _axis(p, sa[1])
+        alpha = math.radians(sa[3]) if sa[3] > 1.6 else sa[3]
+        d = m.vertices - O
+        h = d @ A
+        r = np.linalg.norm(d - np.outer(h, A), axis=1)
+        rmax = float(r.max())
+        slant = rmax / math.sin(alpha)
+        assert float(r.min()) < 1e-6 * s.size          # it reaches the apex
+        assert _area(s) == pytest.approx(math.pi * rmax * slant, rel=2e-3)
+
+
+def test_spindle_torus_faces_lie_on_their_torus():
+    """EUCLID's screw: tori whose minor radius exceeds the major one; points of the
+    inner part pass the axis, so they are inverted at the angle + pi."""
+    path = PARTS / "euclid_screw_ap214.step"
+    res = read_native(path)
+    p, faces = _faces(path)
+    n = 0
+    for k, f in enumerate(faces):
+        name, sa = p.get(p.get(f)[1][2])
+        if name != "TOROIDAL_SURFACE" or sa[3] <= sa[2]:
+            continue
+        R, r = sa[2], sa[3]
+        O = np.array(p.get(p.get(sa[1])[1][1])[1][1], float)
+        A = _axis(p, sa[1])
+        X = geomkit.tessellate(res.surfaces[k], 1e-3 * r).vertices - O
+        h = X @ A
+        rho = np.linalg.norm(X - np.outer(h, A), axis=1)
+        res_ = np.minimum(np.abs(np.hypot(rho - R, h) - r), np.abs(np.hypot(rho + R, h) - r))
+        assert res_.max() < 1e-9 * r
+        n += 1
+    assert n == 3
