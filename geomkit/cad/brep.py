@@ -201,10 +201,22 @@ def analytic(rd, de: int) -> Analytic:
 class _Edge:
     """One oriented model-space edge: its NURBS curve and parameter direction."""
 
-    def __init__(self, curve, key, reverse):
+    def __init__(self, curve, key, reverse, cache=None):
         self.curve, self.key, self.reverse = curve, key, reverse
         p, U, _ = curve
         self.t0, self.t1 = float(U[p]), float(U[-p - 1])
+        # samples shared by every use of the curve (a reader passes one dict per file,
+        # keeping its curves alive)
+        self._cache = {} if cache is None else cache
+
+    def points(self, n: int) -> np.ndarray:
+        """The curve at ``n`` parameters evenly spaced along the edge, in loop order
+        (``curve_eval(curve, ts(linspace(0, 1, n)))``), computed once per curve."""
+        k = (id(self.curve), n)
+        X = self._cache.get(k)
+        if X is None:
+            X = self._cache[k] = curve_eval(self.curve, np.linspace(self.t0, self.t1, n))
+        return X[::-1] if self.reverse else X
 
     def ts(self, s):
         s = np.asarray(s, float)
@@ -286,7 +298,7 @@ def _chain(srf, loop, size):
     s = np.linspace(0.0, 1.0, _NS)
     out, first, prev, prev_pole = [], {}, None, False
     for e in loop:
-        ab, rho = srf.local(curve_eval(e.curve, e.ts(s)))
+        ab, rho = srf.local(e.points(_NS))
         pole = rho <= 1e-9 * size
         if pole.all():
             raise Unsupported("an edge lies on the surface's axis")
@@ -333,7 +345,13 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
                 for k in (0, 1):
                     if iso[k]:
                         q[:, k] = ab[0, k]
-                c, _ = map_pcurve(TrimCurve.polyline(q), fu, fv, tol)
+                # an axis-parallel segment maps onto one (each coordinate by its
+                # own monotone map): its mapped ends are exact
+                if fu is not None:
+                    q[:, 0] = fu(q[:, 0])
+                if fv is not None:
+                    q[:, 1] = fv(q[:, 1])
+                c = TrimCurve.polyline(q)
             else:
                 c = _fit(srf, e, ab, fu, fv, tol)
         pieces.append(c)
@@ -368,7 +386,14 @@ def _fit(srf, e, ab, fu, fv, tol):
         f = fu if k == 0 else fv
         return x if f is None else f(x)
 
-    diag = TrimCurve.polyline([[0.0, 0.0], [1.0, 1.0]])
+    # the edge's own knots start the spans (a quintic across a knot of the edge
+    # converges slowly)
+    p, U, _ = e.curve
+    sk = (np.unique(np.asarray(U, float)[p:len(U) - p]) - e.t0) / (e.t1 - e.t0)
+    sk = np.unique(np.clip(1.0 - sk if e.reverse else sk, 0.0, 1.0))
+    if sk.size < 2:
+        sk = np.array([0.0, 1.0])
+    diag = TrimCurve.polyline(np.column_stack([sk, sk]))
     c, _ = map_pcurve(diag, lambda s: loc(s, 0), lambda s: loc(s, 1), tol)
     return c
 
@@ -392,8 +417,7 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
 
 
 def _edge_points(loops):
-    return np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 9))) for lp in loops
-                           for e in lp])
+    return np.concatenate([e.points(9) for lp in loops for e in lp])
 
 
 def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,

@@ -13,6 +13,7 @@ to a period, for the loop's chaining to place).  An edge that is not on the surf
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
@@ -24,6 +25,49 @@ from geomkit.query.projection_part import project_points
 __all__ = ["edge_uv", "EDGE_TOL"]
 
 _MAX_POINTS = 4097
+
+
+class _Inverse:
+    """Parameters of points on (within ``tol`` of) a surface: Gauss-Newton from the
+    nearest of a grid of its points (several per knot span); a point it does not bring
+    within ``tol`` is projected exactly (:func:`geomkit.project_points`)."""
+
+    def __init__(self, base):
+        self.base = base
+        (u0, u1), (v0, v1) = self.dom = base.domain
+        gu = int(min(128, max(16, 4 * (np.unique(base.knots_u).size - 1))))
+        gv = int(min(128, max(16, 4 * (np.unique(base.knots_v).size - 1))))
+        uu, vv = np.meshgrid(np.linspace(u0, u1, gu), np.linspace(v0, v1, gv),
+                             indexing="ij")
+        self.grid = np.column_stack([uu.ravel(), vv.ravel()])
+        self.tree = cKDTree(base.evaluate(self.grid))
+
+    def __call__(self, X, tol):
+        (u0, u1), (v0, v1) = self.dom
+        uv = self.grid[self.tree.query(X)[1]].copy()
+        scale = max(u1 - u0, v1 - v0)
+        for _ in range(12):
+            D = self.base.derivatives(uv, 1)
+            S, Su, Sv = D[:, 0, 0], D[:, 1, 0], D[:, 0, 1]
+            r = X - S
+            a, b, c = (Su * Su).sum(1), (Su * Sv).sum(1), (Sv * Sv).sum(1)
+            g1, g2 = (Su * r).sum(1), (Sv * r).sum(1)
+            det = a * c - b * b
+            ok = det > 1e-300
+            det = np.where(ok, det, 1.0)
+            step = np.where(ok[:, None], np.column_stack([(c * g1 - b * g2) / det,
+                                                          (a * g2 - b * g1) / det]), 0.0)
+            uv[:, 0] = np.clip(uv[:, 0] + step[:, 0], u0, u1)
+            uv[:, 1] = np.clip(uv[:, 1] + step[:, 1], v0, v1)
+            if float(np.abs(step).max(initial=0.0)) <= 1e-14 * scale:
+                break
+        dist = np.linalg.norm(self.base.evaluate(uv) - X, axis=1)
+        far = ~(dist <= tol)
+        if far.any():
+            pr = project_points([self.base], X[far])
+            uv[far] = pr.uv
+            dist[far] = pr.distance
+        return uv, dist
 
 
 def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
@@ -44,18 +88,17 @@ def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
             out[:, c] = lo[c] + np.mod(uv[:, c] - lo[c], per[c])
         return out
 
+    inverse = _Inverse(base)
     pieces, worst = [], 0.0
     for k, e in enumerate(edges):
         s = np.linspace(0.0, 1.0, 17)
+        raw, dist = inverse(e.points(17), tol)
         while True:
-            X = curve_eval(e.curve, e.ts(s))
-            pr = project_points([base], X)
-            off = float(np.nanmax(pr.distance)) if np.all(np.isfinite(pr.distance)) \
-                else np.inf
+            off = float(np.nanmax(dist)) if np.all(np.isfinite(dist)) else np.inf
             if off > tol:
                 raise Unsupported(f"{what}: edge {k} is not on the surface (a point is "
                                   f"{off:.3g} from it, tolerance {tol:.3g})")
-            uv = pr.uv
+            uv = raw.copy()
             for c in np.flatnonzero(wrapped):
                 uv[:, c] = np.unwrap(uv[:, c], period=per[c])
             sm = 0.5 * (s[1:] + s[:-1])
@@ -70,6 +113,12 @@ def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
                 raise Unsupported(f"{what}: edge {k} has no UV polyline within {tol:.3g} "
                                   f"of {_MAX_POINTS} points (its projection jumps: a "
                                   "seam?)")
-            s = np.sort(np.concatenate([s, sm[bad]]))
+            # only the new points are projected
+            new = sm[bad]
+            nuv, nd = inverse(curve_eval(e.curve, e.ts(new)), tol)
+            order = np.argsort(np.concatenate([s, new]), kind="stable")
+            s = np.concatenate([s, new])[order]
+            raw = np.concatenate([raw, nuv])[order]
+            dist = np.concatenate([dist, nd])[order]
         pieces.append(TrimCurve.polyline(uv, f"{what}.edge{k}"))
     return pieces, worst

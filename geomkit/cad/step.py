@@ -3,8 +3,7 @@
 
 :func:`read_step` reads the B-rep with :func:`geomkit.cad.stepbrep.read_native`
 (geomkit's Part 21 parser and geometry; no Open CASCADE, no OCC crash in the process)
-and falls back to :func:`read_step_occ` for assemblies of placed parts and faces the
-native reader cannot convert.  Through Open CASCADE, OCC reads the file and builds
+and falls back to :func:`read_step_occ` for faces the native reader cannot convert.  Through Open CASCADE, OCC reads the file and builds
 the B-rep; geomkit converts each face:
 
 * B-spline and Bezier faces are taken as they are, with the file's pcurves;
@@ -292,8 +291,9 @@ def occ_shape(path):
 
 READERS = ("auto", "geomkit", "occ")
 """``read_step``'s readers: geomkit's own (:mod:`geomkit.cad.stepbrep`), Open
-CASCADE's, or geomkit's with Open CASCADE for what it does not read (assemblies,
-faces it cannot convert) when the extra is installed."""
+CASCADE's, or geomkit's with Open CASCADE for what it does not read (faces it
+cannot convert, placements other than item-defined transformations) when the extra
+is installed."""
 
 
 def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
@@ -303,7 +303,7 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
     ``reader="auto"`` reads the file's B-rep with geomkit's own reader
     (:func:`geomkit.cad.stepbrep.read_native`: no Open CASCADE needed), and hands
     the file to Open CASCADE (:func:`read_step_occ`) only for what it does not read
-    (an assembly of placed parts, a face it cannot convert) when the extra is
+    (a face it cannot convert, a placement it does not read) when the extra is
     installed; ``"geomkit"`` / ``"occ"`` choose one.  A malformed file is an error
     from geomkit's reader, never handed on.
 

@@ -4,7 +4,8 @@ and geometry (:mod:`geomkit.cad.p21`, :mod:`geomkit.cad.stepgeom`) to trimmed su
 * **Which faces.** Every face of every shell of the shape representations that hold
   solids or surface models (``MANIFOLD_SOLID_BREP``, ``BREP_WITH_VOIDS``,
   ``SHELL_BASED_SURFACE_MODEL``, ``FACE_BASED_SURFACE_MODEL``), in file order of
-  their shells.  Assemblies whose parts are placed by transformations are not read
+  their shells; in an assembly, every occurrence of a part where its placements put
+  it (:mod:`geomkit.cad.stepasm`), each part's faces converted once.
   (:class:`~geomkit.cad.loops.Unsupported`: the caller reads them through OCC).
 * **Edges.** Each edge is its 3-D curve between its two vertices, an exact NURBS
   (:meth:`~geomkit.cad.stepgeom.Curve.nurbs`), run the way the loop runs it.  STEP
@@ -31,6 +32,7 @@ from geomkit.cad.edgeproj import edge_uv
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.p21 import P21, Ref, read_p21
+from geomkit.cad.stepasm import instances
 from geomkit.cad.stepgeom import StepGeometry, reverse_curve
 from geomkit.cad.stepseam import cap_point, cut_at_seam, merge_winding, start_inside
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
@@ -99,11 +101,20 @@ def file_units(p: P21):
     return None, 1.0, None
 
 
-def _shells(p: P21):
-    """Shell ids in file order of the representations' items, and the shells'
-    count of transformed placements (assemblies)."""
-    out = []
+def _rep_items(p: P21) -> dict:
+    """Shape representation id -> its item ids."""
+    out = {}
     for i in p.of_type(*_REPS):
+        _, a = p.get(i)
+        out[i] = [int(x) for x in a[1]] if len(a) > 1 and isinstance(a[1], list) else []
+    return out
+
+
+def _shells(p: P21, reps=None):
+    """Shell ids of the B-rep items of the representations ``reps`` (default: every
+    shape representation), in file order, each once."""
+    out = []
+    for i in (p.of_type(*_REPS) if reps is None else reps):
         _, a = p.get(i)
         for it in a[1] if len(a) > 1 and isinstance(a[1], list) else []:
             if not isinstance(it, Ref) or p.names.get(int(it)) not in _ITEMS:
@@ -185,6 +196,7 @@ class _Faces:
     def __init__(self, p: P21, geom: StepGeometry):
         self.p, self.g = p, geom
         self._edges: dict = {}
+        self._samples: dict = {}  # (id(edge curve), n) -> its points
 
     def edge(self, i):
         """The edge curve (exact NURBS) run from its start vertex to its end vertex."""
@@ -235,9 +247,11 @@ class _Faces:
             edges = []
             for oe in la[1]:
                 _, oa = self.g.rec(oe, "ORIENTED_EDGE")
-                edges.append(_Edge(self.edge(oa[3]), int(oa[3]), oa[4] is False))
+                edges.append(_Edge(self.edge(oa[3]), int(oa[3]), oa[4] is False,
+                                   self._samples))
             if ba[2] is False:
-                edges = [_Edge(e.curve, e.key, not e.reverse) for e in edges[::-1]]
+                edges = [_Edge(e.curve, e.key, not e.reverse, self._samples)
+                         for e in edges[::-1]]
             (outer if bname == "FACE_OUTER_BOUND" else inner).append(edges)
         if not outer and len(inner) > 1:  # no outer bound named: the widest loop
             inner.sort(key=lambda lp: -float(np.ptp(np.concatenate(
@@ -278,8 +292,7 @@ def _swept_base(kind, srf, loops):
     if c.bounds is None:
         raise Unsupported(f"a swept {c.kind}: only B-spline and polyline curves are read")
     curve = c.nurbs(*c.bounds)
-    X = np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 33)))
-                        for lp in loops for e in lp])
+    X = np.concatenate([e.points(33) for lp in loops for e in lp])
     if kind == "extrusion":
         V = srf[1]
         vv = float(V @ V)
@@ -346,8 +359,8 @@ def _face(F, geom, face, name, unc):
     # the projection's on the others): the model's gap at an edge is at most the
     # two faces' distances plus their approximation errors
     if kind == "analytic":
-        X = np.concatenate([curve_eval(e.curve, e.ts(np.linspace(0, 1, 9)))
-                            for lp in loops for e in lp]) if loops else np.empty((0, 3))
+        X = np.concatenate([e.points(9) for lp in loops for e in lp]) if loops \
+            else np.empty((0, 3))
         off = float(srf.residual(X).max()) if len(X) else 0.0
     else:
         off = fit_error
@@ -366,41 +379,61 @@ def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False
     p = read_p21(path)
     unit, angle, unc = file_units(p)
     geom = StepGeometry(p, angle)
-    if _placed(p, geom):
-        raise Unsupported("an assembly (parts placed by transformations)")
-    F = _Faces(p, geom)
-    shells = _shells(p)
-    if not shells:
+    if _placed(p, geom):  # an assembly: each part's shells where they sit
+        items = _rep_items(p)
+        placed = [(_shells(p, [r]), M) for r, M in
+                  instances(p, geom, items, lambda r: _holds_brep(p, r))]
+    else:
+        placed = [(_shells(p), None)]
+    if not any(sh for sh, _ in placed):
         raise FileFormatError(f"{p.source}: no solid or surface model (no shell)")
+    F = _Faces(p, geom)
     surfaces, entities, skipped, gaps = [], [], [], []
     fit_error = 0.0
-    at_edge: dict = {}  # edge id -> each face's distance from it
+    at_edge: dict = {}  # (occurrence, edge id) -> each face's distance from it
+    done: dict = {}  # face id -> its conversion (a part placed twice is read once)
     k = -1
-    for sh in shells:
-        _, sa = geom.rec(sh, "CLOSED_SHELL", "OPEN_SHELL", "CONNECTED_FACE_SET",
-                         "ORIENTED_CLOSED_SHELL")
-        for face in sa[1]:
-            k += 1
-            name = f"face{k}"
-            try:
-                s, g, err, dev, keys = _face(F, geom, face, name, unc)
-                gaps += g
-                fit_error = max(fit_error, err)
-                for key in keys:
-                    at_edge.setdefault(key, []).append(dev)
-            except InvalidInputError as exc:
-                if not skip_invalid:
-                    raise InvalidSurfaceError(f"{p.source}: face {k}: {exc}") from None
-                skipped.append(Skipped(name, f"invalid: {exc}"))
-                continue
-            except (Unsupported, FileFormatError, ValueError) as exc:
-                skipped.append(Skipped(name, f"cannot convert ({exc})"))
-                continue
-            surfaces.append(s)
-            entities.append(k)
+    for occ, (shells, M) in enumerate(placed):
+        for sh in shells:
+            _, sa = geom.rec(sh, "CLOSED_SHELL", "OPEN_SHELL", "CONNECTED_FACE_SET",
+                             "ORIENTED_CLOSED_SHELL")
+            for face in sa[1]:
+                k += 1
+                name = f"face{k}"
+                try:
+                    if int(face) not in done:
+                        done[int(face)] = _face(F, geom, face, name, unc)
+                    s, g, err, dev, keys = done[int(face)]
+                    s = _placed_surface(s, M, name)
+                    gaps += g
+                    fit_error = max(fit_error, err)
+                    for key in keys:
+                        at_edge.setdefault((occ, key), []).append(dev)
+                except InvalidInputError as exc:
+                    if not skip_invalid:
+                        raise InvalidSurfaceError(f"{p.source}: face {k}: {exc}") from None
+                    skipped.append(Skipped(name, f"invalid: {exc}"))
+                    continue
+                except (Unsupported, FileFormatError, ValueError) as exc:
+                    skipped.append(Skipped(name, f"cannot convert ({exc})"))
+                    continue
+                surfaces.append(s)
+                entities.append(k)
     check_read(p.source, surfaces, skipped, skip_unsupported, UnreadFaces)
     shared = [sorted(d)[-2:] for d in at_edge.values() if len(d) > 1]
     edge_gap = max((sum(d) for d in shared), default=None)
     return IgesResult(surfaces, entities, skipped, {"faces": k + 1}, len(gaps),
                       max(gaps, default=0.0), unit, unc, edge_fit_error=fit_error,
                       edge_gap=edge_gap)
+
+
+def _placed_surface(s, M, name):
+    """``s`` carried by the 4 x 4 matrix ``M`` (exact: affine maps commute with
+    NURBS), named ``name``."""
+    if M is None and s.name == name:
+        return s
+    P = s.control_points
+    if M is not None:
+        P = P @ M[:3, :3].T + M[:3, 3]
+    return Surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v, P, s.weights,
+                   s.trim or None, name=name, approx_error=s.approx_error)

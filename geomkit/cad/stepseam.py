@@ -48,7 +48,7 @@ def _angles(srf, e, n=65, full=False):
     """Unwrapped angles about the axis along edge ``e``; None when it reaches the
     axis (a pole or an apex), unless ``full``: then the angle there is the
     neighbour's."""
-    X = curve_eval(e.curve, e.ts(np.linspace(0.0, 1.0, n)))
+    X = e.points(n)
     ab, rho = srf.local(X)
     b = ab[:, 1]
     on = rho <= 1e-9 * max(1.0, float(np.ptp(X, axis=0).max()))

@@ -24,8 +24,8 @@ FACES = {"nist_ftc_06_ap242.stp": 187, "nist_ftc_07_ap242.stp": 306,
          "sw2013_featuretype_ap214.step": 96, "sw2018_base_interface_ap203.step": 30,
          "nx9_face_recognition_ap214.stp": 23, "ug16_io1_ap214.stp": 17,
          "euclid_screw_ap214.step": 10, "inventor2015_cylinder_block_face6.stp": 1,
-         "catia_v5_ventilator_swept_faces.stp": 5}
-"""Open CASCADE's face count of each single-part test file."""
+         "catia_v5_ventilator_swept_faces.stp": 5, "proe_as1_ap203.stp": 160}
+"""Open CASCADE's face count of each test file (the Pro/E file is an assembly)."""
 
 
 def _file(data: str) -> str:
@@ -93,10 +93,27 @@ def test_reads_every_single_part_without_open_cascade(name, monkeypatch):
                                                                   res.surfaces)
 
 
-def test_an_assembly_needs_open_cascade(monkeypatch):
-    monkeypatch.setattr(step_mod, "HAVE_OCP", False)
-    with pytest.raises(FileFormatError, match="assembly.*cadquery-ocp"):
-        read_step(PARTS / "proe_as1_ap203.stp")
+def test_assembly_parts_are_placed():
+    """The Pro/E "AS1" assembly places its parts (a bolt four times) by item-defined
+    transformations: every occurrence is read once per placement, each a rigid copy
+    of its part (face by face against OCC: tests/cad/test_real_parts.py)."""
+    from geomkit.cad.p21 import read_p21
+    from geomkit.cad.stepasm import instances
+    from geomkit.cad.stepbrep import _holds_brep, _rep_items, file_units
+    from geomkit.cad.stepgeom import StepGeometry
+
+    path = PARTS / "proe_as1_ap203.stp"
+    p = read_p21(path)
+    inst = instances(p, StepGeometry(p, file_units(p)[1]), _rep_items(p),
+                     lambda r: _holds_brep(p, r))
+    reps = [r for r, _ in inst]
+    assert len(inst) > len(set(reps))            # parts used more than once
+    for _, M in inst:                             # rigid motions
+        R = M[:3, :3]
+        assert np.allclose(R @ R.T, np.eye(3), atol=1e-12) and np.isclose(
+            np.linalg.det(R), 1.0)
+    res = read_step(path, reader="geomkit")
+    assert len(res.surfaces) == 160
 
 
 def test_reader_choice():
