@@ -202,6 +202,7 @@ class PartProjector(QueryBase):
         self.voxel_size = voxel_size
         boxes = np.array([face_box(s) for s in self.surfaces])
         self.blocks = _blocks(boxes, max(1, int(block_faces)))
+        self.face_boxes = boxes
         self.block_lo = np.array([boxes[b, 0].min(axis=0) for b in self.blocks])
         self.block_hi = np.array([boxes[b, 1].max(axis=0) for b in self.blocks])
         anchors = [face_anchors(s) for s in self.surfaces]
@@ -250,6 +251,18 @@ class PartProjector(QueryBase):
             self.built[b] = pr
         return pr
 
+    def _block_distance(self, P):
+        """(n, blocks) lower bounds of the distance from each point to each block:
+        the nearest of its faces' boxes (blocks of large faces overlap; their faces'
+        boxes overlap less)."""
+        D = _box_distance(P, self.block_lo, self.block_hi)
+        for b, faces in enumerate(self.blocks):
+            near = np.flatnonzero(D[:, b] == 0.0)  # inside the block's box
+            if near.size:
+                fb = self.face_boxes[faces]
+                D[near, b] = _box_distance(P[near], fb[:, 0], fb[:, 1]).min(axis=1)
+        return D
+
     def _reach(self, P):
         """Distance to the nearest anchor of a face that has not failed (inf: none)."""
         if self._tree_errors != len(self.face_errors):
@@ -264,7 +277,7 @@ class PartProjector(QueryBase):
         t0 = time.perf_counter()
         n = P.shape[0]
         errors = len(self.face_errors)
-        D = _box_distance(P, self.block_lo, self.block_hi)
+        D = self._block_distance(P)
         # a point of the part lies within reach (an anchor), grown by rounding so the
         # block holding that point is visited and does not answer BEYOND
         slack = 1e-9 * self.size
