@@ -3,8 +3,8 @@
 For each STEP part (default: the real parts in the repository's ``tests/data/parts``,
 see its README for their sources), beside OCC in the same process:
 
-* **read** -- :func:`geomkit.cad.step.read_step` (OCC's reader and transfer, then
-  geomkit's conversion of every face with its trims, gaps and edge gaps) against
+* **read** -- :func:`geomkit.cad.step.read_step` (geomkit's own STEP reader: parse,
+  convert every face with its trims from the 3-D edges, edge gaps) against
   ``STEPControl_Reader.ReadFile`` + ``TransferRoots`` alone.  No error column: the
   faces are checked against OCC face by face in ``tests/cad/test_real_parts.py``.
 * **tessellate** at 1e-3 of the part's size -- :func:`geomkit.tessellate` against
@@ -178,7 +178,8 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
         size = float(np.linalg.norm(hi - lo))
         rows.append(make_row("parts", name, "read faces", len(S), tg, None,
                              "OCC STEPControl_Reader", to, None, repeats=k,
-                             note="OCC: read + transfer; geomkit: that + conversion"))
+                             note="OCC: read + transfer; geomkit: its own reader, every "
+                                  "face converted"))
         # tessellate at the same linear deflection
         tol = 1e-3 * size
         tm, mesh, k = median_time(lambda: geomkit.tessellate(S, tol), repeat)
