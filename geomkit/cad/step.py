@@ -343,7 +343,38 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
                 raise
             raise FileFormatError(f"{p}: geomkit's STEP reader does not read {exc}"
                                   + ("" if HAVE_OCP else f"; {INSTALL_HINT}")) from None
-    return read_step_occ(p, skip_invalid, skip_unsupported)
+        why = str(exc)
+    return _occ_isolated(p, skip_invalid, skip_unsupported, why)
+
+
+def _occ_isolated(p: Path, skip_invalid, skip_unsupported, why: str) -> IgesResult:
+    """:func:`read_step_occ` in a child process (:mod:`geomkit.cad.occ_child`): a file
+    geomkit's reader could not finish goes to Open CASCADE, which can crash on broken
+    files (a segmentation fault in ``TransferRoots``); a crash there is a
+    :class:`FileFormatError` here, and OCC's messages stay off this process's stdout."""
+    import os
+    import pickle
+    import subprocess
+    import sys
+    import tempfile
+
+    fd, out = tempfile.mkstemp(prefix="geomkit-occ-", suffix=".pkl")
+    os.close(fd)
+    try:
+        run = subprocess.run([sys.executable, "-m", "geomkit.cad.occ_child", str(p),
+                              str(int(skip_invalid)), str(int(skip_unsupported)), out],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        if run.returncode != 0 or not os.path.getsize(out):
+            raise FileFormatError(f"{p}: geomkit's STEP reader stopped ({why}) and Open "
+                                  f"CASCADE crashed reading the file (exit "
+                                  f"{run.returncode}): it is malformed")
+        with open(out, "rb") as fh:
+            kind, res = pickle.load(fh)
+    finally:
+        os.unlink(out)
+    if kind == "error":
+        raise res
+    return res
 
 
 def read_step_occ(path, skip_invalid: bool = False,

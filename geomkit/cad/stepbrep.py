@@ -368,6 +368,16 @@ def _face(F, geom, face, name, unc):
     return s, gaps, fit_error, off + s.approx_error, keys
 
 
+_MALFORMED = (IndexError, TypeError, KeyError, AttributeError)
+"""What reading a record with missing or mistyped parameters raises (a list where a
+reference should be, too few parameters)."""
+
+
+def _malformed(source, where, exc) -> FileFormatError:
+    return FileFormatError(f"{source}: {where}: a record with missing or mistyped "
+                           f"parameters ({type(exc).__name__}: {exc})")
+
+
 def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False):
     """Every face of a STEP file's B-rep as a trimmed :class:`~geomkit.Surface`, read
     by geomkit alone (see the module); an :class:`~geomkit.cad.iges.reader.IgesResult`
@@ -377,14 +387,17 @@ def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False
     ``skip_unsupported``), :class:`~geomkit.errors.FileFormatError` for a malformed
     file."""
     p = read_p21(path)
-    unit, angle, unc = file_units(p)
-    geom = StepGeometry(p, angle)
-    if _placed(p, geom):  # an assembly: each part's shells where they sit
-        items = _rep_items(p)
-        placed = [(_shells(p, [r]), M) for r, M in
-                  instances(p, geom, items, lambda r: _holds_brep(p, r))]
-    else:
-        placed = [(_shells(p), None)]
+    try:
+        unit, angle, unc = file_units(p)
+        geom = StepGeometry(p, angle)
+        if _placed(p, geom):  # an assembly: each part's shells where they sit
+            items = _rep_items(p)
+            placed = [(_shells(p, [r]), M) for r, M in
+                      instances(p, geom, items, lambda r: _holds_brep(p, r))]
+        else:
+            placed = [(_shells(p), None)]
+    except _MALFORMED as exc:
+        raise _malformed(p.source, "its product structure", exc) from None
     if not any(sh for sh, _ in placed):
         raise FileFormatError(f"{p.source}: no solid or surface model (no shell)")
     F = _Faces(p, geom)
@@ -414,7 +427,16 @@ def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False
                         raise InvalidSurfaceError(f"{p.source}: face {k}: {exc}") from None
                     skipped.append(Skipped(name, f"invalid: {exc}"))
                     continue
-                except (Unsupported, FileFormatError, ValueError) as exc:
+                except (FileFormatError,) + _MALFORMED as exc:
+                    # a malformed record: the file is broken, not merely beyond this
+                    # reader (never handed on to another reader)
+                    err = exc if isinstance(exc, FileFormatError) else \
+                        _malformed(p.source, f"face {k}", exc)
+                    if not skip_unsupported:
+                        raise FileFormatError(f"face {k}: {err}") from None
+                    skipped.append(Skipped(name, f"malformed ({err})"))
+                    continue
+                except (Unsupported, ValueError) as exc:
                     skipped.append(Skipped(name, f"cannot convert ({exc})"))
                     continue
                 surfaces.append(s)

@@ -246,8 +246,10 @@ class StepGeometry:
             p, pts = int(a[1]), a[2]
             kn = a[6:8] if name == "B_SPLINE_CURVE_WITH_KNOTS" else None
             weights, sub = None, (None if kn is not None else name)
-        P = np.array([self.point(k) for k in pts])
+        P = np.array([self.point(k) for k in pts]).reshape(-1, 3)
         n = len(P)
+        if n < 2:
+            raise self._bad(i, f"a B-spline curve of {n} control point(s)")
         if kn is not None:
             U = _knots(kn[0], kn[1])
         else:
@@ -323,7 +325,7 @@ class StepGeometry:
             kn = a[8:12] if name == "B_SPLINE_SURFACE_WITH_KNOTS" else None
             W, sub = None, (None if kn is not None else name)
         P = np.array([[self.point(k) for k in row] for row in net])
-        if P.ndim != 3:
+        if P.ndim != 3 or P.shape[0] < 2 or P.shape[1] < 2:
             raise self._bad(i, "a B-spline surface whose control net is not rectangular")
         nu, nv = P.shape[:2]
         if kn is not None:

@@ -54,22 +54,34 @@ def _ply_header(p: Path):
             words = raw.decode("ascii", "replace").split()
             if not words or words[0] in ("comment", "obj_info"):
                 continue
+            line = " ".join(words)[:60]
             if words[0] == "format":
+                if len(words) < 2:
+                    raise FileFormatError(f"{p}: PLY header line {line!r}: no format")
                 fmt = words[1]
             elif words[0] == "element":
+                if len(words) != 3 or not words[2].isdigit():
+                    raise FileFormatError(f"{p}: PLY header line {line!r}: expected "
+                                          "'element NAME COUNT'")
                 elements.append((words[1], int(words[2]), []))
             elif words[0] == "property":
                 if not elements:
                     raise FileFormatError(f"{p}: PLY property before any element")
-                if words[1] == "list":
+                if len(words) >= 5 and words[1] == "list":
                     elements[-1][2].append((words[-1], None))
-                else:
-                    if words[1] not in _PLY_TYPES:
-                        raise FileFormatError(f"{p}: PLY property type {words[1]!r} "
-                                              "not understood")
+                elif len(words) == 3 and words[1] in _PLY_TYPES:
+                    if words[2] in [q for q, _ in elements[-1][2]]:
+                        raise FileFormatError(f"{p}: PLY property {words[2]!r} declared "
+                                              "twice")
                     elements[-1][2].append((words[2], _PLY_TYPES[words[1]]))
+                else:
+                    raise FileFormatError(f"{p}: PLY header line {line!r}: expected "
+                                          "'property TYPE NAME' with TYPE one of "
+                                          + ", ".join(sorted(set(_PLY_TYPES))))
             elif words[0] == "end_header":
                 return fmt, fh.tell(), elements
+            else:
+                raise FileFormatError(f"{p}: PLY header line {line!r} not understood")
 
 
 def _ply_vertices(p: Path):

@@ -212,3 +212,29 @@ def test_spindle_torus_faces_lie_on_their_torus():
         assert res_.max() < 1e-9 * r
         n += 1
     assert n == 3
+
+
+def test_a_malformed_record_is_an_error_never_handed_on(tmp_path):
+    """A face whose records lack parameters is a malformed file: a FileFormatError
+    naming the face, not a fall-back to Open CASCADE."""
+    text = (PARTS / "nx9_face_recognition_ap214.stp").read_text(encoding="latin-1")
+    bad = tmp_path / "bad.stp"
+    bad.write_text(text.replace("#278=VERTEX_POINT('',#839);", "#278=VERTEX_POINT('');"),
+                   encoding="latin-1")
+    with pytest.raises(FileFormatError, match="face .*missing or mistyped"):
+        read_step(bad)
+    res = read_step(bad, skip_unsupported=True)     # the other faces, named what is left
+    assert len(res.surfaces) + len(res.skipped) == 23 and res.skipped
+
+
+@pytest.mark.occ
+@pytest.mark.skipif(not step_mod.HAVE_OCP, reason="needs cadquery-ocp")
+def test_a_file_that_crashes_open_cascade_is_an_error():
+    """geomkit's reader cannot convert three faces of this file (a misspelt entity),
+    so it goes to Open CASCADE, which crashes on it (segmentation fault): in a child
+    process, so here it is one FileFormatError and this process goes on."""
+    path = DATA / "malformed" / "nx9_misspelt_entities.stp"
+    with pytest.raises(FileFormatError, match="Open CASCADE crashed"):
+        read_step(path)
+    res = read_step(path, skip_unsupported=True)    # geomkit's reader, without them
+    assert len(res.surfaces) == 20 and len(res.skipped) == 3

@@ -159,6 +159,19 @@ def test_scan_bad_inputs(tmp_path, cloud):
     raw = (tmp_path / "nan.npy").read_bytes()
     (tmp_path / "cut.npy").write_bytes(raw[:len(raw) // 2])
     cases.append((tmp_path / "cut.npy", "truncated .npy"))
+    # PLY headers the reader fuzz test broke (issue: "element verte x 200" gave a
+    # ValueError, a short line an IndexError, a repeated property numpy's error)
+    good = write_ply(tmp_path / "g.ply", P[:5]).read_bytes()
+    for k, (old, new, phrase) in enumerate([
+            (b"element vertex 5", b"element verte x 5", "expected 'element NAME COUNT'"),
+            (b"element vertex 5", b"element vertex", "expected 'element NAME COUNT'"),
+            (b"property float y", b"property float x", "declared twice"),
+            (b"property float y", b"property flot y", "expected 'property TYPE NAME'"),
+            (b"format binary_little_endian 1.0", b"format", "no format"),
+            (b"comment geomkit test", b"garbage here", "not understood")]):
+        assert old in good
+        (tmp_path / f"h{k}.ply").write_bytes(good.replace(old, new, 1))
+        cases.append((tmp_path / f"h{k}.ply", phrase))
     try:
         import laspy
         h = laspy.LasHeader(point_format=0, version="1.2")

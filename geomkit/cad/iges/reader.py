@@ -394,6 +394,15 @@ def read_iges(path, skip_invalid: bool = False,
         except _Skip as why:
             skipped.append(Skipped(where, str(why)))
             return
+        except (IndexError, ValueError, TypeError, KeyError) as exc:
+            if isinstance(exc, InvalidInputError):  # a ValueError too: validation
+                if not skip_invalid:
+                    raise InvalidSurfaceError(f"{p}: {what} at DE {de}: {exc}") from None
+                skipped.append(Skipped(where, f"invalid: {exc}"))
+                return
+            # parameters missing or not numbers where the entity needs them
+            raise FileFormatError(f"{p}: {what} at DE {de}: malformed parameters "
+                                  f"({type(exc).__name__}: {exc})") from None
         except InvalidInputError as exc:
             if not skip_invalid:
                 raise InvalidSurfaceError(f"{p}: {what} at DE {de}: {exc}") from None

@@ -1,0 +1,31 @@
+"""Open CASCADE's STEP read in a child process (``python -m geomkit.cad.occ_child``).
+
+:func:`geomkit.cad.step.read_step` hands a file to Open CASCADE only when geomkit's own
+reader could not finish it, and such files are often broken: OCC can crash on them
+(a segmentation fault in ``TransferRoots``).  The child reads the file with
+:func:`geomkit.cad.step.read_step_occ` and pickles the result (or the error) to the file
+named on its command line; a crash ends only the child.  Its stdout (OCC's messages)
+is not the parent's.
+"""
+
+from __future__ import annotations
+
+import pickle
+import sys
+
+
+def main(argv=None) -> int:
+    path, skip_invalid, skip_unsupported, out = (argv or sys.argv[1:])[:4]
+    from geomkit.cad.step import read_step_occ
+
+    try:
+        res = ("ok", read_step_occ(path, skip_invalid == "1", skip_unsupported == "1"))
+    except Exception as exc:  # noqa: BLE001 - sent to the parent, which raises it
+        res = ("error", exc)
+    with open(out, "wb") as fh:
+        pickle.dump(res, fh)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
