@@ -262,8 +262,14 @@ class P21:
         want = {n.upper() for n in names}
         return [i for i, n in self.names.items() if n in want]
 
-    def complex_ids(self) -> list[int]:
-        return [i for i, n in self.names.items() if n == ""]
+    def complex_ids(self, part: str | None = None) -> list[int]:
+        """Ids of the complex records (``#id = (A(...) B(...))``), those naming entity
+        ``part`` among their parts when given (found in the text, parsed later)."""
+        ids = [i for i, n in self.names.items() if n == ""]
+        if part is None:
+            return ids
+        want = part.upper()
+        return [i for i in ids if want in self._raw[i].upper()]
 
 
 def read_p21(path) -> P21:

@@ -82,9 +82,7 @@ def instances(p: P21, geom, items, holds) -> list:
             nauo_of_cdsr[int(a[0])] = int(pds[2])
     children: dict = {}  # parent group -> [(child group, matrix child -> parent)]
     is_child = set()
-    for i in p.complex_ids():
-        if "REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION" not in p._raw[i].upper():
-            continue
+    for i in p.complex_ids("REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION"):
         _, parts = p.get(i)
         rel = parts.get("REPRESENTATION_RELATIONSHIP")
         t = parts.get("REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION", [None])[0]

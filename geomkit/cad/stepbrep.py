@@ -143,9 +143,7 @@ def _holds_brep(p: P21, rep) -> bool:
 def _placed(p: P21, geom: StepGeometry) -> bool:
     """The file places B-rep representations by transformations other than the
     identity (an assembly), through representation relationships or mapped items."""
-    for i in p.complex_ids():
-        if "REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION" not in p._raw[i].upper():
-            continue
+    for i in p.complex_ids("REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION"):
         _, parts = p.get(i)
         t = parts.get("REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION", [None])[0]
         if t is None or p.names.get(int(t)) != "ITEM_DEFINED_TRANSFORMATION":
@@ -162,14 +160,14 @@ def _placed(p: P21, geom: StepGeometry) -> bool:
 
 
 def _same_place(geom, a, b) -> bool:
-    if p_name(geom, a) != "AXIS2_PLACEMENT_3D" or p_name(geom, b) != "AXIS2_PLACEMENT_3D":
+    if _name(geom, a) != "AXIS2_PLACEMENT_3D" or _name(geom, b) != "AXIS2_PLACEMENT_3D":
         return False
     A, B = geom.axis2(a), geom.axis2(b)
     return all(np.abs(x - y).max() <= 1e-12 * max(1.0, np.abs(x).max())
                for x, y in zip(A, B))
 
 
-def p_name(geom, i):
+def _name(geom, i):
     return geom.p.names.get(int(i)) if isinstance(i, Ref) else None
 
 
