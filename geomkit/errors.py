@@ -19,6 +19,7 @@ __all__ = [
     "ToleranceNotMetWarning",
     "MeshingError",
     "FaceFailedWarning",
+    "FileRecoveredWarning",
 ]
 
 
@@ -72,3 +73,9 @@ class FaceFailedWarning(UserWarning):
 class ToleranceNotMetWarning(UserWarning):
     """A result could not be brought within the requested tolerance; the value it
     states (e.g. ``Mesh.max_deviation``) is the measured one, above the request."""
+
+
+class FileRecoveredWarning(UserWarning):
+    """A file was read only after its reader recovered from errors in it (e.g. Open
+    CASCADE skipping records with syntax errors): what those records held may be
+    missing from the result."""

@@ -3,8 +3,9 @@
 
 :func:`read_step` reads the B-rep with :func:`geomkit.cad.stepbrep.read_native`
 (geomkit's Part 21 parser and geometry; no Open CASCADE, no OCC crash in the process)
-and falls back to :func:`read_step_occ` for faces the native reader cannot convert.  Through Open CASCADE, OCC reads the file and builds
-the B-rep; geomkit converts each face:
+and falls back to :func:`read_step_occ` (in a child process) for faces the native
+reader cannot convert.  Through Open CASCADE, OCC reads the file and builds the B-rep;
+geomkit converts each face:
 
 * B-spline and Bezier faces are taken as they are, with the file's pcurves;
 * planes, cylinders, cones, spheres, tori and extrusions / revolutions of B-spline
@@ -29,13 +30,14 @@ Coordinates stay in the file's length unit (``units``); ``resolution`` is the fi
 
 from __future__ import annotations
 
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from geomkit.errors import (FileFormatError, InvalidInputError, InvalidSurfaceError,
-                            MissingDependencyError)
-import re
+from geomkit.errors import (FileFormatError, FileRecoveredWarning, InvalidInputError,
+                            InvalidSurfaceError, MissingDependencyError)
 
 from geomkit.cad.elementary import carry_pcurve, elementary_patch
 from geomkit.cad.loops import Unsupported, finish_loop
@@ -334,7 +336,9 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
         raise InvalidInputError(f"expected one of {', '.join(READERS)}, got {reader!r}",
                                 "reader")
     if reader == "occ":
-        return read_step_occ(p, skip_invalid, skip_unsupported)
+        if not HAVE_OCP:
+            raise MissingDependencyError(INSTALL_HINT)
+        return _occ_isolated(p, skip_invalid, skip_unsupported, "")
     try:
         return read_native(p, skip_invalid, skip_unsupported)
     except (Unsupported, UnreadFaces) as exc:
@@ -351,7 +355,11 @@ def _occ_isolated(p: Path, skip_invalid, skip_unsupported, why: str) -> IgesResu
     """:func:`read_step_occ` in a child process (:mod:`geomkit.cad.occ_child`): a file
     geomkit's reader could not finish goes to Open CASCADE, which can crash on broken
     files (a segmentation fault in ``TransferRoots``); a crash there is a
-    :class:`FileFormatError` here, and OCC's messages stay off this process's stdout."""
+    :class:`FileFormatError` here.  OCC's messages are captured, logged on the
+    ``geomkit.occ`` logger (``geomkit --verbose`` shows them) and never printed on this
+    process's stdout; a file OCC read only by skipping records with syntax errors gives
+    a :class:`~geomkit.errors.FileRecoveredWarning`; the child's warnings are raised
+    again here."""
     import os
     import pickle
     import subprocess
@@ -363,24 +371,61 @@ def _occ_isolated(p: Path, skip_invalid, skip_unsupported, why: str) -> IgesResu
     try:
         run = subprocess.run([sys.executable, "-m", "geomkit.cad.occ_child", str(p),
                               str(int(skip_invalid)), str(int(skip_unsupported)), out],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        messages = occ_messages(run.stdout)
         if run.returncode != 0 or not os.path.getsize(out):
-            raise FileFormatError(f"{p}: geomkit's STEP reader stopped ({why}) and Open "
-                                  f"CASCADE crashed reading the file (exit "
-                                  f"{run.returncode}): it is malformed")
+            before = f"geomkit's STEP reader stopped ({why}) and " if why else ""
+            raise FileFormatError(f"{p}: {before}Open CASCADE crashed reading the file "
+                                  f"(exit {run.returncode}): it is malformed")
         with open(out, "rb") as fh:
-            kind, res = pickle.load(fh)
+            kind, res, found = pickle.load(fh)
     finally:
         os.unlink(out)
+    for category, message in found:
+        warnings.warn(message, category, stacklevel=3)
+    fails = syntax_failures(messages)
     if kind == "error":
         raise res
+    if fails:
+        warnings.warn(f"{p}: Open CASCADE read the file only after skipping {fails} "
+                      "record(s) with syntax errors; what they held may be missing",
+                      FileRecoveredWarning, stacklevel=3)
     return res
+
+
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+
+def occ_messages(raw: bytes) -> list[str]:
+    """Open CASCADE's console output as lines (colour codes removed), each logged at
+    INFO on the ``geomkit.occ`` logger."""
+    import logging
+
+    log = logging.getLogger("geomkit.occ")
+    lines = [ln.strip() for ln in _ANSI.sub("", raw.decode("utf-8", "replace")).splitlines()]
+    lines = [ln for ln in lines if ln]
+    for ln in lines:
+        log.info("%s", ln)
+    return lines
+
+
+def syntax_failures(lines) -> int:
+    """The count of records OCC's STEP parser skipped as syntax errors (0 for none),
+    from its ``ERR StepFile : Incorrect Syntax : Fails Count : N`` message."""
+    n = 0
+    for ln in lines:
+        m = re.search(r"Incorrect Syntax\W*Fails Count\W*(\d+)", ln)
+        if m:
+            n += int(m.group(1))
+    return n
 
 
 def read_step_occ(path, skip_invalid: bool = False,
                   skip_unsupported: bool = False) -> IgesResult:
-    """:func:`read_step` through Open CASCADE: OCC reads the file and builds the
-    B-rep, geomkit converts each face (see the module)."""
+    """:func:`read_step` through Open CASCADE, in this process: OCC reads the file
+    and builds the B-rep, geomkit converts each face (see the module).  OCC can crash
+    on a malformed file and prints on stdout: ``read_step(path, reader="occ")`` runs
+    this in a child process instead."""
     p = Path(path)
     try:
         from OCP.BRep import BRep_Tool

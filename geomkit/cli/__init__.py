@@ -7,11 +7,13 @@ hold the commands."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+import warnings
 
 from geomkit.errors import GeomkitError
-from geomkit.cli._common import (Parser, _positive_float, _positive_int, _positive_or_zero,
-                                 _units_arg)
+from geomkit.cli._common import (WARNINGS, Parser, _positive_float, _positive_int,
+                                 _positive_or_zero, _units_arg, show_warning)
 from geomkit.cli import bench as _bench
 from geomkit.cli import clearance as _clearance
 from geomkit.cli.jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
@@ -39,7 +41,7 @@ EXAMPLES = """examples:
 Inputs: geomkit-case/1 or geomdl JSON, IGES (.igs/.iges; see docs/guide_cad.md for
 the entities read), STEP (.stp/.step, needs cadquery-ocp), or a bundled sample name;
 faces that cannot be read are an error unless --skip-unsupported.  Points: CSV/XYZ
-(x y z [i j k], named headers, decimal commas), PLY, STL, NPY, LAS/LAZ, or a folder
+(x y z [i j k], named headers, decimal commas), PLY, STL, NPY, LAS/LAZ, E57, or a folder
 of scans (streamed; --workers N on Dask).  Units: the model's own (IGES/STEP/JSON state
 them; --units overrides), written in every report.  Errors: one line on stderr,
 exit code 2.
@@ -60,6 +62,8 @@ def _add_cad_options(p) -> None:
                    help="IGES/STEP: go on without faces whose entities cannot be read "
                         "(they are listed, and every report says PARTIAL MODEL); "
                         "default: such a file is an error")
+    p.add_argument("--verbose", action="store_true", default=argparse.SUPPRESS,
+                   help="also show Open CASCADE's messages on stderr")
 
 
 def _version_line() -> str:
@@ -80,6 +84,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--version", action="version", version=_version_line(),
                     help="the version, and whether the kernels are compiled ahead of "
                          "time or on first use (JIT)")
+    ap.add_argument("--verbose", action="store_true",
+                    help="also show the messages of the libraries geomkit calls (Open "
+                         "CASCADE's, when a STEP file is handed to it) on stderr")
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="the main jobs on built-in data (deviation, section, "
                                     "clearance)",
@@ -115,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "--probe-radius 1.5 --tolerance -0.05 0.05 --align -o rep")
     p.add_argument("nominal", help="nominal surfaces: JSON, IGES, STEP or a sample name")
     p.add_argument("points", help="measured points: CSV/XYZ (x y z [i j k], named "
-                                  "headers), PLY, STL, NPY, LAS/LAZ, or a folder of scans")
+                                  "headers), PLY, STL, NPY, LAS/LAZ, E57, or a folder of scans")
     p.add_argument("-o", "--output", default=None,
                    help="report folder (default ./<points name>-deviation)")
     p.add_argument("--probe-radius", type=_positive_or_zero, default=0.0,
@@ -169,6 +176,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--units", type=_units_arg, default=None, metavar="UNIT",
                    help=UNITS_HELP)
+    p.add_argument("--verbose", action="store_true", default=argparse.SUPPRESS,
+                   help="also show Open CASCADE's messages on stderr")
     p.set_defaults(func=_cmd_info)
     p = sub.add_parser("mesh", help="triangulate surfaces within a chord tolerance",
                        description="Triangulate every surface of INPUT so that each "
@@ -197,33 +206,66 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    as_json = "--json" in argv
+    Parser.last_error = None
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help (0) or a one-line argument error (2)
-        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+        if code and as_json:
+            _json_error(Parser.last_error or "argument error", code)
+        return code
+    WARNINGS.clear()
+    if getattr(args, "verbose", False):
+        import logging
+
+        logging.basicConfig(stream=sys.stderr, level=logging.INFO,
+                            format="geomkit: %(name)s: %(message)s")
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.showwarning = show_warning
+        code, message = _run(args)
+    if message is not None:
+        print(f"geomkit: error: {message}", file=sys.stderr)
+        if as_json:
+            _json_error(message, code)
+    return code
+
+
+def _run(args):
+    """``(exit code, error message or None)`` of the command."""
     try:
-        return args.func(args)
+        return args.func(args), None
     except (GeomkitError, FileExistsError) as exc:
-        print(f"geomkit: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
+        return 2, _one_line(exc)
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
-        return 0
+        return 0, None
     except OSError as exc:
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-        print(f"geomkit: error: {where}{exc.strerror or exc}", file=sys.stderr)
-        return 2
+        return 2, f"{where}{exc.strerror or exc}"
     except KeyboardInterrupt:
-        print("geomkit: error: interrupted", file=sys.stderr)
-        return 130
+        return 130, "interrupted"
     except Exception as exc:  # a bug: still one line, the traceback on request
         import os
 
         if os.environ.get("GEOMKIT_DEBUG"):
             raise
-        print(f"geomkit: error: internal error {type(exc).__name__}: {_one_line(exc)} "
-              "(set GEOMKIT_DEBUG=1 for the traceback)", file=sys.stderr)
-        return 3
+        return 3, (f"internal error {type(exc).__name__}: {_one_line(exc)} "
+                   "(set GEOMKIT_DEBUG=1 for the traceback)")
+
+
+def _json_error(message: str, code: int) -> None:
+    """With ``--json``, stdout is JSON even when the run fails: ``{"error": ...,
+    "exit_code": ...}`` (and the run's warnings)."""
+    out = {"error": message, "exit_code": code}
+    if WARNINGS:
+        out["warnings"] = list(WARNINGS)
+    try:
+        print(json.dumps(out, indent=1))
+    except (BrokenPipeError, ValueError):  # stdout closed
+        pass
 
 
 def _one_line(exc) -> str:

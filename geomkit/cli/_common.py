@@ -4,6 +4,7 @@ progress bars and the one-line argument errors."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -14,13 +15,41 @@ class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line ``geomkit: error: ...`` and exit 2
     (argparse prints a usage block otherwise); sub-parsers inherit the class."""
 
+    last_error: str | None = None
+    """The message of the last argument error (``--json`` prints it as JSON)."""
+
     def error(self, message):
         words = self.prog.split()
         cmd = f"{' '.join(words[1:])}: " if len(words) > 1 else ""
         message = " ".join(str(message).split())
         if not cmd and message.endswith("required: command"):
             message = "no command given (geomkit --help lists them)"
+        Parser.last_error = f"{cmd}{message}"
         self.exit(2, f"geomkit: error: {cmd}{message}\n")
+
+
+# --------------------------------------------------------------- warnings, JSON
+WARNINGS: list[str] = []
+"""The warnings of this run, in order (:func:`show_warning` appends; ``--json``
+output carries them as its ``warnings`` field)."""
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None):
+    """``warnings.showwarning`` of the command line: one line ``geomkit: warning:
+    ...`` on stderr (not Python's two-line form with the source), kept for ``--json``."""
+    text = " ".join(str(message).split())
+    WARNINGS.append(text)
+    print(f"geomkit: warning: {text}", file=sys.stderr)
+
+
+def emit_json(obj) -> None:
+    """Print a command's ``--json`` result on stdout, with the run's warnings (the
+    ``warnings`` field) when there were any."""
+    from geomkit.outputs import json_safe
+
+    if isinstance(obj, dict) and WARNINGS:
+        obj = {**obj, "warnings": list(WARNINGS)}
+    print(json.dumps(json_safe(obj), indent=1, default=str))
 
 
 # ----------------------------------------------------------------------- inputs

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import sys
 
 
 def _cmd_bench(args) -> int:
     from geomkit.bench.suite import ENGINES, FILES, format_table, run_suite, write_outputs
     from geomkit.errors import InvalidInputError
-    from geomkit.outputs import json_safe
-    from geomkit.cli._common import Outputs
+    from geomkit.cli._common import Outputs, emit_json
 
     engines = [e.strip() for e in args.engines.split(",") if e.strip()] if args.engines \
         else list(ENGINES)
@@ -25,8 +23,7 @@ def _cmd_bench(args) -> int:
                     (lambda m: print(m, file=sys.stderr, flush=True)))
     res["files"] = write_outputs(res, outputs.create(), args.overwrite)  # folder made now
     if args.json:
-        print(json.dumps(json_safe({k: res[k] for k in ("mode", "seconds", "machine", "rows",
-                                                     "files")}), indent=1, default=str))
+        emit_json({k: res[k] for k in ("mode", "seconds", "machine", "rows", "files")})
         return 0
     print(format_table(res["rows"]))
     print(f"\n{res['mode']} mode, {res['seconds']:.0f} s")

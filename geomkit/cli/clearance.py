@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from geomkit.errors import InvalidInputError
 from geomkit.cli import _reports
-from geomkit.cli._common import Outputs, _load_input, _model_info, _progress, _unit
+from geomkit.cli._common import (Outputs, _load_input, _model_info, _progress, _unit,
+                                 emit_json)
 
 STYLUS_HELP = ("stylus: a JSON file (keys tip_radius, shaft_radius, shaft_length and "
                "optionally extension_radius, extension_length, body_radius, body_length) "
@@ -51,7 +51,6 @@ def parse_stylus(text: str):
 
 def _cmd_clearance(args) -> int:
     from geomkit.jobs.clearance import probe_clearance, read_path
-    from geomkit.outputs import json_safe
     from geomkit.report.files import plot_clearance, write_clearance_csv, write_json
 
     stylus = parse_stylus(args.stylus)
@@ -96,7 +95,7 @@ def _cmd_clearance(args) -> int:
                "files": [str(f) for f in files] + [str(targets["clearance_summary.json"])]}
     write_json(summary, targets["clearance_summary.json"], args.overwrite, **rk)
     if args.json:
-        print(json.dumps(json_safe(summary), indent=1))
+        emit_json(summary)
     else:
         s = summary
         if note:  # a pass on part of the part is not a pass on the part: say so first

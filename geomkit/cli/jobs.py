@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +9,7 @@ import numpy as np
 from geomkit.errors import InvalidInputError
 from geomkit.cli import _reports
 from geomkit.cli._common import (Outputs, _file_target, _load_input, _load_points, _model_info,
-                                 _progress, _tolerance, _unit)
+                                 _progress, _tolerance, _unit, emit_json)
 
 
 def _cmd_demo(args) -> int:
@@ -19,8 +18,7 @@ def _cmd_demo(args) -> int:
     from geomkit.jobs.demo import STEPS, run_demo
 
     if args.json:
-        print(json.dumps(run_demo(out_dir=args.output, grid=args.grid, tol=args.tol),
-                         indent=1))
+        emit_json(run_demo(out_dir=args.output, grid=args.grid, tol=args.tol))
         return 0
     print(f"geomkit demo: reports in {Path(args.output)}/", flush=True)
 
@@ -135,8 +133,7 @@ def _cmd_deviation(args) -> int:
                "files": [str(f) for f in files] + [str(targets["summary.json"])]}
     write_json(summary, targets["summary.json"], args.overwrite, **rk)  # last
     if args.json:
-        from geomkit.outputs import json_safe
-        print(json.dumps(json_safe(summary), indent=1))
+        emit_json(summary)
         return 0
     s = summary
     print(f"{s['points']} points, {s['valid']} matched ({s['edge']} on edges, "
@@ -172,7 +169,6 @@ def _require_matches(matched: int, total: int, max_distance) -> None:
 
 def _cmd_distance(args) -> int:
     from geomkit import project_points
-    from geomkit.outputs import json_safe
 
     case = _load_input(args.surface, args.skip_invalid, args.units,
                        skip_unsupported=args.skip_unsupported)
@@ -215,7 +211,7 @@ def _cmd_distance(args) -> int:
             "mean": float(d.mean()) if d.size else None,
             "output": str(target) if target else None}
     if args.json:
-        print(json.dumps(json_safe(info), indent=1))
+        emit_json(info)
         return 0
     written = f"; written {target}" if target else ""
     if note:
@@ -232,7 +228,6 @@ def _cmd_distance(args) -> int:
 
 def _cmd_section(args) -> int:
     from geomkit import plane_section
-    from geomkit.outputs import json_safe
     from geomkit.report.files import plot_section, write_json, write_section
     from geomkit.section.plane import as_plane
 
@@ -299,7 +294,7 @@ def _cmd_section(args) -> int:
                "files": files + [str(targets["section_summary.json"])]}
     write_json(summary, targets["section_summary.json"], args.overwrite, **rk)
     if args.json:
-        print(json.dumps(json_safe(summary), indent=1))
+        emit_json(summary)
         return 0
     for r in rows:
         a, b, c, d = r["plane"]
@@ -326,7 +321,7 @@ def _cmd_info(args) -> int:
                                 "control_net": list(s.shape), "domain": [[u0, u1], [v0, v1]],
                                 "trim_loops": len(s.trim), "bounds": s.bounds.tolist()})
     if args.json:
-        print(json.dumps(out, indent=1))
+        emit_json(out)
     else:
         for s in out["surfaces"]:
             print(f"{s['name'] or '-'}: {'NURBS' if s['rational'] else 'B-spline'} degree "
@@ -361,7 +356,7 @@ def _cmd_mesh(args) -> int:
             "failed_surfaces": [i for i, st in enumerate(mesh.stats["surfaces"])
                                 if "failed" in st]}
     if args.json:
-        print(json.dumps(info, indent=1))
+        emit_json(info)
     else:
         print(f"{out}: {info['faces']} triangles, {info['vertices']} vertices from "
               f"{info['surfaces']} surface(s); measured max deviation "

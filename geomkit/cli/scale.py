@@ -4,13 +4,13 @@ tells :func:`geomkit.cli.jobs._cmd_deviation` to hand the run to :func:`run_scal
 
 from __future__ import annotations
 
-import json
 import shutil
 import sys
 from pathlib import Path
 
 from geomkit.errors import InvalidInputError
-from geomkit.cli._common import _load_input, _model_info, _progress, _tolerance, _unit
+from geomkit.cli._common import (_load_input, _model_info, _progress, _tolerance, _unit,
+                                 emit_json)
 
 STREAM_BYTES = 64 << 20
 """Point files larger than this are streamed (no plots) without being asked."""
@@ -29,7 +29,7 @@ def add_deviation_options(p):
                    help="points per chunk / Dask task (default 65536)")
     g.add_argument("--stream", action="store_true",
                    help="stream the scan (bounded memory, no plots); implied for "
-                        "folders, .npy/.las/.laz, files over 64 MB, --workers, "
+                        "folders, .npy/.las/.laz/.e57, files over 64 MB, --workers, "
                         "--scheduler and --format")
 
 
@@ -38,7 +38,7 @@ def wants_scale(args) -> bool:
     if args.workers is not None or args.scheduler or args.format or args.stream or \
             args.chunk_size is not None or p.is_dir():
         return True
-    if p.suffix.lower() in (".npy", ".las", ".laz"):
+    if p.suffix.lower() in (".npy", ".las", ".laz", ".e57"):
         return True
     try:
         return p.stat().st_size > STREAM_BYTES
@@ -105,8 +105,7 @@ def run_scaled(args) -> int:
         if cluster is not None:
             cluster.close()
     if args.json:
-        from geomkit.outputs import json_safe
-        print(json.dumps(json_safe(s), indent=1))
+        emit_json(s)
         return 0
     if note:
         print(note)

@@ -74,7 +74,7 @@ def read_points(path) -> PointSet:
     """
     p = check_path(path)
     ext = p.suffix.lower()
-    if ext in (".ply", ".npy", ".las", ".laz"):
+    if ext in (".ply", ".npy", ".las", ".laz", ".e57"):
         parts = list(iter_scan(p))
         N = None if parts[0][1] is None else np.concatenate([c[1] for c in parts])
         return PointSet(np.concatenate([c[0] for c in parts]), N, str(p))

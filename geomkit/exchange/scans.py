@@ -8,7 +8,9 @@ Formats (by extension):
 * ``.ply``: binary (little / big endian) or ASCII; the ``vertex`` element's ``x y z``
   (and ``nx ny nz`` when present) properties, read chunk by chunk.
 * ``.las`` / ``.laz``: through laspy (``laspy[lazrs]`` for LAZ), scaled coordinates,
-  read with laspy's chunk iterator.
+  read with laspy's chunk iterator; ``.e57``: every scan of the file through pye57,
+  placed by its pose (:mod:`geomkit.exchange.scanlib`).  Their intensity and colours
+  are kept (:func:`iter_scan_attrs`).
 * text (``.csv .xyz .txt .asc .pts``): :func:`geomkit.exchange.points.iter_text` (headers,
   decimal commas, see :mod:`geomkit.exchange.points`).
 * ``.stl``: read whole (its unique vertices, through trimesh); a mesh, not a scan.
@@ -24,12 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from geomkit.errors import FileFormatError, MissingDependencyError
+from geomkit.errors import FileFormatError
+from geomkit.exchange.scanlib import e57_length, iter_e57, iter_las, las_length
 from geomkit.exchange.text import TEXT_FORMATS, check_path, iter_text
 
-__all__ = ["iter_scan", "scan_length", "STREAM_FORMATS", "DEFAULT_CHUNK"]
+__all__ = ["iter_scan", "iter_scan_attrs", "scan_length", "STREAM_FORMATS",
+           "DEFAULT_CHUNK"]
 
-STREAM_FORMATS = (".npy", ".ply", ".las", ".laz") + TEXT_FORMATS
+STREAM_FORMATS = (".npy", ".ply", ".las", ".laz", ".e57") + TEXT_FORMATS
 DEFAULT_CHUNK = 1 << 16
 """Points per chunk (~10 MB of per-point results)."""
 
@@ -148,43 +152,6 @@ def _iter_ply(p: Path, chunk: int):
             yield a, np.array(rows)
 
 
-# ------------------------------------------------------------------ LAS / LAZ
-def _laspy():
-    try:
-        import laspy
-    except ImportError:
-        raise MissingDependencyError("reading LAS/LAZ needs laspy: pip install "
-                                     "geomkit[scale]") from None
-    return laspy
-
-
-def _iter_las(p: Path, chunk: int):
-    laspy = _laspy()
-    try:
-        fh = laspy.open(str(p))
-    except Exception as exc:  # laspy raises its own and OS errors
-        raise FileFormatError(f"{p}: cannot read as LAS/LAZ ({exc})") from None
-    with fh:
-        n = int(fh.header.point_count)
-        if n == 0:
-            raise FileFormatError(f"{p}: no points (the LAS header declares 0 points)")
-        a = 0
-        try:
-            for pts in fh.chunk_iterator(chunk):
-                P = np.column_stack([np.asarray(pts.x, dtype=np.float64),
-                                     np.asarray(pts.y, dtype=np.float64),
-                                     np.asarray(pts.z, dtype=np.float64)])
-                yield a, P
-                a += P.shape[0]
-        except FileFormatError:
-            raise
-        except Exception as exc:
-            raise FileFormatError(f"{p}: cannot read point {a} onwards ({exc})") from None
-        if a < n:
-            raise FileFormatError(f"{p}: truncated LAS file: the header declares {n} points, "
-                                  f"read {a}")
-
-
 # ------------------------------------------------------------------ NumPy
 def _npy(p: Path):
     """(shape, dtype, fortran_order, data offset) of a .npy file, checked."""
@@ -230,8 +197,8 @@ def _iter_npy(p: Path, chunk: int):
 
 # ------------------------------------------------------------------ public
 def scan_length(path) -> int | None:
-    """Number of points of a scan file when its header says it (``.npy``, PLY, LAS),
-    else None (text files are not counted ahead)."""
+    """Number of points of a scan file when its header says it (``.npy``, PLY, LAS,
+    E57: invalid points included), else None (text files are not counted ahead)."""
     p = check_path(path)
     ext = p.suffix.lower()
     if ext == ".npy":
@@ -239,8 +206,9 @@ def scan_length(path) -> int | None:
     if ext == ".ply":
         return int(_ply_vertices(p)[3])
     if ext in (".las", ".laz"):
-        with _laspy().open(str(p)) as fh:
-            return int(fh.header.point_count)
+        return las_length(p)
+    if ext == ".e57":
+        return e57_length(p)
     return None
 
 
@@ -290,7 +258,7 @@ def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
     Parameters
     ----------
     path : str or Path
-        ``.npy``, ``.ply``, ``.las`` / ``.laz``, CSV / XYZ text or ``.stl``.
+        ``.npy``, ``.ply``, ``.las`` / ``.laz``, ``.e57``, CSV / XYZ text or ``.stl``.
     chunk_size : int >= 1
 
     Yields
@@ -305,6 +273,15 @@ def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
         Unknown type, truncated file, a non-finite value or a zero normal (naming the
         row, 0-based for binary formats, the line for text), no points.
     """
+    for P, N, _ in iter_scan_attrs(path, chunk_size):
+        yield P, N
+
+
+def iter_scan_attrs(path, chunk_size: int = DEFAULT_CHUNK):
+    """:func:`iter_scan` with each chunk's per-point attributes: yields ``(points,
+    normals or None, attributes)``, ``attributes`` a dict of (m,) arrays
+    (``intensity``, ``red``, ``green``, ``blue`` from LAS / LAZ / E57 files that have
+    them; empty for the other formats), the same columns in every chunk."""
     p = check_path(path)
     chunk = int(chunk_size)
     if chunk < 1:
@@ -314,28 +291,35 @@ def iter_scan(path, chunk_size: int = DEFAULT_CHUNK):
         count = 0
         for P, N in iter_text(p, chunk):
             count += P.shape[0]
-            yield P, N
+            yield P, N, {}
         if count == 0:
             raise FileFormatError(f"{p}: no points (empty point set)")
         return
     if ext == ".stl":
         V = mesh_vertices(p)
         for a in range(0, len(V), chunk):
-            yield V[a:a + chunk], None
+            yield V[a:a + chunk], None, {}
         return
     if ext == ".npy":
-        it, what = _iter_npy(p, chunk), "row"
+        it, what = _plain(_iter_npy(p, chunk)), "row"
     elif ext == ".ply":
-        it, what = _iter_ply(p, chunk), "vertex"
+        it, what = _plain(_iter_ply(p, chunk)), "vertex"
     elif ext in (".las", ".laz"):
-        it, what = _iter_las(p, chunk), "point"
+        it, what = iter_las(p, chunk), "point"
+    elif ext == ".e57":
+        it, what = iter_e57(p, chunk), "point"
     else:
         raise FileFormatError(f"{p}: unknown scan file type {p.suffix!r}; use one of "
                               f"{', '.join(STREAM_FORMATS + ('.stl',))}")
-    for a, A in it:
+    for a, A, attrs in it:
         _check_chunk(p, a, A, what)
         N = _normals(p, a, A, what) if A.shape[1] == 6 else None
-        yield np.ascontiguousarray(A[:, :3]), N
+        yield np.ascontiguousarray(A[:, :3]), N, attrs
+
+
+def _plain(it):
+    for a, A in it:
+        yield a, A, {}
 
 
 def is_scan_file(path) -> bool:

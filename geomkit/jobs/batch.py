@@ -33,7 +33,7 @@ def scan_files(folder) -> list[Path]:
                    if p.is_file() and not p.name.startswith(".") and is_scan_file(p))
     if not files:
         raise InvalidInputError(f"{d}: no scan files (.csv .xyz .txt .asc .pts .ply .npy "
-                                ".las .laz .stl) in the folder", "points")
+                                ".las .laz .e57 .stl) in the folder", "points")
     return files
 
 
@@ -76,8 +76,9 @@ def batch_deviation(surfaces, folder, out, *, fmt="csv", overwrite=False, inputs
     """Every scan of ``folder`` against the same surfaces: ``out/<scan name>/`` report
     per part, ``out/parts.csv`` and ``out/summary.json`` (last).
 
-    A part that fails (bad file, no valid point) is listed with its error and its
-    folder holds no report; the batch goes on.  A part passes when a tolerance is
+    A part that fails (bad file, no valid point, or any other error in its run, an
+    internal one included) is listed with its one-line reason and its folder holds no
+    report; the batch goes on.  A part passes when a tolerance is
     given, it has valid points, every valid point is within the tolerance and no point
     is beyond ``max_distance`` or failed.
 
@@ -101,14 +102,17 @@ def batch_deviation(surfaces, folder, out, *, fmt="csv", overwrite=False, inputs
             st = deviation_report(surfaces, scan, Path(out) / name, fmt=fmt,
                                   overwrite=overwrite, inputs=inputs, extra=extra, **kw)
             rows.append(_part_row(name, scan, st, tol))
-        except GeomkitError as exc:
+        except Exception as exc:  # noqa: BLE001 - one part never sinks the batch
             try:  # the part's folder, created by the check above, holds nothing
                 (Path(out) / name).rmdir()
             except OSError:
                 pass
+            why = " ".join(str(exc).split())
+            if not isinstance(exc, (GeomkitError, OSError)):
+                why = f"internal error {type(exc).__name__}: {why}"
             rows.append({c: "" for c in PART_COLUMNS} | {
                 "part": name, "file": str(scan), "pass": "fail" if tol else "",
-                "error": " ".join(str(exc).split())})
+                "error": why})
         if progress is not None:
             progress(k + 1, len(files))
     buf = io.StringIO()

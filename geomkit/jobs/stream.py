@@ -13,6 +13,7 @@ transform is then applied to every point; the summary states the sample size.
 
 from __future__ import annotations
 
+import collections
 import math
 import time
 
@@ -25,7 +26,7 @@ from geomkit.jobs.stats import DeviationStats
 from geomkit.errors import InvalidInputError, MissingDependencyError
 from geomkit.query.projection_part import cached_projector
 from geomkit.query.results import STATUS_NAMES
-from geomkit.exchange.scans import DEFAULT_CHUNK, iter_scan
+from geomkit.exchange.scans import DEFAULT_CHUNK, iter_scan, iter_scan_attrs
 
 __all__ = ["stream_deviation", "COLUMNS", "ALIGN_SAMPLE"]
 
@@ -34,7 +35,8 @@ ALIGN_SAMPLE = 200_000
 # ------------------------------------------------------------------ writers
 class CSVWriter:
     """Per-point CSV rows appended chunk by chunk (through pyarrow's C++ CSV writer
-    when installed, else Python; both round-trip every float exactly)."""
+    when installed, else Python; both round-trip every float exactly).  The header is
+    :data:`COLUMNS` and the scan's attributes after them (the first chunk's)."""
 
     def __init__(self, fh):
         self.fh = fh
@@ -43,9 +45,12 @@ class CSVWriter:
             self.arrow = True
         except ImportError:
             self.arrow = False
-        fh.write((",".join(COLUMNS) + "\n").encode())
+        self.header = False
 
     def write(self, cols):
+        if not self.header:
+            self.fh.write((",".join(cols) + "\n").encode())
+            self.header = True
         if self.arrow:
             import pyarrow.csv as pc
 
@@ -57,6 +62,7 @@ class CSVWriter:
         f = (lambda x: repr(x) if math.isfinite(x) else "")
         fl = {c: cols[c].tolist() for c in COLUMNS if c not in ("index", "surface",
                                                                  "status", "edge")}
+        extra = [c for c in cols if c not in COLUMNS]
         lines = []
         for i in range(cols["index"].size):
             row = [str(int(cols["index"][i]))]
@@ -64,6 +70,7 @@ class CSVWriter:
             row.append(str(int(cols["surface"][i])))
             row += [f(fl[c][i]) for c in COLUMNS[13:18]]
             row += [names[i], str(int(cols["edge"][i]))]
+            row += [_text(cols[c][i]) for c in extra]
             lines.append(",".join(row))
         self.fh.write(("\n".join(lines) + "\n").encode())
 
@@ -71,11 +78,16 @@ class CSVWriter:
         pass
 
 
+def _text(x) -> str:
+    x = x.item()
+    return repr(x) if isinstance(x, float) else str(x)
+
+
 def _arrow_table(cols):
     import pyarrow as pa
 
     arrays = []
-    for c in COLUMNS:
+    for c in cols:
         a = cols[c]
         if c == "status":
             arrays.append(pa.array(_STATUS_LUT[a.astype(np.int64)]))
@@ -83,7 +95,7 @@ def _arrow_table(cols):
             arrays.append(pa.array(a, mask=~np.isfinite(a)))
         else:
             arrays.append(pa.array(a))
-    return pa.table(arrays, names=list(COLUMNS))
+    return pa.table(arrays, names=list(cols))
 
 
 _STATUS_LUT = np.array([STATUS_NAMES.get(i, str(i)) for i in range(128)], dtype=object)
@@ -168,7 +180,8 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     -------
     dict
         The statistics (:class:`~geomkit.jobs.stats.DeviationStats`), settings,
-        ``chunks``, ``seconds`` and ``alignment``.
+        ``chunks``, ``seconds``, ``alignment`` and ``attributes`` (the scan's per-point
+        attributes written after the deviation columns: intensity, colours).
     """
     t0 = time.perf_counter()
     probe_radius, max_distance = _check_settings(probe_radius, max_distance)
@@ -186,7 +199,8 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
         T = align_info["transform"]
     writer = WRITERS[fmt](out) if out is not None else None
     stats = DeviationStats(tol)
-    chunks = iter_scan(scan, chunk_size)
+    attrs = collections.deque()  # each chunk's scan attributes, in chunk order
+    chunks = _keep_attrs(iter_scan_attrs(scan, chunk_size), attrs)
     if client is not None:
 
         results = run_chunks(client, projector.surfaces, chunks, T, probe_radius,
@@ -194,10 +208,13 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     else:
         results = _local(projector, chunks, T, probe_radius, max_distance)
     nchunks = 0
-    for cols in results:
+    names = []
+    for cols in results:  # results come in chunk order
         stats.update(cols["deviation"], cols["status"], cols["edge"].astype(bool))
+        extra = attrs.popleft()
+        names = list(extra)
         if writer is not None:
-            writer.write(cols)
+            writer.write({**cols, **extra})
         nchunks += 1
         if progress is not None:
             progress(stats.n, None)
@@ -206,7 +223,7 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
     st = stats.result(require_valid=require_valid)
     st.update(probe_radius=probe_radius, max_distance=max_distance,
               tolerance=list(tol) if tol else None, chunks=nchunks, chunk_size=chunk_size,
-              streamed=True, workers=_nworkers(client),
+              streamed=True, workers=_nworkers(client), attributes=names,
               # faces with no candidate (failed to mesh); a cluster's workers build
               # their own projectors, named in their warnings
               faces_failed={int(k): v for k, v in projector.face_errors.items()})
@@ -218,6 +235,13 @@ def stream_deviation(surfaces, scan, out=None, *, fmt: str = "csv",
                                "converged", "sample_points", "sample_stride")}}
     st["seconds"] = time.perf_counter() - t0
     return st
+
+
+def _keep_attrs(chunks, queue):
+    """``(points, normals)`` of each chunk, its attributes appended to ``queue``."""
+    for P, N, A in chunks:
+        queue.append(A)
+        yield P, N
 
 
 def _nworkers(client):

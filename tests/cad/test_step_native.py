@@ -238,3 +238,25 @@ def test_a_file_that_crashes_open_cascade_is_an_error():
         read_step(path)
     res = read_step(path, skip_unsupported=True)    # geomkit's reader, without them
     assert len(res.surfaces) == 20 and len(res.skipped) == 3
+    with pytest.raises(FileFormatError, match="Open CASCADE crashed"):
+        read_step(path, reader="occ")               # OCC asked for: in a child too
+
+
+@pytest.mark.occ
+@pytest.mark.skipif(not step_mod.HAVE_OCP, reason="needs cadquery-ocp")
+def test_a_file_open_cascade_reads_by_skipping_syntax_errors_says_so(tmp_path, capfd):
+    """A missing ';' is an error naming the record for geomkit's reader; Open CASCADE
+    (asked for) reads on by skipping the broken records: a FileRecoveredWarning says
+    so, and OCC's message stays off stdout (it is logged on ``geomkit.occ``)."""
+    text = (PARTS / "nx9_face_recognition_ap214.stp").read_text(encoding="latin-1")
+    bad = tmp_path / "nosemi.stp"
+    i = text.index(";\n#40=")
+    bad.write_text(text[:i] + "\n" + text[i + 2:], encoding="latin-1")
+    with pytest.raises(FileFormatError, match="#39"):
+        read_step(bad)
+    capfd.readouterr()
+    with pytest.warns(geomkit.errors.FileRecoveredWarning, match="skipping 1 record"):
+        res = read_step(bad, reader="occ")
+    assert len(res.surfaces) == 23
+    out, _ = capfd.readouterr()
+    assert "StepFile" not in out and "Incorrect Syntax" not in out

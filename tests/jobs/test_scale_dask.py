@@ -58,6 +58,38 @@ def test_dask_equals_single_process(client, scan):
         assert st[k] == st0[k], k
 
 
+def test_batch_on_workers_goes_on_past_broken_scans(client, scan, tmp_path):
+    """An overnight batch over a folder on a Dask cluster: a truncated LAS file and a
+    corrupt E57 file are parts with a one-line error in the table; the other parts
+    are computed as without a cluster."""
+    from geomkit.jobs.batch import batch_deviation
+
+    d = tmp_path / "scans"
+    d.mkdir()
+    P = np.load(scan)[:500]
+    np.save(d / "a_good.npy", P)
+    laspy = pytest.importorskip("laspy")
+    las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.2"))
+    las.x, las.y, las.z = P[:, 0], P[:, 1], P[:, 2]
+    las.write(str(d / "b.las"))
+    raw = (d / "b.las").read_bytes()
+    (d / "b.las").write_bytes(raw[:len(raw) - 700])          # truncated
+    (d / "c.e57").write_bytes(b"ASTM-E57" + bytes(range(256)) * 8)  # corrupt
+    np.save(d / "d_good.npy", P[::-1])
+    kw = dict(tolerance=(-0.04, 0.04), chunk_size=100)
+    s = batch_deviation(samples.load("sphere"), d, tmp_path / "out", client=client, **kw)
+    rows = {r["part"]: r for r in s["parts"]}
+    assert "truncated LAS file" in rows["b"]["error"]
+    assert "c.e57: cannot read as E57" in rows["c"]["error"]
+    assert not (tmp_path / "out" / "b").exists() and not (tmp_path / "out" / "c").exists()
+    assert s["errors"] == 2, rows
+    assert rows["a_good"]["error"] == "" == rows["d_good"]["error"]
+    batch_deviation(samples.load("sphere"), d, tmp_path / "ref", **kw)  # no cluster
+    for part in ("a_good", "d_good"):
+        assert (tmp_path / "out" / part / "deviation.csv").read_bytes() == \
+            (tmp_path / "ref" / part / "deviation.csv").read_bytes()
+
+
 def test_dask_worker_killed_mid_run(client, scan):
     ref, _ = _run(scan)
     pids = client.run(os.getpid)
