@@ -29,6 +29,7 @@ GROUPS = [
     ("Sections", ["plane_section", "Section"]),
     ("CMM deviation", ["deviation", "DeviationReport", "align_rigid", "report"]),
     ("Probe safety", ["probe_clearance", "Stylus", "Clearance"]),
+    ("Feature fits", ["fit", "FitResult"]),
     ("Collision", ["Body", "Contact", "Contacts", "Distance", "collide", "collide_many",
                    "min_distance"]),
     ("Motion and scenes", ["first_contact", "probe_path", "FirstContact", "ProbePath",

@@ -38,6 +38,7 @@ from geomkit.jobs.clearance import Clearance, Stylus, probe_clearance
 from geomkit.collision.motion import FirstContact, ProbePath, first_contact, probe_path
 from geomkit.exchange.cases import Case, load, load_case, save
 from geomkit.exchange.points import PointSet, read_points
+from geomkit.fitting import FitResult, fit
 from geomkit.query.projection import Projector
 from geomkit.query.projection_part import PartProjector, project_points
 from geomkit.query.results import MeshNearest, Projection, SurfaceDistance
@@ -73,4 +74,5 @@ __all__ = [
     "probe_clearance", "Stylus", "Clearance",
     "SceneDistances", "SweepAndPrune", "CoherentPair", "fit_exclusions",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
+    "fit", "FitResult",
 ]
