@@ -177,6 +177,28 @@ def run(sizes=(1000, 100000, 1000000), kinds=KINDS):
     return rows
 
 
+def sweep(sizes=(1000, 100000), kinds=KINDS):
+    """:func:`run` as rows of the common schema (:mod:`geomkit.bench._common`) for
+    ``geomkit bench``: one row per (kind, size) and reference (scikit-spatial where it
+    has the fit, else scipy's ``least_squares`` where it is run); the error is the
+    worst parameter error against the known feature, relative to its size (radians
+    for directions)."""
+    from geomkit.bench._common import make_row
+
+    rows = []
+    for r in run(sizes, kinds):
+        refs = [(name, r[f"{key}_s"], r[f"{key}_err"])
+                for name, key in (("scikit-spatial", "skspatial"),
+                                  ("scipy least_squares", "scipy"))
+                if r[f"{key}_s"] is not None]
+        for name, rs, re_ in refs or [(None, None, None)]:
+            rows.append(make_row("fit", r["kind"], "points", r["n"], r["geomkit_s"],
+                                 r["geomkit_err"], name, rs, re_, per="call",
+                                 note="least squares; error relative to the size"
+                                 + (f"; {r['note']}" if r["note"] else "")))
+    return rows
+
+
 def main(sizes=(1000, 100000, 1000000)):
     """Print the table of :func:`run`."""
     def f(x, fmt):

@@ -13,6 +13,8 @@ Usage: ``python -m geomkit.bench.suite [--full] [--engines a,b] [-o DIR] [--over
 from __future__ import annotations
 
 import argparse
+import importlib
+import importlib.util
 import json
 import os
 import platform
@@ -24,7 +26,7 @@ from geomkit.errors import InvalidInputError
 from geomkit.bench._common import FIELDS
 
 ENGINES = ("evaluation", "tessellate", "projection", "section", "distance", "collision",
-           "parts")
+           "parts", "fit")
 FILES = ("bench.json", "bench.md", "bench.png")
 
 #: Per engine: (module, keyword arguments of its ``sweep``) for quick and full mode.
@@ -57,10 +59,11 @@ CONFIG = {
                           "proe_as1_ap203.stp", "euclid_screw_ap214.step",
                           "nist_ctc_01_ap203.stp", "nist_ftc_06_ap242.stp",
                           "nist_ftc_07_ap242.stp"))),
+    "fit": ("fit", dict(sizes=(1_000, 100_000)), dict(sizes=(1_000, 100_000, 1_000_000))),
 }
 
 REFERENCES = {"evaluation": "occ", "tessellate": "occ", "projection": "occ", "section": "occ",
-              "distance": "occ", "collision": "coal", "parts": "occ"}
+              "distance": "occ", "collision": "coal", "parts": "occ", "fit": "skspatial"}
 
 
 def machine_info() -> dict:
@@ -127,7 +130,6 @@ def run_suite(engines=None, quick=True, out_dir=None, progress=None, overwrite=F
     ``machine`` (:func:`machine_info`), ``engines`` (per engine: wall seconds and
     notes), ``mode``, ``seconds`` and ``files`` (paths written).
     """
-    import importlib
 
     from geomkit.bench._common import MISSING_COAL, MISSING_OCC, coal_or_none, occ_or_none
 
@@ -139,7 +141,8 @@ def run_suite(engines=None, quick=True, out_dir=None, progress=None, overwrite=F
     paths = _targets(out_dir, overwrite) if out_dir is not None else None
     say = progress or (lambda msg: None)
     config = config or {}
-    have = {"occ": occ_or_none() is not None, "coal": coal_or_none() is not None}
+    have = {"occ": occ_or_none() is not None, "coal": coal_or_none() is not None,
+            "skspatial": importlib.util.find_spec("skspatial") is not None}
     t_start = time.perf_counter()
     machine = machine_info()
     rows, per_engine = [], {}
@@ -153,7 +156,8 @@ def run_suite(engines=None, quick=True, out_dir=None, progress=None, overwrite=F
         new = mod.sweep(**kw)
         dt = time.perf_counter() - t0
         notes = [] if have[REFERENCES[name]] else [
-            MISSING_OCC if REFERENCES[name] == "occ" else MISSING_COAL]
+            {"occ": MISSING_OCC, "coal": MISSING_COAL}.get(
+                REFERENCES[name], "scikit-spatial not installed: its columns are empty")]
         per_engine[name] = {"seconds": dt, "rows": len(new), "settings": _jsonable(kw),
                             "notes": notes}
         rows.extend(new)

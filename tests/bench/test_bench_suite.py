@@ -217,3 +217,17 @@ def test_parts_engine_beside_occ():
         assert "vs OCC" in r["note"]
     assert "first query" in rows[5]["note"]
     assert rows[6]["geomkit_error"] < 1e-5                              # OCC's edge tolerance
+
+
+def test_fit_engine_rows_against_references():
+    """``geomkit bench --engines fit``: geomkit's least-squares fits beside
+    scikit-spatial / scipy on the same points, each error against the known feature."""
+    res = suite.run_suite(["fit"], config={"fit": {"sizes": (400,)}})
+    rows = res["rows"]
+    assert {r["case"] for r in rows} == {"plane", "line", "circle", "sphere", "cylinder",
+                                         "cone"}
+    assert all(r["engine"] == "fit" and r["geomkit_error"] < 1e-9 for r in rows)
+    refs = {(r["case"], r["reference_name"]) for r in rows}
+    assert ("sphere", "scipy least_squares") in refs
+    if res["machine"].get("have_occ") is not None and not res["engines"]["fit"]["notes"]:
+        assert ("plane", "scikit-spatial") in refs

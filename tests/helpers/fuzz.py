@@ -245,7 +245,7 @@ def _worker() -> int:
     sys.stdout = open(os.devnull, "w")
     for line in sys.stdin:
         path = Path(line.strip())
-        problem = check(path, path.with_suffix(".out"))
+        problem = check(path, path.with_name(path.name + ".out"))
         real.write(json.dumps({"path": str(path), "problem": problem}) + "\n")
         real.flush()
     return 0
@@ -315,6 +315,9 @@ def long_run(count: int, seed: int, out: Path, workers: int = 2,
                 w = _Worker()
             with lock:
                 results.append((name, path, problem))
+                if len(results) % 500 == 0:
+                    print(f"{len(results)} inputs, {time.time() - t0:.0f} s, "
+                          f"{sum(1 for r in results if r[2])} failed", flush=True)
         w.close()
 
     threads = [threading.Thread(target=run) for _ in range(workers)]
