@@ -39,6 +39,9 @@ from geomkit.collision.motion import FirstContact, ProbePath, first_contact, pro
 from geomkit.exchange.cases import Case, load, load_case, save
 from geomkit.exchange.points import PointSet, read_points
 from geomkit.fitting import FitResult, fit
+from geomkit import gdt
+from geomkit.gdt import Characteristic, DatumFrame, datum_frame
+from geomkit.cad.steppmi import Pmi, read_pmi
 from geomkit.query.projection import Projector
 from geomkit.query.projection_part import PartProjector, project_points
 from geomkit.query.results import MeshNearest, Projection, SurfaceDistance
@@ -74,5 +77,6 @@ __all__ = [
     "probe_clearance", "Stylus", "Clearance",
     "SceneDistances", "SweepAndPrune", "CoherentPair", "fit_exclusions",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
-    "fit", "FitResult",
+    "fit", "FitResult", "gdt", "datum_frame", "DatumFrame", "Characteristic",
+    "read_pmi", "Pmi",
 ]

@@ -35,10 +35,10 @@ def _laspy():
     return laspy
 
 
-def _check_las_header(p: Path) -> None:
+def _check_las_header(p: Path) -> tuple[int, bool]:
     """The LAS public header block's sizes, checked against the file before laspy
     reads it: a damaged count (of variable-length records, of points) would have laspy
-    allocate or loop for as many as it says."""
+    allocate or loop for as many as it says.  Returns (point count, compressed)."""
     import struct
 
     size = p.stat().st_size
@@ -67,10 +67,13 @@ def _check_las_header(p: Path) -> None:
         raise FileFormatError(f"{p}: truncated LAS file: the header declares {count} "
                               f"points of {rlen} bytes, the file holds "
                               f"{(size - offset) // rlen}")
+    return int(count), compressed
 
 
 def las_length(p: Path) -> int:
-    _check_las_header(p)
+    count, compressed = _check_las_header(p)
+    if compressed:  # the count from the header: no decompressor in this process
+        return count
     try:
         with _laspy().open(str(p)) as fh:
             return int(fh.header.point_count)
@@ -82,7 +85,9 @@ def las_length(p: Path) -> int:
 
 def iter_las(p: Path, chunk: int):
     laspy = _laspy()
-    _check_las_header(p)
+    if _check_las_header(p)[1]:
+        yield from _iter_laz(p, chunk)
+        return
     try:
         fh = laspy.open(str(p))
     except Exception as exc:  # laspy raises its own and OS errors
@@ -109,6 +114,58 @@ def iter_las(p: Path, chunk: int):
         if a < n:
             raise FileFormatError(f"{p}: truncated LAS file: the header declares {n} points, "
                                   f"read {a}")
+
+
+def _iter_laz(p: Path, chunk: int):
+    """A compressed file, decompressed in a child process
+    (:mod:`geomkit.exchange.lazchild`): a decompressor that aborts ends the child."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "geomkit.exchange.lazchild", str(p),
+                             str(chunk)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env={**os.environ, "RUST_BACKTRACE": "0"})
+    a = 0
+    try:
+        head = json.loads(proc.stdout.readline() or b"{}")
+        if "error" in head or "fields" not in head:
+            raise FileFormatError(f"{p}: cannot read as LAS/LAZ "
+                                  f"({head.get('error', 'the decompressor stopped')})")
+        n = head["n"]
+        if n == 0:
+            raise FileFormatError(f"{p}: no points (the LAS header declares 0 points)")
+        dt = np.dtype([tuple(f) for f in head["fields"]])
+        names = [f[0] for f in head["fields"][3:]]
+        while True:
+            raw = proc.stdout.read(8)
+            if len(raw) < 8:
+                break
+            m = int.from_bytes(raw, "little")
+            body = proc.stdout.read(m * dt.itemsize)
+            if len(body) < m * dt.itemsize:
+                break
+            rec = np.frombuffer(body, dt)
+            yield a, np.column_stack([rec["x"], rec["y"], rec["z"]]), \
+                {d: rec[d].copy() for d in names}
+            a += m
+        code = proc.wait()
+        if code != 0:
+            why = [ln for ln in proc.stderr.read().decode("utf-8", "replace").splitlines()
+                   if ln.strip() and not ln.startswith("note:")]
+            raise FileFormatError(f"{p}: the LAZ decompressor failed at point {a} "
+                                  f"(exit {code}{': ' + why[-1][:200] if why else ''}): "
+                                  "the file is corrupt")
+        if a < n:
+            raise FileFormatError(f"{p}: truncated LAZ file: the header declares {n} "
+                                  f"points, read {a}")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+        proc.stdout.close()
+        proc.stderr.close()
 
 
 # ------------------------------------------------------------------ E57

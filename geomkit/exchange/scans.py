@@ -64,7 +64,7 @@ def _ply_header(p: Path):
                     raise FileFormatError(f"{p}: PLY header line {line!r}: no format")
                 fmt = words[1]
             elif words[0] == "element":
-                if len(words) != 3 or not words[2].isdigit():
+                if len(words) != 3 or not (words[2].isascii() and words[2].isdigit()):
                     raise FileFormatError(f"{p}: PLY header line {line!r}: expected "
                                           "'element NAME COUNT'")
                 elements.append((words[1], int(words[2]), []))

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["split_at_poles", "drop_shared_edges", "join_ends", "join_across_edges",
-           "EDGE_REACH"]
+           "boundary_distance", "EDGE_REACH"]
 
 
 def _collapsed_sides(s) -> np.ndarray:
@@ -229,20 +229,55 @@ def join_across_edges(curves, surfs, gap, bridged):
 
 
 def _to_boundary(s, p, per_piece=256):
-    """Distance of the point ``p`` to the boundary of face ``s`` (its trim loops' 3-D
-    polylines at ``per_piece`` samples per piece: within their sagitta of it)."""
+    """Distance of the point ``p`` to the boundary of face ``s`` (see
+    :func:`boundary_distance`)."""
+    return float(boundary_distance(s, np.reshape(p, (1, 3)), per_piece=per_piece)[0])
+
+
+def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8):
+    """(n,) distances of the points ``P`` (n, 3) to the boundary of face ``s``: its trim
+    loops' 3-D polylines at ``per_piece`` samples per piece (within their sagitta of
+    it; built once per face and kept).  Distances above ``upto`` may be reported as
+    any value above it (a cheaper upper bound).
+
+    Exact for the polyline: the ``k`` segments with the nearest midpoints give an upper
+    bound ``d``; any other segment is at least ``r_k - h`` away (``r_k`` the k-th
+    midpoint distance, ``h`` the longest half-segment), and every one at least
+    ``r_1 - h``: points with ``d > r_k - h`` and ``r_1 - h <= upto`` are measured
+    against all segments."""
+    from scipy.spatial import cKDTree
+
     from geomkit.cad.gaps import boundary_samples
 
     key = ("boundary_polyline", per_piece)
     if key not in s._cache:
         X, _, pc = boundary_samples([s], per_piece)
         same = pc[:-1] == pc[1:]
-        s._cache[key] = (X[:-1][same], X[1:][same])
-    A, B = s._cache[key]
+        A, B = X[:-1][same], X[1:][same]
+        s._cache[key] = (A, B, cKDTree(0.5 * (A + B)),
+                         0.5 * float(np.linalg.norm(B - A, axis=1).max(initial=0.0)))
+    A, B, tree, h = s._cache[key]
+    P = np.asarray(P, dtype=float).reshape(-1, 3)
+    if not len(P):
+        return np.empty(0)
+    k = min(k, len(A))
+    r, j = tree.query(P, k)
+    r, j = np.reshape(r, (len(P), k)), np.reshape(j, (len(P), k))
+    out = _segment_distances(P[:, None, :], A[j], B[j]).min(axis=1)
+    far = np.flatnonzero((out > r[:, -1] - h) & (r[:, 0] - h <= upto)) if k < len(A) else []
+    step = max(1, (1 << 20) // len(A))   # points per block: ~1e6 pairs
+    for i in range(0, len(far), step):
+        f = far[i:i + step]
+        out[f] = _segment_distances(P[f, None, :], A[None], B[None]).min(axis=1)
+    return out
+
+
+def _segment_distances(P, A, B):
+    """Distances of points ``P`` to segments ``A B`` (broadcast over leading axes)."""
     AB = B - A
-    L2 = np.einsum("ij,ij->i", AB, AB)
-    t = np.clip(np.einsum("ij,ij->i", p - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
-    return float(np.linalg.norm(A + t[:, None] * AB - p, axis=1).min())
+    L2 = np.einsum("...j,...j->...", AB, AB)
+    t = np.clip(np.einsum("...j,...j->...", P - A, AB) / np.where(L2 > 0, L2, 1.0), 0, 1)
+    return np.linalg.norm(P - (A + t[..., None] * AB), axis=-1)
 
 
 def _rev(c):

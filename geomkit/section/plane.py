@@ -16,7 +16,9 @@ subdivision", extended):
    linked through the leaves into chains; exact midpoints (bracketed roots on the
    graph line of the leaf, else Newton along the gradient) are inserted until the
    chord deviation is <= ``tol``.
-3. Chains are clipped by trims, cut at poles, kept once where the plane runs along a
+3. Chains are clipped by trims (a chain along a trim that lies in the plane is kept
+   up to the trim's corners, and across stretches where an approximate trim winds
+   round it within ``tol``), cut at poles, kept once where the plane runs along a
    shared edge or a seam, and joined across seams and surfaces where their ends
    coincide within ``tol`` (or the model's gap), and closed loops are flagged
    (:mod:`geomkit.section.joins`).  Curves whose whole extent is within ``tol`` are
@@ -31,8 +33,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geomkit.section.export import fit_curves, plot, to_csv, to_dxf, to_json
-from geomkit.section.joins import (drop_shared_edges, join_across_edges, join_ends,
-                                   split_at_poles)
+from geomkit.section.joins import (boundary_distance, drop_shared_edges,
+                                   join_across_edges, join_ends, split_at_poles)
 from geomkit.section.trace import _Eval, trace_surface
 from geomkit.validate import as_float_array
 from geomkit.errors import FaceFailedWarning, InvalidInputError
@@ -211,7 +213,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
         min_diam = max(0.25 * tol, 1e-13 * scale)
         try:
             chains, cuv, st = trace_surface(s, abcd, tol, zsnap, min_diam)
-            clipped = _clip_trims(s, abcd, chains, zsnap)
+            clipped = _clip_trims(s, abcd, chains, zsnap, tol)
             if len(cuv) and s.is_trimmed:
                 cuv = cuv[s.classify_uv(cuv) != OUTSIDE]
         except Exception as exc:  # noqa: BLE001 - reported: a warning and Section.failed
@@ -268,10 +270,11 @@ def _points(ev, uv, sid):
     return X
 
 
-def _clip_trims(s, plane, chains, zsnap):
+def _clip_trims(s, plane, chains, zsnap, reach=0.0):
     """Keep the parts of each chain inside the trimmed face; the ends on the trim
     curve are found by bisection along the exact curve (classify_uv), all the face's
-    crossings at once."""
+    crossings at once.  A stretch outside between two inside ones that stays within
+    ``reach`` (3-D) of the face's boundary is kept (:func:`_along_trim`)."""
     if not s.is_trimmed:
         return chains
     ev = _Eval(s, plane)
@@ -283,6 +286,8 @@ def _clip_trims(s, plane, chains, zsnap):
         uv = _densify(ev, uv, TRIM_STEP * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2]),
                       zsnap)
         inside = s.classify_uv(uv) != OUTSIDE
+        if not inside.all() and reach > 0:
+            inside = _along_trim(s, ev, uv, inside, c["closed"], reach)
         if inside.all():
             out.append(c)
             continue
@@ -314,6 +319,45 @@ def _clip_trims(s, plane, chains, zsnap):
     return out
 
 
+def _along_trim(s, ev, uv, inside, closed, reach):
+    """``inside`` (k,) bool with the outside runs that lie between inside points and
+    within ``reach`` (3-D) of the face's boundary set True.
+
+    Where the plane contains a face's edge, the section runs along the trim curve, and
+    a trim that only approximates the edge (a fitted pcurve: CTC-01 read through Open
+    CASCADE has one within 2.6e-6 in of the plane, beyond the classification band)
+    winds around it: classified alone, the section would fall into pieces with gaps
+    between them.  A curve leaving the face and coming back within ``reach`` of its
+    boundary all the way is on the boundary at that tolerance (a notch or hole of the
+    trim shallower than ``reach`` is crossed, as it is below the section's resolution).
+    """
+    ins = inside.copy()
+    d = np.diff(np.r_[ins[-1] if closed else 1, ins.astype(np.int8)].astype(np.int8))
+    starts = np.flatnonzero(d == -1)   # first outside point of a run
+    if not len(starts):
+        return ins
+    runs = []
+    for i0 in starts:
+        j = np.flatnonzero(ins[i0:])
+        if len(j):
+            runs.append(np.arange(i0, i0 + j[0]))
+        elif closed and ins.any():   # the run wraps round to the start
+            runs.append(np.r_[i0:len(ins), 0:int(np.argmax(ins))])
+    if closed:
+        runs = [r for r in runs if len(r) < len(ins)]
+    else:
+        runs = [r for r in runs if r[0] > 0 and r[-1] < len(ins) - 1]
+    if not runs:
+        return ins
+    idx = np.concatenate(runs)
+    near = boundary_distance(s, ev.points(uv[idx]), reach) <= reach
+    ok = np.split(near, np.cumsum([len(r) for r in runs])[:-1])
+    for r, o in zip(runs, ok):
+        if o.all():
+            ins[r] = True
+    return ins
+
+
 def _densify(ev, uv, h, zsnap):
     """Insert exact curve points until consecutive UV points are at most ``h`` apart
     (so that a trim loop crossing the curve is seen by point classification)."""
@@ -329,14 +373,30 @@ def _densify(ev, uv, h, zsnap):
 
 def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     """The curve points on the trim boundary between inside points ``a_in`` (n, 2) and
-    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once."""
+    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once.
+
+    A point is inside when ``classify_uv`` does not call it OUTSIDE within a round-off
+    band (``1e-14`` of the domain): the ends land on the exact trim.  Where ``a_in`` is
+    outside by that test, it was kept only for lying within the classification band
+    (``TRIM_TOL``) of a trim curve: the curve runs along the trim (a face's edge lying
+    in the plane, its trim a hair off the curve, e.g. v = 4e-10 against v = 0).  There
+    every midpoint would be outside too and the end would stay at the first inside
+    sample, up to ``TRIM_STEP`` of the domain short of the trim corner where that edge
+    ends; such ends are bisected with the band ``a_in`` was classified with, and
+    reach the corner within it."""
     a, b = a_in.copy(), b_out.copy()
     band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
+    along = s.classify_uv(a, band) == OUTSIDE   # inside only within the wide band
     act = np.arange(len(a))
     for _ in range(iters):
         m, _f = ev.project(0.5 * (a[act] + b[act]), np.linalg.norm(b[act] - a[act], axis=1),
                            0.25 * zsnap)
-        o = s.classify_uv(m, band) == OUTSIDE
+        o = np.empty(len(act), bool)
+        wide = along[act]
+        if (~wide).any():
+            o[~wide] = s.classify_uv(m[~wide], band) == OUTSIDE
+        if wide.any():
+            o[wide] = s.classify_uv(m[wide]) == OUTSIDE
         b[act[o]] = m[o]
         a[act[~o]] = m[~o]
         act = act[np.linalg.norm(b[act] - a[act], axis=1) > 1e-13]

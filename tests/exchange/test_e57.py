@@ -140,3 +140,16 @@ def test_damaged_las_header_is_refused_before_laspy(tmp_path):
     (tmp_path / "n.las").write_bytes(bytes(raw))
     with pytest.raises(FileFormatError, match="truncated LAS file"):
         list(iter_scan(tmp_path / "n.las"))
+
+
+def test_a_laz_file_that_aborts_the_decompressor_is_an_error():
+    """lazrs aborts the whole process on this file (found by the long fuzz run); LAZ
+    is decompressed in a child process, so here it is one FileFormatError, in the API
+    and through the command line."""
+    pytest.importorskip("laspy")
+    from helpers.paths import DATA
+
+    path = DATA / "malformed" / "lazrs_abort.laz"
+    with pytest.raises(FileFormatError, match="LAZ decompressor failed .*corrupt"):
+        list(iter_scan(path))
+    assert scan_length(path) == 60         # the header's count, no decompression here

@@ -22,6 +22,7 @@ pytestmark = [pytest.mark.occ,
 
 FTC07 = DATA / "parts" / "nist_ftc_07_ap242.stp"
 CTC05 = DATA / "parts" / "nist_ctc_05_ap203.stp"
+CTC01 = DATA / "parts" / "nist_ctc_01_ap203.stp"
 
 
 @pytest.fixture(scope="module")
@@ -122,19 +123,42 @@ def test_cli_section_uses_the_file_gap(ftc07_native, tmp_path, capsys):
     assert summary["planes"][0]["closed"] == summary["planes"][0]["curves"] == 7
 
 
-def test_symmetry_plane_closes_as_occ_does():
+@pytest.mark.parametrize("reader", ["geomkit", "occ"])
+def test_symmetry_plane_closes_as_occ_does(reader):
     """NIST CTC-05 (AP203, inch) cut by its symmetry plane y = 0, which contains edges
     that faces share (seams of split cylinders, planar faces' edges): each such edge is
     kept once, so the outline is OCC's one closed wire (before: 16 pieces, 4 closed).
-    Read through Open CASCADE: with geomkit's own read, the section along a cylinder's
-    edge stops 1.9e-3 in short of a trim corner (the classification band), and the
-    outline comes as 2 open pieces."""
+    Read by geomkit, the trim of a split cylinder's edge in the plane lies 4e-10 off it
+    (v = 4.08e-10 against the edge v = 0: inside the classification band, not on the
+    edge): the section along the edge is kept by the band alone, and must be bisected
+    with that band to reach the trim corner at u = 1.4 (before: it stopped at its first
+    sample inside, 1.9e-3 in short, and the outline came as 2 open pieces)."""
     from geomkit.cad.step import read_step
 
-    case = read_step(CTC05, reader="occ")
-    case.gap = case.edge_gap
+    case = read_step(CTC05, reader=reader)
     b = np.array([s.bounds for s in case.surfaces])
     tol = 1e-5 * float(np.linalg.norm(b[:, 1].max(0) - b[:, 0].min(0)))
-    sec = geomkit.plane_section(case.surfaces, [0.0, 1.0, 0.0, 0.0], tol, gap=case.gap)
-    assert (len(sec.curves), sum(sec.closed)) == _occ_wires(CTC05, (0, 1, 0), 0.0, case.gap) \
-        == (1, 1)
+    sec = geomkit.plane_section(case.surfaces, [0.0, 1.0, 0.0, 0.0], tol, gap=case.edge_gap)
+    assert (len(sec.curves), sum(sec.closed)) == _occ_wires(CTC05, (0, 1, 0), 0.0,
+                                                            case.edge_gap) == (1, 1)
+
+
+@pytest.mark.parametrize("reader", ["geomkit", "occ"])
+def test_plane_along_a_split_cone_edge_closes(reader):
+    """NIST CTC-01 cut by x = 0, which contains the edges shared by the halves of two
+    split bosses (faces 94/96, 95/97).  Read through Open CASCADE, their trims there are
+    fitted pcurves up to 2.6e-6 off the plane, winding round the edge beyond the
+    classification band: the section along the edge leaves the face and comes back,
+    within tol of its boundary, and is kept whole (before: 4 open pieces, 0.36 gaps).
+    Either read gives one closed loop, OCC's closed wire (689.13 long); OCC's section
+    adds an open 175-long line at z = 0 that has no ancestor face on the part."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(CTC01, reader=reader)
+    b = np.array([s.bounds for s in case.surfaces])
+    tol = 1e-5 * float(np.linalg.norm(b[:, 1].max(0) - b[:, 0].min(0)))
+    sec = geomkit.plane_section(case.surfaces, [1.0, 0.0, 0.0, 0.0], tol, gap=case.edge_gap)
+    assert (len(sec.curves), sum(sec.closed)) == (1, 1)
+    assert _occ_wires(CTC01, (1, 0, 0), 0.0, case.edge_gap) == (2, 1)
+    X = np.vstack([sec.curves[0], sec.curves[0][:1]])
+    assert abs(np.linalg.norm(np.diff(X, axis=0), axis=1).sum() - 689.126) < 5e-3

@@ -30,7 +30,7 @@ def _global_fields(glob: str, psep: str, rsep: str) -> list:
     out, k, n = [], 0, len(glob)
     while k < n:
         j = k
-        while j < n and glob[j].isdigit():
+        while j < n and glob[j] in "0123456789":
             j += 1
         if j < n and j > k and glob[j] == "H":
             m = int(glob[k:j])
