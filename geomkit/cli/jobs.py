@@ -1,4 +1,4 @@
-"""The deviation, distance, section, info, mesh, samples and demo commands."""
+"""The deviation, distance, section, info, mesh, samples, sample and demo commands."""
 
 from __future__ import annotations
 
@@ -379,3 +379,58 @@ def _cmd_samples(args) -> int:
     return 0
 
 
+
+
+def _faces_arg(text):
+    """``--faces 1,2,5`` as a list of face indices (range-checked by the job)."""
+    if text is None:
+        return None
+    try:
+        faces = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise InvalidInputError(f"expected comma-separated face indices, got {text!r}",
+                                "--faces") from None
+    if not faces:
+        raise InvalidInputError("no face given", "--faces")
+    return faces
+
+
+def _cmd_sample(args) -> int:
+    from geomkit.jobs.sample import sample_faces
+    from geomkit.outputs import atomic_write
+
+    if args.per_face < 1:
+        raise InvalidInputError(f"must be >= 1, got {args.per_face}", "--per-face")
+    faces = _faces_arg(args.faces)
+    out = args.output or f"{Path(args.part).stem}-points.csv"
+    target = _file_target(out, args.overwrite, inputs=[args.part])
+    case = _load_input(args.part, args.skip_invalid, args.units,
+                       skip_unsupported=args.skip_unsupported)
+    n = len(case.surfaces)
+    bad = [f for f in faces or [] if not 0 <= f < n]
+    if bad:
+        raise InvalidInputError(f"face {bad[0]} is out of range: the part has {n} face(s), "
+                                f"0..{n - 1}", "--faces")
+    res = sample_faces(case.surfaces, args.per_face, noise=args.noise, seed=args.seed,
+                       faces=faces)
+    data = res.csv_text().encode("utf-8")
+    if target.exists() and not args.overwrite:
+        raise FileExistsError(f"{target}: exists; pass --overwrite to replace it")
+    atomic_write(target, lambda fh: fh.write(data))
+    model, note = _model_info(case)
+    s = res.summary()
+    info = {"part": args.part, "output": str(target), "units": _unit(case.units),
+            "model": model, "points": s["points"], "faces": s["faces"],
+            "per_face": s["per_face"], "noise": args.noise, "seed": args.seed,
+            "short_faces": s["short_faces"], "flipped_faces": s["flipped_faces"],
+            "undecided_faces": s["undecided_faces"]}
+    if args.json:
+        emit_json(info)
+        return 0
+    short = (f"; {len(s['short_faces'])} face(s) short of {args.per_face}"
+             if s["short_faces"] else "")
+    print(f"{target}: {s['points']} points on {s['faces']} face(s) ({args.per_face} per "
+          f"face{short}), noise {args.noise:g} {info['units']}, seed {args.seed}")
+    if note:
+        print(note)
+    return 0

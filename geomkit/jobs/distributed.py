@@ -18,6 +18,8 @@ also draws its own bar when stderr is a terminal.
 
 from __future__ import annotations
 
+import hashlib
+import pickle
 import uuid
 
 from geomkit.errors import MissingDependencyError
@@ -68,7 +70,12 @@ def run_chunks(client, surfaces, chunks, T, probe_radius, max_distance):
     ``(points, normals)``), in order, computed as tasks on ``client``'s cluster."""
     distributed = _distributed()
     run = uuid.uuid4().hex[:12]
-    [sfut] = client.scatter([list(surfaces)], broadcast=True)
+    # a random key per run (hash=False): the same nominal scattered again for the next
+    # part of a batch under its content key could be released by the previous run's
+    # clean-up while this one uses it ("lost dependencies"); the workers' projector
+    # cache is keyed by the content instead
+    [sfut] = client.scatter([list(surfaces)], broadcast=True, hash=False)
+    content = hashlib.sha1(pickle.dumps(list(surfaces))).hexdigest()
     nworkers = max(1, len(client.scheduler_info().get("workers", {})))
     window = WINDOW * nworkers
     pending = distributed.as_completed()
@@ -83,7 +90,7 @@ def run_chunks(client, surfaces, chunks, T, probe_radius, max_distance):
                 except StopIteration:
                     exhausted = True
                     break
-                f = client.submit(_task, sfut, sfut.key, P, N, T, probe_radius,
+                f = client.submit(_task, sfut, content, P, N, T, probe_radius,
                                   max_distance, offset, key=f"geomkit-dev-{run}-{k}",
                                   retries=RETRIES, pure=False)
                 index[f.key] = k
