@@ -9,10 +9,11 @@ feature.  See ``docs/guide_fits.md`` for conventions and optimality statements.
 from __future__ import annotations
 
 from geomkit.fitting import _geom as G
+from geomkit.fitting._geom import frame as orthonormal_frame
 from geomkit.fitting.lsq import lsq_model, make_result
 from geomkit.fitting.result import FitResult
 
-__all__ = ["fit", "FitResult"]
+__all__ = ["fit", "FitResult", "orthonormal_frame"]
 
 
 def fit(points, kind, method="lsq"):

@@ -11,6 +11,7 @@ from scipy.spatial import ConvexHull
 from scipy.spatial import QhullError
 
 from geomkit.errors import InvalidInputError
+from geomkit.fitting import orthonormal_frame
 from geomkit.validate import as_float_array
 
 #: Points within CONTACT_REL * value + CONTACT_ABS * size of an extreme are "deciding".
@@ -130,13 +131,10 @@ def extremes(v, L, value=None):
 
 
 def perp_basis(z):
-    """Unit (e1, e2) with (e1, e2, z) right-handed orthonormal (deterministic)."""
-    z = np.asarray(z, dtype=np.float64)
-    e = np.zeros(3)
-    e[int(np.argmin(np.abs(z)))] = 1.0
-    e1 = np.cross(e, z)
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(z, e1)
+    """Unit (e1, e2) with (e1, e2, z) right-handed orthonormal (deterministic):
+    :func:`geomkit.fitting.orthonormal_frame`'s pair, turned by a half turn."""
+    u, v = orthonormal_frame(np.asarray(z, dtype=np.float64))
+    return -u, -v
 
 
 def reject(v, a):
