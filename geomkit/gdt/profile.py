@@ -27,7 +27,8 @@ from geomkit.errors import DegenerateGeometryError, InvalidInputError
 from geomkit.gdt._common import (CONTACT_ABS, CONTACT_REL, Characteristic,
                                  check_direction, check_points,
                                  check_tol, perp_basis, reject, size_of)
-from geomkit.gdt.datums import DatumFrame
+from geomkit.gdt.datums import DOFS, DatumFrame
+from geomkit.nurbs.surface import as_surfaces
 from geomkit.query.projection_part import project_points
 from geomkit.query.results import BEYOND, FAILED, STATUS_NAMES
 from geomkit.validate import as_float_array
@@ -42,7 +43,7 @@ FIT_ITER, FIT_TOL = 100, 1e-14
 MIN_INPLANE = 0.1
 
 
-def _project(surfaces, X):
+def _project_one(surfaces, X):
     pr = project_points(surfaces, X)
     bad = np.nonzero((pr.status == BEYOND) | (pr.status == FAILED)
                      | ~np.isfinite(pr.signed_distance))[0]
@@ -52,24 +53,39 @@ def _project(surfaces, X):
             f"{bad.size} point(s) could not be projected on the nominal surfaces (first: "
             f"index {i}, status {STATUS_NAMES.get(int(pr.status[i]), pr.status[i])})",
             "points")
-    d = pr.signed_distance.astype(np.float64)
-    G = X - pr.point
+    return (pr.signed_distance.astype(np.float64), pr.point, pr.normal,
+            np.asarray(pr.surface))
+
+
+def _project(surfaces, X, owner=None):
+    """Signed distances, unit gradients and feet of points on the surfaces; with
+    ``owner`` each point only on its own surface (index into ``surfaces``)."""
+    if owner is None:
+        d, foot, nrm, surf = _project_one(surfaces, X)
+    else:
+        n = X.shape[0]
+        d, foot, nrm = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
+        surf = np.asarray(owner, np.int64).copy()
+        for k in np.unique(surf):
+            m = surf == k
+            d[m], foot[m], nrm[m], _ = _project_one([surfaces[int(k)]], X[m])
+    G = X - foot
     with np.errstate(invalid="ignore", divide="ignore"):
         grad = G / d[:, None]
     small = np.abs(d) <= 1e-12 * size_of(X)
-    grad[small] = pr.normal[small]
+    grad[small] = nrm[small]
     grad /= np.linalg.norm(grad, axis=1)[:, None]
-    return d, grad, pr
+    return d, grad, surf
 
 
 class _Scaled:
     """Distances seen in the zone: (d - c) / w, w the in-plane share (profile_line)."""
 
-    def __init__(self, surfaces, c, plane_n=None):
-        self.surfaces, self.c, self.plane_n = surfaces, c, plane_n
+    def __init__(self, surfaces, c, plane_n=None, owner=None):
+        self.surfaces, self.c, self.plane_n, self.owner = surfaces, c, plane_n, owner
 
     def __call__(self, X):
-        d, g, pr = _project(self.surfaces, X)
+        d, g, surf = _project(self.surfaces, X, self.owner)
         w = np.ones_like(d)
         if self.plane_n is not None:
             w = np.linalg.norm(reject(g, self.plane_n), axis=1)
@@ -79,10 +95,10 @@ class _Scaled:
                     f"the section plane is nearly tangent to the surface at point "
                     f"{int(low[0])} (in-plane share of the normal {w[low[0]]:.3g})",
                     "plane")
-        return (d / w) - self.c, g / w[:, None], pr, w
+        return (d / w) - self.c, g / w[:, None], surf, w
 
 
-def rigid_minimax(values, X, basis, L, max_iter=FIT_ITER):
+def rigid_minimax(values, X, basis, L, max_iter=FIT_ITER, center=None):
     """Rigid motion of points minimising max_i |e_i| (sequential LP, trust region).
 
     Parameters
@@ -95,6 +111,9 @@ def rigid_minimax(values, X, basis, L, max_iter=FIT_ITER):
         3 rows for motions in a plane.
     L : float
         Length scale (rotations are scaled by it).
+    center : (3,) float, optional
+        The point rotations turn about (default the moved points' centroid; give it
+        when the basis holds rotations without every translation).
 
     Returns
     -------
@@ -112,7 +131,7 @@ def rigid_minimax(values, X, basis, L, max_iter=FIT_ITER):
     Y = X
     while it < max_iter:
         it += 1
-        c = Y.mean(axis=0)
+        c = Y.mean(axis=0) if center is None else np.asarray(center, np.float64)
         J = np.hstack([np.cross(Y - c, g) / L, g]) @ basis.T         # (n, k)
         A = np.vstack([np.column_stack([J, -np.ones(len(e))]),
                        np.column_stack([-J, -np.ones(len(e))])])
@@ -165,17 +184,57 @@ def _zone(tol, unequal):
                           "limits": (U - t, U)}
 
 
-def _profile(type_, P, surfaces, tol, frame, unequal, best_fit, plane_n):
+def _check_owner(owner, n, k):
+    o = np.asarray(owner)
+    if o.shape != (n,) or not np.issubdtype(o.dtype, np.integer):
+        raise InvalidInputError(f"expected {n} integer surface indices, got shape "
+                                f"{o.shape} of {o.dtype}", "surface_of")
+    if n and (o.min() < 0 or o.max() >= k):
+        raise InvalidInputError(f"surface index out of range 0..{k - 1}", "surface_of")
+    return o.astype(np.int64)
+
+
+def _free_basis(frame, free):
+    """Rows (omega, t) of the motions ``free`` names (``tx`` ... ``rz``) in the frame's
+    axes."""
+    rows = []
+    for name in free:
+        if name not in DOFS:
+            raise InvalidInputError(f"unknown degree of freedom {name!r}; expected some "
+                                    f"of {', '.join(DOFS)}", "free")
+        r = np.zeros(6)
+        ax = frame.axes["xyz".index(name[1])]
+        if name[0] == "r":
+            r[:3] = ax
+        else:
+            r[3:] = ax
+        rows.append(r)
+    return np.array(rows).reshape(-1, 6)
+
+
+def _profile(type_, P, surfaces, tol, frame, unequal, best_fit, plane_n, free=None,
+             owner=None):
     t, c, tolerance = _zone(tol, unequal)
     if frame is not None and not isinstance(frame, DatumFrame):
         raise InvalidInputError(f"expected a DatumFrame or None, got "
                                 f"{type(frame).__name__}", "frame")
     fit_it = (frame is None) if best_fit is None else bool(best_fit)
     L = size_of(P)
-    vals = _Scaled(surfaces, c, plane_n)
+    surfaces = as_surfaces(surfaces)
+    if owner is not None:
+        owner = _check_owner(owner, P.shape[0], len(surfaces))
+    vals = _Scaled(surfaces, c, plane_n, owner)
     details = {"best_fit": fit_it}
     X = P
-    if fit_it:
+    if free and frame is not None and plane_n is None:
+        if not isinstance(free, (tuple, list)):
+            raise InvalidInputError(f"expected a tuple of degrees of freedom, got "
+                                    f"{free!r}", "free")
+        basis = _free_basis(frame, free)
+        R, tr, info = rigid_minimax(vals, P, basis, L, center=frame.origin)
+        X = P @ R.T + tr
+        details.update(rotation=R, translation=tr, fit=info, free=tuple(free))
+    elif fit_it:
         if plane_n is None:
             basis = np.eye(6)
         else:
@@ -185,14 +244,14 @@ def _profile(type_, P, surfaces, tol, frame, unequal, best_fit, plane_n):
         R, tr, info = rigid_minimax(vals, P, basis, L)
         X = P @ R.T + tr
         details.update(rotation=R, translation=tr, fit=info)
-    e, _, pr, w = vals(X)
+    e, _, surf, w = vals(X)
     dev = e + c
     value = 2.0 * float(np.abs(e).max())
     tl = CONTACT_REL * value + CONTACT_ABS * L
     deciding = np.nonzero(np.abs(e) >= np.abs(e).max() - tl)[0]
     details.update(deviation=dev, zone_center_offset=c, points=X,
                    range=(float(dev.min()), float(dev.max())),
-                   surface=pr.surface)
+                   surface=surf)
     if plane_n is not None:
         details["inplane_share_min"] = float(w.min())
     return Characteristic(type_, value, tolerance,
@@ -201,7 +260,7 @@ def _profile(type_, P, surfaces, tol, frame, unequal, best_fit, plane_n):
 
 
 def profile_surface(points, surfaces, tol, frame=None, unequal=None,
-                    best_fit=None) -> Characteristic:
+                    best_fit=None, free=None, surface_of=None) -> Characteristic:
     """Profile of a surface (ISO 1101:2017 18.7-18.8, as understood; ASME Y14.5-2018
     section 11).
 
@@ -224,6 +283,16 @@ def profile_surface(points, surfaces, tol, frame=None, unequal=None,
         Default: True without ``frame``.  Rigid minimax fit (every rotation and
         translation) minimising max |d_i - c|: sequential LP on the linearisation
         d_i + g_i.(w x p_i + t), re-projecting after each step; a local optimum.
+    free : tuple of str, optional
+        With ``frame``: the degrees of freedom (``"tx"`` ... ``"rz"``, in the frame's
+        axes; rotations about its origin) in which the zone still floats, e.g. the
+        frame's own ``free`` (datums that do not fix every motion) or the
+        translations of a composite profile's lower segment (orientation only).
+        The same rigid minimax fit, restricted to those motions.
+    surface_of : (n,) int, optional
+        The surface (index into ``surfaces``) each point belongs to (its face):
+        its deviation is then measured to that surface only, not to the nearest of
+        all (a point near a corner keeps its face while the fit moves it).
 
     Returns
     -------
@@ -239,7 +308,8 @@ def profile_surface(points, surfaces, tol, frame=None, unequal=None,
     """
     P = check_points(points, 1 if best_fit is False or frame is not None else 3,
                      "profile of a surface")
-    return _profile("profile_surface", P, surfaces, tol, frame, unequal, best_fit, None)
+    return _profile("profile_surface", P, surfaces, tol, frame, unequal, best_fit, None,
+                    free, surface_of)
 
 
 def profile_line(points, surfaces, plane, tol, frame=None, unequal=None,
