@@ -31,7 +31,7 @@ GROUPS = [
     ("Probe safety", ["probe_clearance", "Stylus", "Clearance"]),
     ("Feature fits and GD&T", ["fit", "FitResult", "gdt", "datum_frame", "DatumFrame",
                                "Characteristic", "read_pmi", "Pmi", "sample_faces",
-                               "SampledPoints"]),
+                               "SampledPoints", "inspect_part", "Inspection"]),
     ("Collision", ["Body", "Contact", "Contacts", "Distance", "collide", "collide_many",
                    "min_distance"]),
     ("Motion and scenes", ["first_contact", "probe_path", "FirstContact", "ProbePath",

@@ -42,6 +42,7 @@ from geomkit.fitting import FitResult, fit
 from geomkit import gdt
 from geomkit.gdt import Characteristic, DatumFrame, datum_frame
 from geomkit.cad.steppmi import Pmi, read_pmi
+from geomkit.jobs.inspect import Inspection, inspect_part
 from geomkit.jobs.sample import SampledPoints, sample_faces
 from geomkit.query.projection import Projector
 from geomkit.query.projection_part import PartProjector, project_points
@@ -79,5 +80,5 @@ __all__ = [
     "SceneDistances", "SweepAndPrune", "CoherentPair", "fit_exclusions",
     "Body", "Contact", "Contacts", "Distance", "collide", "collide_many", "min_distance",
     "fit", "FitResult", "gdt", "datum_frame", "DatumFrame", "Characteristic",
-    "read_pmi", "Pmi", "sample_faces", "SampledPoints",
+    "read_pmi", "Pmi", "sample_faces", "SampledPoints", "inspect_part", "Inspection",
 ]

@@ -16,6 +16,7 @@ from geomkit.cli._common import (WARNINGS, Parser, _positive_float, _positive_in
                                  _positive_or_zero, _units_arg, show_warning)
 from geomkit.cli import bench as _bench
 from geomkit.cli import clearance as _clearance
+from geomkit.cli import inspect as _inspect
 from geomkit.cli.jobs import (_cmd_demo, _cmd_deviation, _cmd_distance, _cmd_info, _cmd_mesh,
                               _cmd_sample, _cmd_samples, _cmd_section)
 
@@ -225,6 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=UNITS_HELP)
     _add_cad_options(p)
     p.set_defaults(func=_cmd_sample)
+    _inspect.add_parser(sub, common)
     p = sub.add_parser("samples", help="list the bundled samples")
     p.set_defaults(func=_cmd_samples)
     from geomkit.cli import _reports  # --report html,pdf on deviation, section, clearance

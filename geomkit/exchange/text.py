@@ -27,7 +27,7 @@ import numpy as np
 
 from geomkit.errors import FileFormatError
 
-__all__ = ["TEXT_FORMATS", "check_path", "iter_text"]
+__all__ = ["TEXT_FORMATS", "check_path", "iter_text", "read_int_column"]
 
 TEXT_FORMATS = (".csv", ".xyz", ".txt", ".asc", ".pts")
 _SPLIT = re.compile(r"[,;\s]+")
@@ -218,3 +218,43 @@ def iter_text(path, chunk_size: int = 1 << 16):
 def _is_data(line, lay) -> bool:
     """The line the layout was sniffed from is a data row (not a header)."""
     return lay.decimal_comma is True or all(_is_number(f) for f in _SPLIT.split(line) if f)
+
+
+def read_int_column(path, name: str):
+    """The integer column ``name`` of a text point file with a header (e.g. the
+    ``face`` column of ``geomkit sample``), one value per data row in file order;
+    None when the file has no header naming it.  A value that is not an integer is
+    a :class:`FileFormatError` naming its line."""
+    p = check_path(path)
+    if p.suffix.lower() not in TEXT_FORMATS and p.suffix:
+        return None
+    want = name.lower()
+    out, col, lay = [], None, None
+    try:
+        fh = open(p, encoding="utf-8-sig", newline=None)
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    with fh:
+        for lineno, raw in enumerate(fh, 1):
+            line = raw.split("#", 1)[0].strip()
+            if not line:
+                continue
+            if lay is None:
+                lay = _sniff(p, lineno, line)
+                if _is_data(line, lay):
+                    return None                       # no header: no named columns
+                names = [f.strip().strip('"').strip("'").strip().lower()
+                         for f in lay.split(line)]
+                if want not in names:
+                    return None
+                col = names.index(want)
+                continue
+            fields = lay.split(line)
+            try:
+                v = fields[col]
+                iv = int(v)
+            except (IndexError, ValueError):
+                raise FileFormatError(f"{p}: line {lineno}: column {name!r} is not an "
+                                      f"integer in {line!r}") from None
+            out.append(iv)
+    return None if col is None else np.asarray(out, dtype=np.int64)

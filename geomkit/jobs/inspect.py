@@ -94,7 +94,9 @@ class Inspection:
     each point (-1: left out); ``points`` as evaluated (after the best fit with
     ``align="bestfit"``); ``frames`` the datum systems built (label string ->
     measured frame dict, or the reason it could not be built); ``units`` the model's
-    length unit."""
+    length unit; ``deviation`` each point's signed distance to its own face (NaN when
+    left out) with the points placed by the datum system ``shown_in`` (the first
+    that fixes every degree of freedom; None: as evaluated), for the colour maps."""
 
     characteristics: list
     verdict: str
@@ -105,6 +107,9 @@ class Inspection:
     align: str = "datums"
     assignment: dict = field(default_factory=dict)
     source: str = ""
+    deviation: np.ndarray = field(default=None, repr=False)
+    shown_in: str | None = None
+    shown_points: np.ndarray = field(default=None, repr=False)
 
     def counts(self) -> dict:
         out = {"pass": 0, "fail": 0, "not evaluated": 0}
@@ -141,9 +146,11 @@ class _Context:
         need |= {int(f) for d in pmi.datums for f in d.faces}
         need = sorted(f for f in need if 0 <= f < len(surfaces))
         self._shapes = {}
+        self.flipped = set()      # faces whose S_u x S_v points into the material
         if need:       # one exact sample of every face the PMI names (one ray vote)
             smp = sample_faces(surfaces, NOMINAL_SAMPLES, faces=need, seed=1)
             self._shapes = face_shapes(surfaces, need, sampled=smp)
+            self.flipped = {int(f) for f, v in smp.orientation.items() if v == "flipped"}
         self._frames = {}
         self._by_face = {}
         for f in self.all_faces:
@@ -385,8 +392,24 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
         verdict = "incomplete"
     else:
         verdict = "pass"
-    frames = {}
+    frames, shown, X = {}, None, P
     for k, v in ctx._frames.items():
         frames[k] = v if isinstance(v, str) else v[0].to_dict()
+        if shown is None and not isinstance(v, str) and not v[1].free:
+            shown, X = k, gdt.align_to_cad(P, *v)
     return Inspection(rows, verdict, F, P, frames, units, align, info,
-                      getattr(pmi, "source", ""))
+                      getattr(pmi, "source", ""),
+                      _own_face_deviation(surfaces, X, F, ctx.flipped), shown, X)
+
+
+def _own_face_deviation(surfaces, X, F, flipped):
+    """Signed distance of each point to its own face, outward positive on the faces
+    whose orientation is known (NaN: no face, no foot)."""
+    d = np.full(X.shape[0], np.nan)
+    for f in np.unique(F[F >= 0]):
+        m = F == f
+        pr = project_points([surfaces[int(f)]], X[m])
+        ok = (pr.status != BEYOND) & (pr.status != FAILED)
+        d[np.nonzero(m)[0][ok]] = pr.signed_distance[ok] * (-1.0 if int(f) in flipped
+                                                             else 1.0)
+    return d
