@@ -12,7 +12,7 @@ from geomkit.gdt._common import Characteristic
 from geomkit.gdt.datums import (Datum, DatumFeature, DatumFrame, align_to_cad,
                                 datum_frame, frame_from_axes)
 from geomkit.gdt.form import circularity, cylindricity, flatness, sphericity, straightness
-from geomkit.gdt.location import mmc_bonus, position
+from geomkit.gdt.location import float_pattern, mmc_bonus, position
 from geomkit.gdt.orientation import angularity, parallelism, perpendicularity
 from geomkit.gdt.profile import profile_line, profile_surface
 from geomkit.gdt.runout import circular_runout, total_runout
@@ -21,6 +21,6 @@ __all__ = ["Characteristic", "Datum", "DatumFeature", "DatumFrame", "datum_frame
            "frame_from_axes", "align_to_cad",
            "flatness", "straightness", "circularity", "cylindricity", "sphericity",
            "parallelism", "perpendicularity", "angularity",
-           "position", "mmc_bonus",
+           "position", "mmc_bonus", "float_pattern",
            "profile_surface", "profile_line",
            "circular_runout", "total_runout"]

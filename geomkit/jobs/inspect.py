@@ -137,13 +137,15 @@ def assign_faces(surfaces, points, max_distance):
 class _Context:
     """What the evaluators share: points by face, face shapes, frames, units."""
 
-    def __init__(self, surfaces, pmi, P, face, units, align):
+    def __init__(self, surfaces, pmi, P, face, units, align, tolerances):
         self.surfaces, self.pmi, self.P, self.face = surfaces, pmi, P, face
         self.units, self.align = units, align
         self.size = max(s.size for s in surfaces)
         self.all_faces = sorted(int(f) for f in np.unique(face[face >= 0]))
-        need = {int(f) for t in pmi.tolerances for f in t.faces}
-        need |= {int(f) for d in pmi.datums for f in d.faces}
+        # the faces of the tolerances evaluated and of the datums they refer to
+        labels = {r.label for t in tolerances for r in t.datums}
+        need = {int(f) for t in tolerances for f in t.faces}
+        need |= {int(f) for d in pmi.datums if d.label in labels for f in d.faces}
         need = sorted(f for f in need if 0 <= f < len(surfaces))
         self._shapes = {}
         self.flipped = set()      # faces whose S_u x S_v points into the material
@@ -361,8 +363,8 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
         F = F.astype(np.int64)
     info.update(points=int(P.shape[0]), assigned=int((F >= 0).sum()),
                 left_out=int((F < 0).sum()), max_distance=md)
-    ctx = _Context(surfaces, pmi, P, F, units, align)
     tols = pmi.tolerances if tolerances is None else list(tolerances)
+    ctx = _Context(surfaces, pmi, P, F, units, align, tols)
     lower = {o for t in pmi.tolerances for k, o in t.related if k == "composite"}
     rows = []
     for t in tols:

@@ -26,7 +26,6 @@ LOWER_SEGMENT = "lower"
 
 _MATERIAL = {"maximum_material_requirement": "MMC", "least_material_requirement": "LMC"}
 _UNSUPPORTED_MODIFIERS = {
-    "projected": "a projected tolerance zone (P)",
     "free_state": "free state (F)",
     "tangent_plane": "a tangent plane (T)",
     "common_zone": "a common zone (CZ)",
@@ -174,7 +173,22 @@ def _orientation(tol, T, feats, ctx, frames):
         else:
             fn = gdt.parallelism if tol.type == "parallelism" else gdt.perpendicularity
             ch = fn(P, T, meas_f, datum=label, feature=feature, **kw)
-        per.append(_from_char(ch, idx, f.faces))
+        r = _from_char(ch, idx, f.faces)
+        proj = _projected(tol, ctx)
+        if proj is not None:
+            if feature != "axis":
+                raise NotEvaluated("a projected zone (P) on a plane is not supported")
+            e1, e2 = ch.details["axis_ends"]
+            u = (e2 - e1) / max(float(np.linalg.norm(e2 - e1)), 1e-300)
+            z = ch.details["zone"]
+            if z["shape"] == "cylinder":
+                v = z["axis"]
+                r["measured"] = proj * float(np.linalg.norm(u - (u @ v) * v))
+            else:
+                r["measured"] = proj * abs(float(z["normal"] @ u))
+            r["passed"] = bool(r["measured"] <= r["limit"])
+            r["note"] = f"projected zone: the axis direction over {proj:.6g}"
+        per.append(r)
     return per
 
 
@@ -199,11 +213,37 @@ def _size_limits(tol, f, ctx):
     return None
 
 
-def _position(tol, T, feats, ctx, frames):
+def _projected(tol, ctx):
+    """The projected length (model units) of a projected zone (P), else None."""
+    if "projected" not in tol.modifiers:
+        return None
+    v = tol.extra.get("projected_length")
+    if v is None:
+        raise NotEvaluated("a projected zone (P) without its projected length")
+    scale = ctx.length_scale(v[1] if isinstance(v, (list, tuple)) else tol.unit)
+    if scale is None:
+        raise NotEvaluated("a projected length in a unit geomkit does not know")
+    return float(v[0] if isinstance(v, (list, tuple)) else v) * scale
+
+
+def _extend(ends, length):
+    """A feature's axis ends and the ends of its axis extended ``length`` beyond each
+    end (the projected zone: the file does not say on which side the mating part
+    sits, so both sides are checked and the worse counts)."""
+    e1, e2 = ends
+    u = (e2 - e1) / max(float(np.linalg.norm(e2 - e1)), 1e-300)
+    return np.array([e1 - length * u, e1, e2, e2 + length * u])
+
+
+def _position(tol, T, feats, ctx, frames, lower=False):
     meas_f, nom_f = frames
     material = next((_MATERIAL[m] for m in tol.modifiers if m in _MATERIAL), None)
+    proj = _projected(tol, ctx)
     planes_paired, rest = _widths(feats)
-    per = []
+    if lower and (planes_paired or any(f.kind != "cylinder" for f in rest)):
+        raise NotEvaluated("the lower segment of a composite position is evaluated for "
+                           "holes and shafts only")
+    per, axes = [], []
     for kind, a, b in planes_paired:
         if kind != "width":
             raise NotEvaluated(f"position of a single plane (face {_faces(a.faces)}) "
@@ -239,7 +279,28 @@ def _position(tol, T, feats, ctx, frames):
             extra["note"] = note
         if "bonus" in ch.tolerance:
             extra["bonus"] = ch.tolerance["bonus"]
-        per.append(_from_char(ch, idx, f.faces, extra=extra))
+        r = _from_char(ch, idx, f.faces, extra=extra)
+        ends = np.asarray(ch.details["axis_ends"])
+        if proj is not None:
+            ends = _extend(ends, proj)
+            r["measured"] = 2.0 * float(np.linalg.norm(
+                (ends - nominal) - np.outer((ends - nominal) @ axis, axis), axis=1).max())
+            r["passed"] = bool(r["measured"] <= r["limit"]
+                               and ch.details.get("size_ok", True))
+            r["note"] = (f"projected zone: the axis extended {proj:.6g} beyond both ends, "
+                         "the worse side")
+        per.append(r)
+        axes.append((ends, nominal, axis, ch.details.get("size_ok", True)))
+    if lower:
+        free = tuple(sorted(set(nom_f.free) | {"tx", "ty", "tz"}))
+        got, motion = gdt.float_pattern([a[0] for a in axes], [a[1] for a in axes],
+                                        [a[2] for a in axes], [r["limit"] for r in per],
+                                        free)
+        for r, m, a in zip(per, got, axes):
+            r["measured"] = float(m)
+            r["passed"] = bool(m <= r["limit"] and a[3])
+            r["note"] = ("lower segment: the pattern's zones moved together in "
+                         f"{', '.join(free)} (orientation to the datums kept)")
     return per
 
 
@@ -310,9 +371,6 @@ def evaluate(tol, ctx, lower: bool = False) -> dict:
     frames = ctx.frames(tol) if tol.datums else None
     if tol.type == "surface_profile":
         return _result(ctx, _profile(tol, T, faces, ctx, frames, lower))
-    if lower and tol.type == "position":
-        raise NotEvaluated("the lower segment of a composite position (a pattern zone "
-                           "free to move) is not supported")
     feats = group_features(ctx.shapes(faces), faces, ctx.size)
     try:
         if tol.type in ("flatness", "cylindricity", "sphericity", "roundness"):
@@ -322,7 +380,7 @@ def evaluate(tol, ctx, lower: bool = False) -> dict:
         elif tol.type in ("position", "coaxiality"):
             if frames is None:
                 raise NotEvaluated(f"{tol.type} without datums is not supported")
-            per = _position(tol, T, feats, ctx, frames)
+            per = _position(tol, T, feats, ctx, frames, lower)
         elif tol.type in ("circular_runout", "total_runout"):
             per = _runout(tol, T, feats, ctx, frames)
         else:

@@ -234,3 +234,35 @@ def test_cli_inspect_bad_input(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "line 3" in err and "face" in err
     assert not (tmp_path / "b").exists()
+
+
+# --------------------------------------------------------------------- FTC-07
+
+FTC07 = DATA / "parts" / "nist_ftc_07_ap242.stp"
+
+
+def test_ftc07_projected_zones_and_composite_lower_segments():
+    part, pmi = geomkit.read_step(FTC07), geomkit.read_pmi(FTC07)
+    faces = _pmi_faces(pmi)
+    s = sample_faces(part, 16, faces=faces, seed=4)
+    res = inspect_part(part, pmi, s.points, s.face)
+    assert len(res.characteristics) == len(pmi.tolerances) == 27
+    assert res.verdict == "pass", [(c.id, c.reason) for c in res.characteristics
+                                   if c.status != "pass"]
+    size = _size(part)
+    assert max(c.measured for c in res.characteristics) <= 1e-9 * size
+    notes = {c.id: " ".join(f.get("note", "") for f in c.features)
+             for c in res.characteristics}
+    assert "projected zone" in notes["#14025"] and "lower segment" in notes["#14483"]
+    # one hole of the four-hole pattern moved 0.02 in: the pattern-locating zone (0.06
+    # to A|B|C) still holds it (2 x 0.02), the feature-relating zone (0.015 to A,
+    # floating) does not: the zones float by half the shift (2 x 0.01 each)
+    shift = {"kind": "offset", "translate": (0.02, 0.0, 0.0)}
+    s = sample_faces(part, 16, faces=faces, seed=4,
+                     form_errors={253: [shift], 254: [shift]})
+    tols = [t for t in pmi.tolerances if t.id in (14472, 14483)]
+    res = inspect_part(part, pmi, s.points, s.face, tolerances=tols)
+    up, low = _by_id(res)["#14472"], _by_id(res)["#14483"]
+    assert up.status == "pass" and abs(up.measured - 0.04) <= 1e-6 * size
+    assert low.status == "fail"
+    assert 0.02 - 1e-6 * size <= low.measured <= 0.02 / np.cos(np.pi / 64) + 1e-6 * size
