@@ -200,3 +200,38 @@ def test_runout_errors():
         total_runout(P, ((0, 0, 0), (0, 0, 1)), 0.1, direction="tangential")
     with pytest.raises(InvalidInputError, match="non-zero"):
         total_runout(P, ((0, 0, 0), (0, 0, 0)), 0.1)
+
+
+def test_profile_free_dofs_float_only_those(frame):
+    # a sphere profile to a plane datum A: the zone may slide in x and y (A leaves
+    # them free), not along z
+    P, _ = sphere_points(80, 3, h=0.0)
+    t = np.array([0.4, -0.25, 0.0])
+    ch = profile_surface(P + t, SPHERE, 0.06, frame=frame, free=frame.free)
+    assert ch.details["free"] == frame.free
+    assert ch.measured < 1e-9
+    R, tr = ch.details["rotation"], ch.details["translation"]
+    assert abs(tr[2]) < 1e-12 and abs(R[2, 2] - 1.0) < 1e-12   # only tx, ty, rz moved
+    lifted = profile_surface(P + [0.0, 0.0, 0.01], SPHERE, 0.06, frame=frame,
+                             free=frame.free)
+    assert lifted.measured > ch.measured + 0.005      # tz is held by datum A
+    with pytest.raises(InvalidInputError, match="degree of freedom"):
+        profile_surface(P, SPHERE, 0.06, frame=frame, free=("tq",))
+
+
+def test_profile_surface_of_keeps_each_point_on_its_face():
+    # two parallel faces: points given their face are measured to it, not to the
+    # nearest face
+    a, b = geomkit.samples.load("offset_planes")
+    uv = np.array([[0.5, 0.5]])
+    pa, pb = a.evaluate(uv), b.evaluate(uv)
+    P = np.vstack([pa, pb])
+    ch = profile_surface(P, [a, b], 0.01, best_fit=False, surface_of=[0, 1])
+    assert ch.measured < 1e-9
+    # given the wrong faces the distances are those to the other face
+    wrong = profile_surface(P, [a, b], 0.01, best_fit=False, surface_of=[1, 0])
+    assert wrong.measured > 1e-6
+    with pytest.raises(InvalidInputError, match="surface"):
+        profile_surface(P, [a, b], 0.01, best_fit=False, surface_of=[0, 2])
+    with pytest.raises(InvalidInputError):
+        profile_surface(P, [a, b], 0.01, best_fit=False, surface_of=[0.5, 1.0])
