@@ -16,17 +16,24 @@ the rootdir, the current folder or pytest's ``--import-mode``.
 Fixtures: :func:`impeller` (pyiges' impeller.igs read by geomkit, once per module;
 skips when pyiges is absent) and :func:`impeller_surfaces` (its surfaces).
 
+The CAD read cache is off (``GEOMKIT_NO_CACHE=1``) unless a test turns it on.
+
 Hypothesis runs under the ``ci`` profile (no deadline, 30 examples); ``pytest
 --hypothesis-profile=stress`` runs 500 examples per test.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, settings
+
+# the CAD read cache (geomkit.cad.readcache) stays off: tests read the files afresh
+# (tests/cad/test_readcache.py turns it on in a temporary folder)
+os.environ.setdefault("GEOMKIT_NO_CACHE", "1")
 
 _TESTS = str(Path(__file__).resolve().parent)
 if _TESTS not in sys.path:

@@ -42,6 +42,7 @@ from geomkit.errors import (FileFormatError, FileRecoveredWarning, InvalidInputE
 from geomkit.cad.elementary import carry_pcurve, elementary_patch
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.occ import HAVE_OCP
+from geomkit.cad.readcache import cached_read
 from geomkit.cad.stepbrep import UnreadFaces, check_read, read_native
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.mesh.tessellate import closed_directions
@@ -299,7 +300,7 @@ is installed."""
 
 
 def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
-              reader: str = "auto") -> IgesResult:
+              reader: str = "auto", cache: bool = True) -> IgesResult:
     """Read the faces of a STEP file as trimmed :class:`~geomkit.Surface` objects.
 
     ``reader="auto"`` reads the file's B-rep with geomkit's own reader
@@ -312,6 +313,10 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
     Returns an :class:`~geomkit.cad.iges.reader.IgesResult` (``entities`` holds face indices in
     OCC's ``TopExp_Explorer`` order, so ``len(surfaces)`` equals OCC's face count when
     nothing is skipped).
+
+    ``cache``: a file read before with the same bytes and options comes from the read
+    cache (:mod:`geomkit.cad.readcache`; the first read's warnings given again); off
+    with ``cache=False`` or ``GEOMKIT_NO_CACHE=1``.  A read that fails is never cached.
 
     Raises
     ------
@@ -330,11 +335,20 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
         raise FileFormatError(f"{p}: no such file")
     if p.is_dir():
         raise FileFormatError(f"{p}: is a directory, expected a STEP file")
-    if not p.read_bytes().strip():
+    data = p.read_bytes()
+    if not data.strip():
         raise InvalidInputError(f"{p}: empty file, expected a STEP file")
     if reader not in READERS:
         raise InvalidInputError(f"expected one of {', '.join(READERS)}, got {reader!r}",
                                 "reader")
+    if not cache:
+        return _read_step(p, skip_invalid, skip_unsupported, reader)
+    return cached_read(data, ("step", str(p.resolve()), bool(skip_invalid),
+                              bool(skip_unsupported), reader, HAVE_OCP),
+                       lambda: _read_step(p, skip_invalid, skip_unsupported, reader))
+
+
+def _read_step(p: Path, skip_invalid, skip_unsupported, reader) -> IgesResult:
     if reader == "occ":
         if not HAVE_OCP:
             raise MissingDependencyError(INSTALL_HINT)
