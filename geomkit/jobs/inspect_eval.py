@@ -84,7 +84,7 @@ def _width_center(Pa, Pb, a, b, ctx, frames):
     return 0.5 * (side_a + side_b), (ia, ib), abs(side_a - side_b)
 
 
-def _result(ctx, per, measured_key="measured"):
+def _result(per):
     """Combine per-feature results (dicts with measured, limit, passed, deciding)."""
     worst = max(per, key=lambda r: r["measured"] / r["limit"] if r["limit"] else math.inf)
     return {"measured": worst["measured"], "limit": worst["limit"],
@@ -370,7 +370,7 @@ def evaluate(tol, ctx, lower: bool = False) -> dict:
                            if tol.items else "applies to no face")
     frames = ctx.frames(tol) if tol.datums else None
     if tol.type == "surface_profile":
-        return _result(ctx, _profile(tol, T, faces, ctx, frames, lower))
+        return _result(_profile(tol, T, faces, ctx, frames, lower))
     feats = group_features(ctx.shapes(faces), faces, ctx.size)
     try:
         if tol.type in ("flatness", "cylindricity", "sphericity", "roundness"):
@@ -387,4 +387,4 @@ def evaluate(tol, ctx, lower: bool = False) -> dict:
             raise NotEvaluated(f"{tol.type.replace('_', ' ')} is not supported")
     except GeomkitError as exc:
         raise NotEvaluated(f"{type(exc).__name__}: {exc}") from None
-    return _result(ctx, per)
+    return _result(per)
