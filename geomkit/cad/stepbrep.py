@@ -30,6 +30,7 @@ from geomkit.cad.analytic import curve_eval, extrude, revolve
 from geomkit.cad.brep import _Edge, analytic_pieces
 from geomkit.cad.edgeproj import edge_uv
 from geomkit.cad.iges.reader import IgesResult, Skipped
+from geomkit.cad.loose import duplicate_faces
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.p21 import P21, Ref, read_p21
 from geomkit.cad.stepasm import instances
@@ -401,13 +402,16 @@ def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False
     F = _Faces(p, geom)
     surfaces, entities, skipped, gaps = [], [], [], []
     fit_error = 0.0
+    loose, closed_faces = [], 0   # positions of faces outside the solids
     at_edge: dict = {}  # (occurrence, edge id) -> each face's distance from it
     done: dict = {}  # face id -> its conversion (a part placed twice is read once)
     k = -1
     for occ, (shells, M) in enumerate(placed):
         for sh in shells:
-            _, sa = geom.rec(sh, "CLOSED_SHELL", "OPEN_SHELL", "CONNECTED_FACE_SET",
-                             "ORIENTED_CLOSED_SHELL")
+            kind, sa = geom.rec(sh, "CLOSED_SHELL", "OPEN_SHELL", "CONNECTED_FACE_SET",
+                                "ORIENTED_CLOSED_SHELL")
+            is_open = kind in ("OPEN_SHELL", "CONNECTED_FACE_SET")
+            closed_faces += 0 if is_open else len(sa[1])
             for face in sa[1]:
                 k += 1
                 name = f"face{k}"
@@ -437,14 +441,23 @@ def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False
                 except (Unsupported, ValueError) as exc:
                     skipped.append(Skipped(name, f"cannot convert ({exc})"))
                     continue
+                if is_open:
+                    loose.append(len(surfaces))
                 surfaces.append(s)
                 entities.append(k)
     check_read(p.source, surfaces, skipped, skip_unsupported, UnreadFaces)
     shared = [sorted(d)[-2:] for d in at_edge.values() if len(d) > 1]
     edge_gap = max((sum(d) for d in shared), default=None)
+    if not closed_faces:
+        loose = []                 # a surface model alone: nothing is loose
+    dup = {}
+    if loose:
+        size = max(s.size for s in surfaces)
+        dup = duplicate_faces(surfaces, loose, max(unc or 0.0, edge_gap or 0.0,
+                                                   1e-9 * size))
     return IgesResult(surfaces, entities, skipped, {"faces": k + 1}, len(gaps),
                       max(gaps, default=0.0), unit, unc, edge_fit_error=fit_error,
-                      edge_gap=edge_gap)
+                      edge_gap=edge_gap, loose=loose, duplicates=dup)
 
 
 def _placed_surface(s, M, name):

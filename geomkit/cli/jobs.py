@@ -320,6 +320,9 @@ def _cmd_info(args) -> int:
                                 "degree": [s.degree_u, s.degree_v],
                                 "control_net": list(s.shape), "domain": [[u0, u1], [v0, v1]],
                                 "trim_loops": len(s.trim), "bounds": s.bounds.tolist()})
+    dup = getattr(case, "duplicates", None) or {}
+    if dup:
+        out["duplicate_faces"] = {str(k): v for k, v in dup.items()}
     if args.json:
         emit_json(out)
     else:
@@ -327,6 +330,10 @@ def _cmd_info(args) -> int:
             print(f"{s['name'] or '-'}: {'NURBS' if s['rational'] else 'B-spline'} degree "
                   f"{s['degree']}, net {s['control_net']}, domain {s['domain']}, "
                   f"{s['trim_loops']} trim loop(s), bounds {s['bounds']} ({out['units']})")
+        for k, v in dup.items():
+            print(f"{case.surfaces[k].name}: a loose face lying on the solid's face(s) "
+                  f"{', '.join(case.surfaces[i].name for i in v)} (left out of the "
+                  "outward-normal vote and of inspect's face assignment)")
     return 0
 
 

@@ -60,6 +60,9 @@ class Case:
     """The model's edge gap (faces sharing an edge meet within it), measured on the
     file's topology (STEP); None when the file gives none.  Sections join curve ends
     across it (:func:`geomkit.plane_section`'s ``gap``)."""
+    duplicates: dict = field(default_factory=dict)
+    """Loose faces lying on a solid's face (STEP): position -> the solid faces'
+    positions (:mod:`geomkit.cad.loose`); jobs that need one boundary leave them out."""
 
 
 # --------------------------------------------------------------------- dicts
@@ -227,7 +230,8 @@ def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
         from geomkit.cad.step import read_step as read
     res = read(p, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
     return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
-                skipped=list(res.skipped), gap=getattr(res, "edge_gap", None))
+                skipped=list(res.skipped), gap=getattr(res, "edge_gap", None),
+                duplicates=dict(getattr(res, "duplicates", None) or {}))
 
 
 def _reader_units(units):

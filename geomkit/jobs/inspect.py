@@ -124,11 +124,14 @@ class Inspection:
                 "frames": jsonable(self.frames), "source": self.source}
 
 
-def assign_faces(surfaces, points, max_distance):
+def assign_faces(surfaces, points, max_distance, exclude=()):
     """Face of each point's exact foot (-1 beyond ``max_distance`` or not found) and
-    its signed distance."""
-    pr = project_points(surfaces, points, max_distance)
-    face = np.asarray(pr.surface, np.int64).copy()
+    its signed distance; the faces ``exclude`` (loose faces duplicating a solid's
+    face) take no points."""
+    keep = [i for i in range(len(surfaces)) if i not in set(exclude)] or \
+        list(range(len(surfaces)))
+    pr = project_points([surfaces[i] for i in keep], points, max_distance)
+    face = np.asarray(keep, np.int64)[np.maximum(np.asarray(pr.surface, np.int64), 0)]
     bad = (pr.status == BEYOND) | (pr.status == FAILED) | ~np.isfinite(pr.signed_distance)
     face[bad] = -1
     return face, np.where(bad, np.nan, pr.signed_distance)
@@ -137,7 +140,7 @@ def assign_faces(surfaces, points, max_distance):
 class _Context:
     """What the evaluators share: points by face, face shapes, frames, units."""
 
-    def __init__(self, surfaces, pmi, P, face, units, align, tolerances):
+    def __init__(self, part, surfaces, pmi, P, face, units, align, tolerances):
         self.surfaces, self.pmi, self.P, self.face = surfaces, pmi, P, face
         self.units, self.align = units, align
         self.size = max(s.size for s in surfaces)
@@ -150,7 +153,10 @@ class _Context:
         self._shapes = {}
         self.flipped = set()      # faces whose S_u x S_v points into the material
         if need:       # one exact sample of every face the PMI names (one ray vote)
-            smp = sample_faces(surfaces, NOMINAL_SAMPLES, faces=need, seed=1)
+            # the part itself (not only its surfaces): its duplicate loose faces
+            # stay out of the ray vote
+            src = part if hasattr(part, "surfaces") else surfaces
+            smp = sample_faces(src, NOMINAL_SAMPLES, faces=need, seed=1)
             self._shapes = face_shapes(surfaces, need, sampled=smp)
             self.flipped = {int(f) for f, v in smp.orientation.items() if v == "flipped"}
         self._frames = {}
@@ -349,7 +355,7 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
         info["bestfit"] = {k: al[k] for k in ("rms_before", "rms_after", "iterations",
                                               "converged")}
     if face is None:
-        F, _ = assign_faces(surfaces, P, md)
+        F, _ = assign_faces(surfaces, P, md, getattr(part, "duplicates", None) or {})
     else:
         F = np.asarray(face)
         if F.shape != (P.shape[0],) or not np.issubdtype(F.dtype, np.integer):
@@ -364,7 +370,7 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
     info.update(points=int(P.shape[0]), assigned=int((F >= 0).sum()),
                 left_out=int((F < 0).sum()), max_distance=md)
     tols = pmi.tolerances if tolerances is None else list(tolerances)
-    ctx = _Context(surfaces, pmi, P, F, units, align, tols)
+    ctx = _Context(part, surfaces, pmi, P, F, units, align, tols)
     lower = {o for t in pmi.tolerances for k, o in t.related if k == "composite"}
     rows = []
     for t in tols:

@@ -412,9 +412,11 @@ def _ray_hits(origins, dirs, tri, tmin):
     return out
 
 
-def _orientation(surfs, sel, pts_by_face, nrm_by_face, rng):
+def _orientation(surfs, sel, pts_by_face, nrm_by_face, rng, dup=()):
     """``{face: +1 (normal points out), -1 (points in), 0 (no verdict)}`` by ray
-    parity against a tessellation of the whole part (module doc, step 2)."""
+    parity against a tessellation of the whole part (module doc, step 2), without
+    the loose faces ``dup`` that duplicate a solid's face (they would be crossed
+    twice)."""
     from geomkit.mesh.tessellate import tessellate
 
     lo = np.min([s.bounds[0] for s in surfs], axis=0)
@@ -422,7 +424,8 @@ def _orientation(surfs, sel, pts_by_face, nrm_by_face, rng):
     size = float(np.linalg.norm(hi - lo)) or 1.0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        mesh = tessellate(surfs, _ORIENT_TOL * size)
+        mesh = tessellate([s for i, s in enumerate(surfs) if i not in dup] or surfs,
+                          _ORIENT_TOL * size)
     tri = mesh.vertices[mesh.faces]
     tmin = 3.0 * max(float(mesh.max_deviation), _ORIENT_TOL * size) + 1e-9 * size
     verdict = {}
@@ -514,6 +517,7 @@ def sample_faces(surfaces, per_face, *, noise: float = 0.0, seed: int = 0, faces
         ``margin``, a face index out of range, an unknown form-error kind or a
         missing key, a transform that is not rigid, an unknown ``orient``.
     """
+    dup = set(getattr(surfaces, "duplicates", None) or {})
     surfs = as_surfaces(surfaces)
     if isinstance(per_face, (bool, np.bool_)) or not isinstance(per_face, (int, np.integer)):
         raise InvalidInputError(f"expected an integer >= 1, got {per_face!r}", "per_face")
@@ -548,7 +552,7 @@ def sample_faces(surfaces, per_face, *, noise: float = 0.0, seed: int = 0, faces
                       stacklevel=2)
     orientation = {f: "surface" for f in sel}
     if orient == "outward":
-        verdict = _orientation(surfs, sel, pts_by, nrm_by, rng.spawn(1)[0])
+        verdict = _orientation(surfs, sel, pts_by, nrm_by, rng.spawn(1)[0], dup)
         for f, v in verdict.items():
             if v < 0:
                 nrm_by[f] = -nrm_by[f]

@@ -104,6 +104,10 @@ class IgesResult:
         topology to measure it on.
     edge_tolerance : float or None, the largest edge tolerance the file states (STEP,
         as Open CASCADE keeps it).
+    loose : list of int, positions in ``surfaces`` of the faces outside the file's
+        solids (STEP: an open shell of a surface model beside a closed shell).
+    duplicates : dict, loose face position -> positions of the solid faces it lies on
+        within the file's tolerance (:mod:`geomkit.cad.loose`).
     """
 
     surfaces: list
@@ -118,6 +122,8 @@ class IgesResult:
     edge_fit_error: float = 0.0
     edge_gap: float | None = None
     edge_tolerance: float | None = None
+    loose: list = field(default_factory=list)
+    duplicates: dict = field(default_factory=dict)
 
 
 class _Reader:
