@@ -63,6 +63,9 @@ class Case:
     duplicates: dict = field(default_factory=dict)
     """Loose faces lying on a solid's face (STEP): position -> the solid faces'
     positions (:mod:`geomkit.cad.loose`); jobs that need one boundary leave them out."""
+    entities: list | None = None
+    """CAD reads: the file's face (STEP) or entity (IGES) index of each surface, as
+    ``IgesResult.entities``; what PMI face indices refer to."""
 
 
 # --------------------------------------------------------------------- dicts
@@ -231,7 +234,8 @@ def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
     res = read(p, skip_invalid=skip_invalid, skip_unsupported=skip_unsupported)
     return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
                 skipped=list(res.skipped), gap=getattr(res, "edge_gap", None),
-                duplicates=dict(getattr(res, "duplicates", None) or {}))
+                duplicates=dict(getattr(res, "duplicates", None) or {}),
+                entities=list(res.entities))
 
 
 def _reader_units(units):

@@ -63,6 +63,7 @@ class CharacteristicRow:
     limit: float | None = None
     n_points: int = 0
     reason: str | None = None
+    surfaces: list = field(default_factory=list)      # positions in part.surfaces
     features: list = field(default_factory=list, repr=False)
     deciding: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64),
                                  repr=False)
@@ -77,6 +78,7 @@ class CharacteristicRow:
             feats.append({k: jsonable(v) for k, v in f.items()
                           if k not in ("deviation", "deviation_points")})
         return {"id": self.id, "type": self.type, "faces": list(self.faces),
+                "surfaces": list(self.surfaces),
                 "tolerance": jsonable(self.tolerance), "datums": list(self.datums),
                 "measured": self.measured, "limit": self.limit,
                 "pass": self.passed, "status": self.status, "points": self.n_points,
@@ -202,6 +204,10 @@ class _Context:
         d = next((d for d in self.pmi.datums if d.label == label), None)
         if d is None:
             raise NotEvaluated(f"datum {label} is referenced but not defined in the PMI")
+        unread = [-1 - f for f in d.faces if f < 0]
+        if unread:
+            raise NotEvaluated(f"datum {label}: face(s) {', '.join(map(str, unread))} "
+                               "of the file were left out of the read")
         if not d.faces:
             what = "datum targets" if d.targets else "no face"
             raise NotEvaluated(f"datum {label} is defined by {what} (not supported)")
@@ -273,6 +279,25 @@ class _Context:
         if isinstance(got, str):
             raise NotEvaluated(got)
         return got
+
+
+def _remap(pmi, entities, n):
+    """The PMI with its face indices (``read_step``'s face order) turned into
+    positions in ``surfaces``: they differ when faces were left out of the read
+    (``skip_unsupported`` / ``skip_invalid``); a face that was not read maps to
+    ``-1 - index`` (its characteristic is then not evaluated, naming it)."""
+    if entities is None or list(entities) == list(range(n)):
+        return pmi
+    pos = {int(e): i for i, e in enumerate(entities)}
+
+    def faces(fs):
+        return [pos.get(int(f), -1 - int(f)) for f in fs]
+
+    return replace(
+        pmi,
+        tolerances=[replace(t, faces=faces(t.faces)) for t in pmi.tolerances],
+        datums=[replace(d, faces=faces(d.faces)) for d in pmi.datums],
+        dimensions=[replace(d, faces=faces(d.faces)) for d in pmi.dimensions])
 
 
 def _pin_free(meas, nom):
@@ -369,7 +394,10 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
         F = F.astype(np.int64)
     info.update(points=int(P.shape[0]), assigned=int((F >= 0).sum()),
                 left_out=int((F < 0).sum()), max_distance=md)
-    tols = pmi.tolerances if tolerances is None else list(tolerances)
+    file_faces = {t.id: list(t.faces) for t in pmi.tolerances}
+    pmi = _remap(pmi, getattr(part, "entities", None), len(surfaces))
+    tols = pmi.tolerances if tolerances is None else \
+        [t for t in pmi.tolerances if t.id in {u.id for u in tolerances}]
     ctx = _Context(part, surfaces, pmi, P, F, units, align, tols)
     lower = {o for t in pmi.tolerances for k, o in t.related if k == "composite"}
     rows = []
@@ -379,14 +407,17 @@ def inspect_part(part, pmi, points, face=None, *, align: str = "datums",
             T = ctx.tolerance_value(t) if t.value is not None else None
         except NotEvaluated:
             pass
-        base = dict(id=f"#{t.id}", type=t.type,
-                    faces=ctx.all_faces if t.whole_part else list(t.faces),
+        where = ctx.all_faces if t.whole_part else [f for f in t.faces if f >= 0]
+        ent = getattr(part, "entities", None)
+        base = dict(id=f"#{t.id}", type=t.type, surfaces=where,
+                    faces=([int(ent[i]) for i in where] if ent is not None else where)
+                    if t.whole_part else file_faces[t.id],
                     tolerance=_tol_dict(t, T, units), datums=t.datum_labels)
         try:
             r = evaluate(t, ctx, lower=t.id in lower)
         except NotEvaluated as exc:
             rows.append(CharacteristicRow(**base, status="not evaluated",
-                                          n_points=int(ctx.indices(base["faces"]).size),
+                                          n_points=int(ctx.indices(where).size),
                                           reason=str(exc)))
             continue
         rows.append(CharacteristicRow(

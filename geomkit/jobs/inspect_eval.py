@@ -365,6 +365,10 @@ def evaluate(tol, ctx, lower: bool = False) -> dict:
     if bad:
         raise NotEvaluated(f"{bad[0]} is not supported")
     faces = ctx.all_faces if tol.whole_part else list(tol.faces)
+    unread = [-1 - f for f in faces if f < 0]
+    if unread:
+        raise NotEvaluated(f"face(s) {_faces(unread)} of the file were left out of the "
+                           "read")
     if not faces:
         raise NotEvaluated("applies to no face (edges and curves are not evaluated)"
                            if tol.items else "applies to no face")

@@ -76,7 +76,7 @@ def _maps(res):
     for c in res.characteristics:
         if c.status == "not evaluated":
             continue
-        idx = np.nonzero(np.isin(res.face, list(c.faces)))[0]
+        idx = np.nonzero(np.isin(res.face, list(c.surfaces)))[0]
         if idx.size:
             out.append((c, idx))
     out.sort(key=lambda ci: ci[0].status != "fail")
@@ -118,7 +118,7 @@ def inspect_html(res, surfaces, path, overwrite: bool = False, part=None,
         d = res.deviation[idx]
         m = _range(d, band)
         P = res.shown_points[idx]
-        mesh, _ = _nominal_mesh([surfaces[f] for f in c.faces])
+        mesh, _ = _nominal_mesh([surfaces[f] for f in c.surfaces])
         stops = [[p, col] for p, col in rc.colour_stops(band, m)]
         tr = [_mesh_trace(mesh),
               go.Scatter3d(x=P[:, 0], y=P[:, 1], z=P[:, 2], mode="markers", name="points",

@@ -266,3 +266,28 @@ def test_ftc07_projected_zones_and_composite_lower_segments():
     assert up.status == "pass" and abs(up.measured - 0.04) <= 1e-6 * size
     assert low.status == "fail"
     assert 0.02 - 1e-6 * size <= low.measured <= 0.02 / np.cos(np.pi / 64) + 1e-6 * size
+
+
+def test_faces_left_out_of_the_read_keep_the_pmi_faces_right(ctc01):
+    # a read without face 50 (not toleranced) shifts the positions of the faces after
+    # it; the PMI's face indices are the file's and are mapped through `entities`
+    from dataclasses import replace
+
+    part, pmi = ctc01
+    keep = [i for i in range(len(part.surfaces)) if i != 50]
+    cut = replace(part, surfaces=[part.surfaces[i] for i in keep],
+                  entities=[part.entities[i] for i in keep])
+    s = sample_faces(cut, 20, seed=3)
+    res = inspect_part(cut, pmi, s.points, s.face)
+    assert res.verdict == "pass"
+    assert _by_id(res)["#57"].faces == [97] and _by_id(res)["#57"].surfaces == [96]
+    # without datum A's face the characteristics on A are not evaluated, naming it
+    keep = [i for i in range(len(part.surfaces)) if i != 97]
+    cut = replace(part, surfaces=[part.surfaces[i] for i in keep],
+                  entities=[part.entities[i] for i in keep])
+    s = sample_faces(cut, 20, seed=3)
+    res = inspect_part(cut, pmi, s.points, s.face)
+    assert res.verdict == "incomplete"
+    assert "left out of the read" in _by_id(res)["#57"].reason
+    assert "datum A" in _by_id(res)["#56"].reason
+    assert _by_id(res)["#22"].status == "not evaluated"
