@@ -235,7 +235,8 @@ def _cad_case(p: Path, skip_invalid: bool, skip_unsupported: bool) -> Case:
     return Case(p.stem, res.surfaces, units=_reader_units(getattr(res, "units", None)),
                 skipped=list(res.skipped), gap=getattr(res, "edge_gap", None),
                 duplicates=dict(getattr(res, "duplicates", None) or {}),
-                entities=list(res.entities))
+                entities=None if getattr(res, "entities", None) is None
+                else list(res.entities))
 
 
 def _reader_units(units):
