@@ -274,17 +274,19 @@ def test_faces_left_out_of_the_read_keep_the_pmi_faces_right(ctc01):
     from dataclasses import replace
 
     part, pmi = ctc01
-    keep = [i for i in range(len(part.surfaces)) if i != 50]
-    cut = replace(part, surfaces=[part.surfaces[i] for i in keep],
-                  entities=[part.entities[i] for i in keep])
+
+    def without(face):
+        keep = [i for i in range(len(part.surfaces)) if i != face]
+        return replace(part, surfaces=[part.surfaces[i] for i in keep],
+                       entities=[part.entities[i] for i in keep])
+
+    cut = without(50)
     s = sample_faces(cut, 20, seed=3)
     res = inspect_part(cut, pmi, s.points, s.face)
     assert res.verdict == "pass"
     assert _by_id(res)["#57"].faces == [97] and _by_id(res)["#57"].surfaces == [96]
     # without datum A's face the characteristics on A are not evaluated, naming it
-    keep = [i for i in range(len(part.surfaces)) if i != 97]
-    cut = replace(part, surfaces=[part.surfaces[i] for i in keep],
-                  entities=[part.entities[i] for i in keep])
+    cut = without(97)
     s = sample_faces(cut, 20, seed=3)
     res = inspect_part(cut, pmi, s.points, s.face)
     assert res.verdict == "incomplete"
