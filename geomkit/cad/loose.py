@@ -11,7 +11,8 @@ need one boundary leave the duplicates out.
 
 A loose face duplicates the solid when every one of its sample points (a UV grid
 inside its trim, and the ends of its outer loop's pieces) lies within ``tol`` of the
-solid's faces.
+solid's faces.  Only the solid faces whose control nets' boxes (which hold their
+surfaces) come within ``tol`` of a loose face's samples are projected onto.
 """
 
 from __future__ import annotations
@@ -51,14 +52,23 @@ def duplicate_faces(surfaces, loose, tol) -> dict:
     solid = [i for i in range(len(surfaces)) if i not in set(loose)]
     if not loose or not solid:
         return {}
-    others = [surfaces[i] for i in solid]
+    nets = [np.asarray(surfaces[i].control_points).reshape(-1, 3) for i in solid]
+    lo = np.array([P.min(axis=0) for P in nets])
+    hi = np.array([P.max(axis=0) for P in nets])
     out = {}
     for i in loose:
         X = _samples(surfaces[i])
         if X.shape[0] == 0:
             continue
-        pr = project_points(others, X, max_distance=10.0 * tol)
+        # every sample must be within tol of some solid face: the faces whose boxes
+        # are that near the samples' box are the only candidates
+        near = np.all((lo <= X.max(axis=0) + tol) & (hi >= X.min(axis=0) - tol), axis=1)
+        cand = np.nonzero(near)[0]
+        if not cand.size:
+            continue
+        pr = project_points([surfaces[solid[k]] for k in cand], X,
+                            max_distance=10.0 * tol)
         d = pr.distance
         if np.all(np.isfinite(d)) and float(d.max()) <= tol:
-            out[i] = sorted({solid[int(k)] for k in np.unique(pr.surface) if k >= 0})
+            out[i] = sorted({solid[int(cand[k])] for k in np.unique(pr.surface) if k >= 0})
     return out

@@ -10,6 +10,7 @@ argument and call these methods.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -185,6 +186,25 @@ class Surface:
         self.name = name
         self.approx_error = err
         self.trim = self._parse_trim(trim)
+
+    # ------------------------------------------------------------------ pickling
+    def __reduce__(self):
+        """Pickled as one float buffer and a list of shapes (a read cache or a Dask
+        worker restores a part of 800 faces from ~800 arrays, not ~16,000); the
+        restored surface holds the same values bit for bit, unvalidated (it was
+        validated when built).  The evaluation cache is not kept."""
+        arrays = [self.knots_u, self.knots_v, self.control_points, self._Pw]
+        if self.weights is not None:
+            arrays.append(self.weights)
+        loops = []
+        for loop in self.trim:
+            loops.append([c.degree for c in loop.pieces])
+            for c in loop.pieces:
+                arrays += [c.knots, c.control_points, c.weights]
+        shapes = [a.shape for a in arrays]
+        flat = np.concatenate([a.ravel() for a in arrays]) if arrays else np.zeros(0)
+        return (_restore, (self.degree_u, self.degree_v, self.weights is not None, loops,
+                           shapes, flat, self.name, self.approx_error))
 
     # ------------------------------------------------------------------ trims
     def _parse_trim(self, trim) -> tuple:
@@ -369,6 +389,39 @@ class Surface:
     def to_dict(self) -> dict:
         """The ``geomkit-case/1`` form of this surface."""
         return serial.surface_to_dict(self)
+
+
+def _restore(p, q, rational, loops, shapes, flat, name, approx_error) -> Surface:
+    """A :class:`Surface` from :meth:`Surface.__reduce__`'s parts: read-only views of
+    one buffer."""
+    flat = np.ascontiguousarray(flat, dtype=np.float64)
+    flat.setflags(write=False)
+    views, o = [], 0
+    for shp in shapes:
+        n = math.prod(shp)
+        views.append(flat[o:o + n].reshape(shp))
+        o += n
+    s = object.__new__(Surface)
+    s.degree_u, s.degree_v = p, q
+    s.knots_u, s.knots_v, s.control_points, s._Pw = views[:4]
+    k = 4
+    s.weights = None
+    if rational:
+        s.weights, k = views[4], 5
+    trim = []
+    for degrees in loops:
+        pieces = []
+        for d in degrees:
+            c = object.__new__(TrimCurve)  # a frozen dataclass: filled as __init__ would
+            c.__dict__.update(degree=d, knots=views[k], control_points=views[k + 1],
+                              weights=views[k + 2])
+            pieces.append(c)
+            k += 3
+        trim.append(TrimLoop(tuple(pieces)))
+    s.trim = tuple(trim)
+    s.name, s.approx_error = name, approx_error
+    s._cache = {}
+    return s
 
 
 @dataclass(frozen=True, eq=False)

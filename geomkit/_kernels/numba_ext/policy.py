@@ -306,7 +306,9 @@ def prun(worker, n, chunk, *args):
     if n <= 0:
         return
     nch = (n + chunk - 1) // chunk
-    nt = min(numba.get_num_threads(), nch)
+    # one chunk runs here without asking numba for its threads (that call takes a
+    # lock and costs ~15 us: a reader calls small kernels thousands of times)
+    nt = 1 if nch <= 1 else min(numba.get_num_threads(), nch)
     if nt <= 1:
         worker(0, n, *args)
         return
