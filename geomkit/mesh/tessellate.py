@@ -50,7 +50,8 @@ from geomkit.mesh import quadtree as qt
 from geomkit._kernels.surface import surface_points_range, surface_points
 from geomkit._kernels.tess import triangle_deviation
 from geomkit._kernels.tess_lattice import cell_triangles
-from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, planar_trimmed
+from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
+                                         planar_trimmed)
 from geomkit.validate import as_int
 from geomkit.errors import (FaceFailedWarning, GeomkitError, InvalidInputError, MeshingError,
                             ToleranceNotMetWarning)
@@ -400,10 +401,19 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
         planar = _planar_trimmed(s, tol, size, t0, trim_target)
         if planar is not None:
             return planar
+    # trims that are only the domain rectangle (a STEP face bounded by its surface's
+    # own edges: most cylinders and cones of real parts) leave the whole domain; the
+    # cell path drops that loop too, so the untrimmed paths give the same guarantee
+    whole = not s.trim or domain_rectangle_only(s, trim_target * tol)
+    trim = None if whole else TrimPolylines(s, trim_target * tol)
+    if trim is not None and not trim.loops:
+        whole, trim = True, None
+    if whole:
+        trim = None
     ub = _breakpoints(s.knots_u, s.degree_u)
     vb = _breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
-    if not s.trim and max_angle is None and max_edge is None:
+    if whole and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS)
         if grid is not None:
@@ -422,7 +432,6 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             return V, F[good], UV, dev[good], tri_uv[good], stats
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
-    trim = TrimPolylines(s, trim_target * tol) if s.trim else None
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None
     closed = closed_directions(s, size)
     force = None

@@ -141,6 +141,49 @@ class TrimPolylines:
         return state
 
 
+def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
+    """Whether every trim loop of ``surface`` is the domain rectangle as
+    :class:`TrimPolylines` judges it (within its ``eps`` of the domain's edges, the
+    rectangle's area), decided from the control points without sampling: True only
+    when each piece's control polygon runs along the domain's edges (a degree-1 piece:
+    each of its segments on one edge line; a curved piece: all its control points on
+    one edge line, so the curve, inside their convex hull, is on it too) and the
+    loop's control points enclose the rectangle's area (along a line the shoelace sum
+    depends only on the ends).  False when unsure: :class:`TrimPolylines` decides."""
+    if not surface.trim:
+        return False
+    (u0, u1), (v0, v1) = surface.domain
+    size_uv = max(u1 - u0, v1 - v0)
+    lo, hi = 1e-12 * size_uv, 1e-6 * size_uv  # TrimPolylines' eps lies in [lo, hi]
+    worst = 0.0
+    for loop in surface.trim:
+        pts = []
+        for c in loop.pieces:
+            P = c.control_points
+            d = np.stack([np.abs(P[:, 0] - u0), np.abs(P[:, 0] - u1),
+                          np.abs(P[:, 1] - v0), np.abs(P[:, 1] - v1)], axis=1)
+            if c.degree == 1:  # each segment on one edge line: both ends near it
+                seg = np.maximum(d[:-1], d[1:]).min(axis=1)
+                off = float(seg.max())
+            else:
+                off = float(d.max(axis=0).min())
+            if off > hi:
+                return False
+            worst = max(worst, off)
+            pts.append(P)
+        P = np.concatenate(pts)
+        x, y = P[:, 0], P[:, 1]
+        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+        short = abs(area - (u1 - u0) * (v1 - v0)) / (u1 - u0 + v1 - v0)
+        if not short <= hi:
+            return False
+        worst = max(worst, short)
+    if worst <= lo:
+        return True
+    eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+    return worst <= max(eps, lo)
+
+
 def speed_bound(s: Surface) -> float:
     """An upper bound of ``|S_u| + |S_v|`` over the whole domain (so a UV step of
     length ``d`` moves ``S`` by at most ``d * speed_bound(s)``).
