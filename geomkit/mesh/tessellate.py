@@ -170,11 +170,19 @@ def _triangulate(s, lat, cells, M, state, trim, closed, centre):
 
 
 def _triangulate_cut(lat, cells, cut, index, trim):
-    import shapely
-
     starts, ring = index.rings(cells[cut])
     ruv = np.c_[lat.u(ring[:, 0]), lat.v(ring[:, 1])]
     ring_id = np.repeat(np.arange(len(cut)), np.diff(starts))
+    coords, idx = _clip_triangulate(ruv, ring_id, trim)
+    return coords, cut[idx]
+
+
+def _clip_triangulate(ruv, ring_id, trim):
+    """The cells whose UV rings are ``ruv`` (rows of cell ``ring_id``, counter-clockwise)
+    clipped to the trimmed region and triangulated by the constrained Delaunay rule:
+    UV triangles (n, 3, 2) counter-clockwise, and the cell of each."""
+    import shapely
+
     polys = shapely.polygons(shapely.linearrings(ruv, indices=ring_id))
     pieces = shapely.intersection(polys, trim.region)
     try:
@@ -193,7 +201,7 @@ def _triangulate_cut(lat, cells, cut, index, trim):
     coords = coords[keep]
     flip = area2[keep] < 0
     coords[flip] = coords[flip][:, ::-1]
-    return coords, cut[idx[keep]]
+    return coords, idx[keep]
 
 
 def _triangulate_piece(piece):
@@ -387,6 +395,55 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
     return _points(s, uv), F, uv, np.zeros(len(F)), uv[F], stats
 
 
+def _deviation(s: Surface, tri_uv: np.ndarray, k: int, tol: float) -> np.ndarray:
+    """(n,) measured deviation of UV triangles (n, 3, 2) from ``s`` (step 4)."""
+    sub = np.ascontiguousarray(tri_uv)
+    out = np.empty(len(sub))
+    if len(sub):
+        tri_xyz = _points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+        (u0, u1), (v0, v1) = s.domain
+        triangle_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                           sub, tri_xyz, k, u0, u1, v0, v1, EXACT_ABOVE * tol, out)
+    return out
+
+
+def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: float,
+                  size: float, t0: float):
+    """A trimmed surface on one uniform grid (:func:`geomkit.mesh.quadtree.uniform_grid`,
+    every cell's better two-triangle split measured within ``tol``): cells inside the
+    region keep their two triangles, cells the trim crosses are clipped and
+    triangulated (step 3) and their triangles measured.  None when the grid is refused
+    or a clipped triangle measures above ``tol``: the adaptive cells take over."""
+    grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
+                           GRID_CELLS)
+    if grid is None:
+        return None
+    tri_uv, dev, cells, _ = grid
+    state = trim.classify_uv(cells)
+    cut = np.nonzero(state == 2)[0]
+    keep = np.repeat(state == 1, 2)  # two triangles per cell, in cell order
+    tri_uv, dev = tri_uv[keep], dev[keep]
+    if len(cut):
+        c = cells[cut]
+        ruv = np.stack([c[:, [0, 2]], c[:, [1, 2]], c[:, [1, 3]], c[:, [0, 3]]], axis=1)
+        cuv, _ = _clip_triangulate(ruv.reshape(-1, 2), np.repeat(np.arange(len(cut)), 4),
+                                   trim)
+        cdev = _deviation(s, cuv, k, tol)
+        if not (cdev <= tol).all():
+            return None
+        tri_uv = np.concatenate([tri_uv, cuv])
+        dev = np.concatenate([dev, cdev])
+    if not len(tri_uv):
+        return None
+    V, F, UV, good = _weld(s, tri_uv, size, near_uv=bool(len(cut)))
+    closed = closed_directions(s, size)
+    stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
+             "collapsed_dropped": int(np.count_nonzero(~good)),
+             "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
+             "seconds": time.perf_counter() - t0}
+    return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET):
     t0 = time.perf_counter()
@@ -430,6 +487,10 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             if not dropped:  # every face kept: no copies
                 return V, F, UV, dev, tri_uv, stats
             return V, F[good], UV, dev[good], tri_uv[good], stats
+    if trim is not None and max_angle is None and max_edge is None:
+        gridded = _trimmed_grid(s, trim, ub, vb, m, k, tol, size, t0)
+        if gridded is not None:
+            return gridded
     lat = qt.Lattice(ub, vb)
     cells = lat.roots()
     active = (lambda c: trim.classify(lat, c) > 0) if trim is not None else None

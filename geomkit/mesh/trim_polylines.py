@@ -125,11 +125,15 @@ class TrimPolylines:
     def classify(self, lat, cells: np.ndarray) -> np.ndarray:
         """(N,) int8 for lattice cells: 0 outside the trimmed region, 1 inside, 2 cut
         by the trim."""
+        return self.classify_uv(lat.cells_uv(cells))
+
+    def classify_uv(self, uv: np.ndarray) -> np.ndarray:
+        """:meth:`classify` for cells given by their parameters (N, 4) ``u0, u1, v0,
+        v1``."""
         import shapely
 
         tree, region = self.tree, self.region
-        uv = lat.cells_uv(cells)
-        state = np.zeros(cells.shape[0], dtype=np.int8)
+        state = np.zeros(uv.shape[0], dtype=np.int8)
         if len(self.segments):
             boxes = shapely.box(uv[:, 0], uv[:, 2], uv[:, 1], uv[:, 3])
             hit = tree.query(boxes, predicate="intersects")[0]

@@ -84,3 +84,36 @@ def test_real_trims_are_not_taken_for_the_domain(trim):
     mesh = tessellate(s, 1e-2)
     assert "uniform_grid" not in mesh.stats["surfaces"][0]
     assert mesh.max_deviation <= 1e-2 and _exact_gap(mesh) <= 1e-2
+
+
+def _holed(n=97):
+    """The quarter cylinder with an elliptic hole (in UV: centre (H/2, 1/2), semi-axes
+    0.6 and 0.3) as a polygon of ``n - 1`` sides."""
+    a = np.linspace(0, 2 * np.pi, n)
+    hole = np.c_[0.5 * H + 0.6 * np.cos(a), 0.5 + 0.3 * np.sin(a)]
+    hole[-1] = hole[0]
+    return _cylinder([RECT_POLY, hole]), hole
+
+
+@pytest.mark.parametrize("tol", [1e-2, 1e-3])
+def test_trimmed_cylinder_on_one_grid_against_the_cells(tol, monkeypatch):
+    """A cylinder with a hole: one uniform grid, cells the trim crosses clipped (the
+    ``trimmed_grid`` path), against the adaptive cells (the path before it) and the
+    exact cylinder: every triangle within tol (measured and exactly), the same area
+    to the boundary's chord error, no triangle in the hole, no more triangles."""
+    import geomkit.mesh.tessellate as T
+
+    s, hole = _holed()
+    mesh = tessellate(s, tol)
+    st = mesh.stats["surfaces"][0]
+    assert st.get("trimmed_grid") is True and st["cut_cells"] > 0
+    monkeypatch.setattr(T, "_trimmed_grid", lambda *a, **k: None)
+    cells = tessellate(s, tol)
+    assert "trimmed_grid" not in cells.stats["surfaces"][0]
+    for m in (mesh, cells):
+        assert m.max_deviation <= tol and _exact_gap(m) <= tol
+        c = m.face_uv.mean(axis=1)  # no face centre inside the hole's polygon
+        assert (((c[:, 0] - 0.5 * H) / 0.6) ** 2 + ((c[:, 1] - 0.5) / 0.3) ** 2 > 0.99).all()
+    # both boundaries are within tol / 2 of the exact hole (3-D length < 5)
+    assert abs(mesh.area - cells.area) <= 5 * tol
+    assert len(mesh.faces) <= len(cells.faces)
