@@ -99,6 +99,14 @@ class TrimPolylines:
         (u0, u1), (v0, v1) = s.domain
         out = []
         for c in loop.pieces:
+            if self.affine and c.is_polyline and len(c.knots) == len(c.control_points) + 2:
+                P = c.control_points
+                if np.all(c.knots[2:-1] > c.knots[1:-2]) and (P[:, 0].min() >= u0 and P[:, 0].max() <= u1 and P[:, 1].min() >= v0
+                        and P[:, 1].max() <= v1):
+                    # S maps the UV segments to 3-D segments: the kernel would keep
+                    # just the vertices (C(t_i) = P_i exactly, nothing clipped)
+                    out.append(P if not out else P[1:])
+                    continue
             p = c.degree
             t = c.knots[p: len(c.knots) - p]  # non-decreasing: its distinct values
             keep = np.empty(len(t), dtype=bool)
@@ -159,29 +167,34 @@ def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
     (u0, u1), (v0, v1) = surface.domain
     size_uv = max(u1 - u0, v1 - v0)
     lo, hi = 1e-12 * size_uv, 1e-6 * size_uv  # TrimPolylines' eps lies in [lo, hi]
+    edges = np.array([u0, u1, v0, v1])
+    full = (u1 - u0) * (v1 - v0)
     worst = 0.0
     for loop in surface.trim:
-        pts = []
-        for c in loop.pieces:
-            P = c.control_points
-            d = np.stack([np.abs(P[:, 0] - u0), np.abs(P[:, 0] - u1),
-                          np.abs(P[:, 1] - v0), np.abs(P[:, 1] - v1)], axis=1)
-            if c.degree == 1:  # each segment on one edge line: both ends near it
-                seg = np.maximum(d[:-1], d[1:]).min(axis=1)
-                off = float(seg.max())
-            else:
-                off = float(d.max(axis=0).min())
-            if off > hi:
-                return False
-            worst = max(worst, off)
-            pts.append(P)
-        P = np.concatenate(pts)
+        pieces = loop.pieces
+        P = np.concatenate([c.control_points for c in pieces]) if len(pieces) > 1 \
+            else pieces[0].control_points
+        d = np.abs(P[:, [0, 0, 1, 1]] - edges)  # (n, 4) to the u0, u1, v0, v1 lines
+        sizes = [len(c.control_points) for c in pieces]
+        starts = np.cumsum([0] + sizes[:-1])
+        # degree 1: each segment within a piece on one edge line (both ends near it)
+        seg = np.maximum(d[:-1], d[1:]).min(axis=1)
+        inner = np.ones(len(seg), dtype=bool)
+        inner[starts[1:] - 1] = False  # the steps from one piece to the next
+        curved = np.array([c.degree > 1 for c in pieces])
+        if curved.any():
+            inner &= ~np.repeat(curved, sizes)[:-1]
+            # a curved piece: all its control points near one edge line
+            off = np.maximum.reduceat(d, starts, axis=0)[curved].min(axis=1).max()
+            worst = max(worst, float(off))
+        if inner.any():
+            worst = max(worst, float(seg[inner].max()))
         x, y = P[:, 0], P[:, 1]
-        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-        short = abs(area - (u1 - u0) * (v1 - v0)) / (u1 - u0 + v1 - v0)
-        if not short <= hi:
+        area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1])
+                         + x[-1] * y[0] - x[0] * y[-1])
+        worst = max(worst, abs(area - full) / (u1 - u0 + v1 - v0))
+        if worst > hi:
             return False
-        worst = max(worst, short)
     if worst <= lo:
         return True
     eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))

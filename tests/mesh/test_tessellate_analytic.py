@@ -76,6 +76,8 @@ def test_domain_rectangle_trim_is_meshed_as_the_whole_surface(trim, tol):
     [{"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "control_points": [[0, 0], [H, 0.2], [H, 1]]},
      {"degree": 1, "knots": [0, 0, 1, 1], "control_points": [[H, 1], [0, 1]]},
      {"degree": 1, "knots": [0, 0, 1, 1], "control_points": [[0, 1], [0, 0]]}],  # curved cut
+    RECT_PIECES[:2] + [dict(RECT_PIECES[2], control_points=[[H, 1], [0.3 * H, 0.999],
+                                                            [0, 1]])] + RECT_PIECES[3:],
 ])
 def test_real_trims_are_not_taken_for_the_domain(trim):
     s = _cylinder([trim])
