@@ -27,7 +27,7 @@ import numpy as np
 
 from geomkit._kernels.bezier import curve_points
 
-__all__ = ["arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
+__all__ = ["cross3", "unwrap", "arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
            "angle_to_param", "param_to_angle", "turn_into", "arc_knots", "transform_curve"]
 
 
@@ -58,6 +58,29 @@ def _arc_coeffs(theta0: float, theta1: float):
         t1 = theta1 if k == n - 1 else t0 + d
         a.append(math.cos(t1)); b.append(math.sin(t1)); w.append(1.0)
     return np.array(a), np.array(b), np.array(w), U
+
+
+def cross3(a, b) -> np.ndarray:
+    """The cross product of two 3-vectors (``np.cross`` costs ~10x more on one pair)."""
+    a0, a1, a2 = float(a[0]), float(a[1]), float(a[2])
+    b0, b1, b2 = float(b[0]), float(b[1]), float(b[2])
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
+def unwrap(x) -> np.ndarray:
+    """``np.unwrap(x)`` of a 1-D array of angles (same values, without its generic
+    argument handling: the readers unwrap thousands of short edges)."""
+    x = np.asarray(x, float)
+    out = x.copy()
+    if x.size < 2:
+        return out
+    d = np.diff(x)
+    dm = np.mod(d + math.pi, 2 * math.pi) - math.pi
+    dm[(dm == -math.pi) & (d > 0)] = math.pi
+    corr = dm - d
+    corr[np.abs(d) < math.pi] = 0.0
+    out[1:] += np.cumsum(corr)
+    return out
 
 
 def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
@@ -148,7 +171,7 @@ def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
             out[j] = O
             continue
         X /= r
-        Y = np.cross(T, X)
+        Y = cross3(T, X)
         out[j] = O + r * (a[:, None] * X + b[:, None] * Y)
     W = wc[:, None] * wa[None, :]
     return p, 2, np.asarray(U, float), V, out, W

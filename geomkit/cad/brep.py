@@ -30,8 +30,8 @@ import numpy as np
 
 from geomkit.tolerances import ISO_TOL
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.cad.analytic import (angle_to_param, arc_curve, curve_eval, line_curve, plane_patch,
-                                  revolve)
+from geomkit.cad.analytic import (angle_to_param, arc_curve, cross3, curve_eval, line_curve,
+                                  plane_patch, revolve, unwrap)
 from geomkit.cad.iges.entities import curve3d
 from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
@@ -64,7 +64,7 @@ class Analytic:
         self.A = _unit(A)
         X = np.asarray(X, float) - np.dot(X, self.A) * self.A
         self.X = _unit(X)
-        self.Y = np.cross(self.A, self.X)
+        self.Y = cross3(self.A, self.X)
         self.R, self.r, self.alpha = R, r, alpha
         self.periodic = {"plane": (False, False), "cylinder": (False, True),
                          "cone": (False, True), "sphere": (False, True),
@@ -310,7 +310,7 @@ def _chain(srf, loop, size):
         for c in (0, 1):
             if not srf.periodic[c]:
                 continue
-            ab[:, c] = np.unwrap(ab[:, c])
+            ab[:, c] = unwrap(ab[:, c])
             if prev is None:
                 continue
             if c == 1 and prev_pole and e.key in first:

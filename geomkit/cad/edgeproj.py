@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from geomkit._kernels.surface import surface_derivatives
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
@@ -42,12 +43,23 @@ class _Inverse:
         self.grid = np.column_stack([uu.ravel(), vv.ravel()])
         self.tree = cKDTree(base.evaluate(self.grid))
 
+    def _derivs(self, uv):
+        """First derivatives at parameters already inside the domain (the kernel
+        without :meth:`Surface.derivatives`' validation: called a dozen times per
+        edge)."""
+        b = self.base
+        out = np.empty((uv.shape[0], 2, 2, 3))
+        if uv.shape[0]:
+            surface_derivatives(b.homogeneous, b.degree_u, b.degree_v, b.knots_u, b.knots_v,
+                                np.ascontiguousarray(uv), 1, out)
+        return out
+
     def __call__(self, X, tol):
         (u0, u1), (v0, v1) = self.dom
         uv = self.grid[self.tree.query(X)[1]].copy()
         scale = max(u1 - u0, v1 - v0)
         for _ in range(12):
-            D = self.base.derivatives(uv, 1)
+            D = self._derivs(uv)
             S, Su, Sv = D[:, 0, 0], D[:, 1, 0], D[:, 0, 1]
             r = X - S
             a, b, c = (Su * Su).sum(1), (Su * Sv).sum(1), (Sv * Sv).sum(1)

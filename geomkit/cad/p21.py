@@ -80,16 +80,64 @@ def _unexpected(s: str, where: str):
         pos = m.end()
 
 
+_SPLIT = re.compile(r"('(?:[^']|'')*'|[(),])")
+"""Strings and the punctuation ``( ) ,`` of a record body, kept by ``re.split``."""
+_NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?")
+_WORD = re.compile(r"[A-Za-z_][A-Za-z_0-9\-]*")
+_ENUM = re.compile(r"\.[A-Za-z_][A-Za-z_0-9]*\.")
+_PUNCT = {"(": 6, ")": 6, ",": 6}
+
+
+def _tokens_fast(s: str):
+    """``[(kind, text)]`` of a body whose tokens are separated by punctuation (all a
+    writer produces), with the kinds of :data:`_TOKEN`'s groups; None for anything
+    else (two tokens side by side, a character that is not a token), left to the
+    exact tokenizer."""
+    out = []
+    for j, t in enumerate(_SPLIT.split(s)):
+        if j % 2:
+            if t[0] == "'":
+                out.append((1, t[1:-1]))
+            else:
+                out.append((6, t))
+            continue
+        t = t.strip()
+        if not t:
+            continue
+        c = t[0]
+        if c == "#":
+            if not (t[1:].isascii() and t[1:].isdigit()):
+                return None
+            out.append((2, t[1:]))
+        elif c == "$" or c == "*":
+            if len(t) != 1:
+                return None
+            out.append((6, t))
+        elif _NUMBER.fullmatch(t) is not None:
+            out.append((4, t))
+        elif c == ".":
+            if _ENUM.fullmatch(t) is None:
+                return None
+            out.append((3, t[1:-1]))
+        elif _WORD.fullmatch(t) is not None:
+            out.append((5, t))
+        else:
+            return None
+    return out
+
+
 def _parse(s: str, where: str):
     """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
-    if _VALID.fullmatch(s) is None:
-        _unexpected(s, where)
+    toks = _tokens_fast(s)
+    if toks is None:
+        if _VALID.fullmatch(s) is None:
+            _unexpected(s, where)
+        toks = [(m.lastindex, m.group(m.lastindex)) for m in _TOKEN.finditer(s)]
     stack: list = []   # (enclosing list, keyword that opened this one or None)
     cur: list = []
     pending = None     # a keyword waiting for its '('
-    for m in _TOKEN.finditer(s):
-        k = m.lastindex  # 1 string, 2 reference, 3 enumeration, 4 number, 5 keyword, 6 punct.
-        v = m.group(k)
+    # kinds: 1 string, 2 reference, 3 enumeration, 4 number, 5 keyword, 6 punctuation
+    for k, v in toks:
         if pending is not None and v != "(":
             raise FileFormatError(f"{where}: {pending} is not followed by '('")
         if k == 6:

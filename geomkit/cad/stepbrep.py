@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit.cad.analytic import curve_eval, extrude, revolve
+from geomkit.cad.analytic import cross3, curve_eval, extrude, revolve
 from geomkit.cad.brep import _Edge, analytic_pieces
 from geomkit.cad.edgeproj import edge_uv
 from geomkit.cad.iges.reader import IgesResult, Skipped
@@ -273,7 +273,7 @@ class _Axis:
         X = np.eye(3)[int(np.argmin(np.abs(A)))]
         self.X = X - (X @ A) * A
         self.X /= np.linalg.norm(self.X)
-        self.Y = np.cross(A, self.X)
+        self.Y = cross3(A, self.X)
 
     def local(self, P):
         d = np.asarray(P, float) - self.O
@@ -351,9 +351,7 @@ def _face(F, geom, face, name, unc):
         gaps += g
         repairs += r
         trim.append(pieces)
-    s = Surface(base.degree_u, base.degree_v, base.knots_u, base.knots_v,
-                base.control_points, base.weights, trim or None, name=name,
-                approx_error=max(repairs, default=0.0))
+    s = base.with_trim(trim or None, approx_error=max(repairs, default=0.0))
     # how far the face's surface lies from its edges (closed form on analytic faces,
     # the projection's on the others): the model's gap at an edge is at most the
     # two faces' distances plus their approximation errors

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from geomkit.cad.analytic import arc_curve, curve_derivs, line_curve
+from geomkit.cad.analytic import arc_curve, cross3, curve_derivs, line_curve
 from geomkit.cad.brep import Analytic
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
@@ -62,6 +62,11 @@ class Curve:
         then Newton on ``(C - X) . C'``."""
         p, U, Pw = self.spline
         lo, hi = float(U[p]), float(U[-p - 1])
+        # a vertex is most often the end control point of a clamped end itself: then
+        # it is that end's parameter
+        for k, t, ends in ((0, lo, U[:p + 1]), (-1, hi, U[-p - 1:])):
+            if np.all(ends == t) and np.array_equal(Pw[k, :3] / Pw[k, 3], X):
+                return t
         t = np.linspace(lo, hi, max(65, 8 * (len(U) - p)))
         D = curve_derivs(self.spline, t, 0)[:, 0, :]
         t0 = float(t[int(np.argmin(np.linalg.norm(D - X, axis=1)))])
@@ -216,7 +221,7 @@ class StepGeometry:
             r2 = float(self.numbers(i, [a[3]], 1)[0]) if name == "ELLIPSE" else r1
             if not (r1 > 0 and r2 > 0):
                 raise self._bad(i, f"{name} of radius {r1}, {r2}")
-            return Curve(name.lower(), C=C, X=X, Y=np.cross(Z, X), a=r1, b=r2)
+            return Curve(name.lower(), C=C, X=X, Y=cross3(Z, X), a=r1, b=r2)
         if name in ("SURFACE_CURVE", "SEAM_CURVE", "INTERSECTION_CURVE"):
             return self.curve(a[1])
         if name == "TRIMMED_CURVE":  # the edge's vertices bound it

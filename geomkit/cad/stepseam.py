@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit.cad.analytic import curve_eval
+from geomkit.cad.analytic import curve_eval, unwrap
 from geomkit.cad.brep import _Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
@@ -59,7 +59,7 @@ def _angles(srf, e, n=65, full=False):
     if on.any():
         good = np.flatnonzero(~on)
         b = np.interp(np.arange(n), good, b[good])
-    return np.unwrap(b)
+    return unwrap(b)
 
 
 def _split_edge(srf, e, target):

@@ -9,8 +9,9 @@ monotone maps ``fu``/``fv`` (``None``: unchanged).
   only one mapped coordinate varies (iso-parametric lines -- most face boundaries), or
   any curve whose varying coordinates are not remapped.  Its vertices are mapped.
 * Otherwise the mapped curve is interpolated by C0 piecewise quintics at 6 equally
-  spaced parameters per span, spans halved until 9 check points per span are within
-  ``tol`` of the mapped curve (the error of a quintic interpolant falls as ``h^6``); the
+  spaced parameters per span, spans split until 9 check points per span are within
+  ``tol`` of the mapped curve; the error of a quintic interpolant falls as ``h^6``, so a
+  span with error ``e`` is cut into ``(e / tol)^(1/6)`` pieces (with a margin).  The
   largest check error is returned.
 """
 
@@ -42,6 +43,7 @@ _BINV = np.linalg.inv(_bernstein(_R))  # Bezier points = _BINV @ samples at _R
 _CHECK = np.array([0.05, 0.13, 0.27, 0.41, 0.5, 0.59, 0.73, 0.87, 0.95])
 _CB = _bernstein(_CHECK)
 _MAX_SPANS = 20000
+_MAX_SPLIT = 16
 
 
 def _apply(uv, fu, fv):
@@ -83,14 +85,21 @@ def map_pcurve(c: TrimCurve, fu, fv, tol: float):
         chk = X[n * k:].reshape(k, _CHECK.size, 2)
         e = np.abs(np.einsum("ij,kjd->kid", _CB, bez) - chk).max(axis=(1, 2))
         split = (e > tol) & (h > hmin)
-        if sum(len(x) for x in done_a) + 2 * int(split.sum()) > _MAX_SPANS:
+        # pieces per failing span from the error's h^6 decay (a margin of 1.25 on
+        # the length), 2 to _MAX_SPLIT: one or two rounds instead of one per halving
+        m = np.clip(np.ceil(1.25 * (e[split] / tol) ** (1.0 / 6.0)), 2, _MAX_SPLIT)
+        m = m.astype(np.int64)
+        if sum(len(x) for x in done_a) + int(m.sum()) > _MAX_SPANS:
             split[:] = False  # give up refining: the error found is returned
+            m = m[:0]
         keep = ~split
         done_a.append(a[keep])
         done_bez.append(bez[keep])
         errs.append(float(e[keep].max(initial=0.0)))
-        m = a[split] + h[split] / 2
-        a, b = np.concatenate([a[split], m]), np.concatenate([m, b[split]])
+        lo, step = np.repeat(a[split], m), np.repeat(h[split] / m, m)
+        j = np.arange(int(m.sum())) - np.repeat(np.cumsum(m) - m, m)
+        a = lo + j * step
+        b = np.where(j + 1 == np.repeat(m, m), np.repeat(b[split], m), lo + (j + 1) * step)
     A = np.concatenate(done_a)
     order = np.argsort(A, kind="stable")
     bez = np.concatenate(done_bez)[order]

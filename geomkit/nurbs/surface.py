@@ -187,6 +187,27 @@ class Surface:
         self.approx_error = err
         self.trim = self._parse_trim(trim)
 
+    def with_trim(self, trim, name: str | None = None, approx_error: float | None = None):
+        """The same surface (its validated arrays shared, not copied) with the trim
+        loops ``trim`` (any form the constructor takes, validated as there) and,
+        when given, another ``name`` / ``approx_error``."""
+        s = object.__new__(Surface)
+        for k in ("degree_u", "degree_v", "knots_u", "knots_v", "control_points",
+                  "weights", "_Pw"):
+            setattr(s, k, getattr(self, k))
+        s._cache = {}
+        s.name = self.name if name is None else name
+        if approx_error is None:
+            s.approx_error = self.approx_error
+        else:
+            err = float(approx_error)
+            if not (np.isfinite(err) and err >= 0):
+                raise InvalidSurfaceError(f"must be finite and >= 0, got {err!r}",
+                                          "approx_error")
+            s.approx_error = err
+        s.trim = s._parse_trim(trim)
+        return s
+
     # ------------------------------------------------------------------ pickling
     def __reduce__(self):
         """Pickled as one float buffer and a list of shapes (a read cache or a Dask
