@@ -331,7 +331,10 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     estimate for ``target`` (the largest count of its row / column, so the grid has
     no hanging nodes); every cell's two-triangle split is measured (``cell_deviation``,
     as in :func:`measure`) and its better diagonal kept; if a cell fails ``tol``, one
-    more grid is tried with ``target`` scaled down by the excess.  Returns ``(tri_uv
+    more grid is tried with ``target`` scaled down by the excess, then, on a surface
+    with a pole (the estimates miss what the measurement sees at a cone's apex), one
+    with the failing grid's lines multiplied by the square root of its excess.
+    Returns ``(tri_uv
     (M, 3, 2), dev (M,), cells, (u, v, diag))``: triangles counter-clockwise in UV, two
     per cell (row-major, see :func:`_tensor_cells`), the grid lines and each cell's
     diagonal (0: (u0,v0)-(u1,v1), 1: (u1,v0)-(u0,v1)); or None when the grid would
@@ -348,11 +351,19 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     E = np.empty((len(roots), 5))
     cell_errors(Pw, p, q, U, V, roots, m, E)
     (u0, u1), (v0, v1) = surface.domain
-    for _ in range(2):  # a second try with the target scaled by the first's excess
+    # at a pole (a cone's apex: an edge of the net collapsed to a point) the chord
+    # estimates miss what the measurement sees: a third try refines the measured grid
+    P = surface.control_points
+    pole = any(np.ptp(e, axis=0).max() <= 1e-12 * surface.size
+               for e in (P[0], P[-1], P[:, 0], P[:, -1]))
+    for attempt in range(3 if pole else 2):  # the target scaled by the excess measured
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
                               max_parts=max_cells)
         cu = nu.reshape(nsu, nsv).max(axis=1)
         cv = nv.reshape(nsu, nsv).max(axis=0)
+        if attempt == 2:  # at least the last grid's lines times its measured excess
+            cu = np.maximum(cu, np.ceil(grow[0] * grow[2]).astype(np.int64))
+            cv = np.maximum(cv, np.ceil(grow[1] * grow[2]).astype(np.int64))
         if int(cu.sum()) * int(cv.sum()) > max_cells:
             return None
         if cu.max() == 1 and cv.max() == 1:  # the root spans themselves
@@ -372,6 +383,9 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         worst = float(dev.max())
         if worst <= tol:
             break
+        # the estimates can miss what the measurement sees (a cone's apex): the
+        # last try also refines the grid before it, by the square root of the excess
+        grow = (cu, cv, min(np.sqrt(worst / target), 2.0) if np.isfinite(worst) else 2.0)
         # errors fall with the square of the cell size: aim the retry below target
         target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
     else:

@@ -44,10 +44,16 @@ class TrimPolylines:
         # 1e-3 of the chord tolerance (files round their pcurves: OCC's closed torus
         # face ends 2e-10 short of 2 pi)
         size_uv = max(u1 - u0, v1 - v0)
-        eps = min(1e-6 * size_uv, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
-        eps = max(eps, 1e-12 * size_uv)
+        hi = 1e-6 * size_uv  # eps is at most this: a loop failing it fails eps too
+        eps = None
         for loop in surface.trim:
             pts = self._loop_polyline(loop, chord_tol)
+            if not self._is_domain_rectangle(pts, u0, u1, v0, v1, hi):
+                self.loops.append(pts)
+                continue
+            if eps is None:  # the bound of the surface's speed, only when needed
+                eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+                eps = max(eps, 1e-12 * size_uv)
             if self._is_domain_rectangle(pts, u0, u1, v0, v1, eps):
                 self.domain_loop = True
                 continue
@@ -83,6 +89,10 @@ class TrimPolylines:
 
     @staticmethod
     def _is_domain_rectangle(pts, u0, u1, v0, v1, eps) -> bool:
+        q = pts[:: max(1, len(pts) // 8)]  # a few points first: most loops fail there
+        if not ((np.abs(q[:, 0] - u0) <= eps) | (np.abs(q[:, 0] - u1) <= eps)
+                | (np.abs(q[:, 1] - v0) <= eps) | (np.abs(q[:, 1] - v1) <= eps)).all():
+            return False
         on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
               | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
         if not on.all():
@@ -167,6 +177,11 @@ def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
     (u0, u1), (v0, v1) = surface.domain
     size_uv = max(u1 - u0, v1 - v0)
     lo, hi = 1e-12 * size_uv, 1e-6 * size_uv  # TrimPolylines' eps lies in [lo, hi]
+    for loop in surface.trim:  # a quick look at the pieces' starts: holes end here
+        for c in loop.pieces:
+            x, y = c.control_points[0].tolist()
+            if min(abs(x - u0), abs(x - u1), abs(y - v0), abs(y - v1)) > hi:
+                return False
     edges = np.array([u0, u1, v0, v1])
     full = (u1 - u0) * (v1 - v0)
     worst = 0.0
