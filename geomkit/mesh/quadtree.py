@@ -351,12 +351,7 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     E = np.empty((len(roots), 5))
     cell_errors(Pw, p, q, U, V, roots, m, E)
     (u0, u1), (v0, v1) = surface.domain
-    # at a pole (a cone's apex: an edge of the net collapsed to a point) the chord
-    # estimates miss what the measurement sees: a third try refines the measured grid
-    P = surface.control_points
-    pole = any(np.ptp(e, axis=0).max() <= 1e-12 * surface.size
-               for e in (P[0], P[-1], P[:, 0], P[:, -1]))
-    for attempt in range(3 if pole else 2):  # the target scaled by the excess measured
+    for attempt in range(3):  # the target scaled by the excess measured
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
                               max_parts=max_cells)
         cu = nu.reshape(nsu, nsv).max(axis=1)
@@ -383,6 +378,8 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         worst = float(dev.max())
         if worst <= tol:
             break
+        if attempt == 1 and not _has_pole(surface):
+            return None
         # the estimates can miss what the measurement sees (a cone's apex): the
         # last try also refines the grid before it, by the square root of the excess
         grow = (cu, cv, min(np.sqrt(worst / target), 2.0) if np.isfinite(worst) else 2.0)
@@ -394,6 +391,14 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     tri[:, :, 0] = cells[rows[:, None], _CORNER_U[diag]]
     tri[:, :, 1] = cells[:, _CORNER_V]
     return tri.reshape(-1, 3, 2), np.repeat(dev, 2), cells, (u, v, diag)
+
+
+def _has_pole(surface) -> bool:
+    """Whether an edge row or column of the net is one point (a cone's apex, a sphere's
+    pole): there the chord estimates miss what the measurement sees."""
+    P = surface.control_points
+    eps = 1e-12 * surface.size
+    return any(float(np.ptp(e, axis=0).max()) <= eps for e in (P[0], P[-1], P[:, 0], P[:, -1]))
 
 
 def _lines(b: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -271,8 +271,6 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     UVs within rounding of each other: trim crossings computed in two cells), then
     coincident boundary vertices in 3-D (poles, seams); drops the triangles that
     collapse."""
-    from scipy.spatial import cKDTree
-
     flat = tri_uv.reshape(-1, 2)
     (u0, u1), (v0, v1) = s.domain
     # crossing points computed in two neighbouring cells may differ by rounding
@@ -281,7 +279,7 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
     uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
     inv = inv.ravel()
-    pairs = [cKDTree(uniq).query_pairs(1e-13 * dom, output_type="ndarray")] if near_uv else []
+    pairs = [_near_pairs(uniq, 1e-13 * dom)] if near_uv else []
     P = _points(s, uniq)
     eps = 1e-12 * dom
     bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
@@ -290,6 +288,24 @@ def _weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
         pairs.append(_boundary_pairs(P, bnd, size))
     pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
     return _merge(P, uniq, inv, pairs)
+
+
+def _near_pairs(Q, r):
+    """Pairs of the rows of ``Q`` (n, 2) closer than ``r``; the KD-tree only when the
+    points' projections on an oblique unit direction, sorted, have a gap below ``2 r``
+    plus rounding (a pair within ``r`` projects within ``r``: see
+    :func:`_boundary_pairs`)."""
+    if len(Q) < 2:
+        return np.empty((0, 2), np.int64)
+    gaps = np.diff(np.sort(Q @ _NEAR_DIRECTION))
+    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+        return np.empty((0, 2), np.int64)
+    from scipy.spatial import cKDTree
+
+    return cKDTree(Q).query_pairs(r, output_type="ndarray")
+
+
+_NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes
 
 
 def _merge(P, uniq, inv, pairs):

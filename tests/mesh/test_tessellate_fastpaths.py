@@ -5,7 +5,8 @@
   vertices, UVs and stated deviations;
 * the uniform grid's weld from grid indices against the general weld (unique UVs,
   KD-tree of boundary vertices), poles and seams included;
-* the boundary-pair pre-test (oblique projection) against brute force;
+* the boundary-pair and near-UV-pair pre-tests (oblique projection) against brute
+  force;
 * the knot breakpoints and span samples against ``np.unique`` / ``np.linspace``.
 """
 
@@ -104,6 +105,27 @@ def test_boundary_pairs_match_brute_force():
         got = {tuple(sorted(p)) for p in T._boundary_pairs(Q, bnd, size).tolist()}
         d = np.linalg.norm(P[:, None] - P[None], axis=2)
         want = {(int(bnd[a]), int(bnd[b])) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
+        assert got == want, trial
+
+
+def test_near_uv_pairs_match_brute_force():
+    """The weld's near-UV pairs (trim crossings computed in two cells) with the
+    projection pre-test against all pairs within r."""
+    rng = np.random.default_rng(11)
+    for trial in range(40):
+        n = int(rng.integers(2, 80))
+        r = 1e-13 * float(rng.choice([1.0, 10.0, 1e3]))
+        Q = rng.random((n, 2)) * float(rng.choice([1.0, 6.3, 1e3]))
+        if trial % 3 == 0:  # points on grid lines (equal coordinates)
+            Q[: n // 2, 0] = Q[0, 0]
+        if trial % 2:  # plant near and exact coincidences
+            k = int(rng.integers(1, n // 2 + 1))
+            i = rng.choice(n, size=k, replace=False)
+            j = rng.choice(n, size=k, replace=False)
+            Q[j] = Q[i] + rng.normal(size=(k, 2)) * r * rng.choice([0.0, 0.3, 3.0], size=(k, 1))
+        got = {tuple(sorted(p)) for p in T._near_pairs(Q, r).tolist()}
+        d = np.linalg.norm(Q[:, None] - Q[None], axis=2)
+        want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
         assert got == want, trial
 
 
