@@ -31,13 +31,18 @@ __all__ = ["cross3", "unwrap", "arc_curve", "line_curve", "revolve", "extrude", 
            "angle_to_param", "param_to_angle", "turn_into", "arc_knots", "transform_curve"]
 
 
-def arc_knots(theta0: float, theta1: float):
-    """Number of spans, span angle and knot vector of the arc ``[theta0, theta1]``."""
+def _spans(theta0: float, theta1: float):
+    """Number of spans and span angle of the arc ``[theta0, theta1]``."""
     sweep = theta1 - theta0
     if not sweep > 0:
         raise ValueError(f"arc sweep must be > 0, got {sweep!r}")
     n = max(1, int(math.ceil(sweep / (0.5 * math.pi) - 1e-12)))
-    d = sweep / n
+    return n, sweep / n
+
+
+def arc_knots(theta0: float, theta1: float):
+    """Number of spans, span angle and knot vector of the arc ``[theta0, theta1]``."""
+    n, d = _spans(theta0, theta1)
     ks = theta0 + d * np.arange(n + 1)
     ks[-1] = theta1
     U = np.concatenate([[theta0] * 3, np.repeat(ks[1:-1], 2), [theta1] * 3])
@@ -85,7 +90,7 @@ def unwrap(x) -> np.ndarray:
 
 def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
     """NURBS parameter of the arc built by :func:`arc_curve` at angle ``theta``."""
-    n, d, _ = arc_knots(theta0, theta1)
+    n, d = _spans(theta0, theta1)
     th = np.asarray(theta, float)
     k = np.clip(np.floor((th - theta0) / d), 0, n - 1)
     mid = theta0 + (k + 0.5) * d
@@ -103,7 +108,7 @@ def turn_into(x, a0: float, a1: float) -> np.ndarray:
 
 def param_to_angle(s, theta0: float, theta1: float) -> np.ndarray:
     """Inverse of :func:`angle_to_param`."""
-    n, d, _ = arc_knots(theta0, theta1)
+    n, d = _spans(theta0, theta1)
     s = np.asarray(s, float)
     k = np.clip(np.floor((s - theta0) / d), 0, n - 1)
     r = (s - theta0) / d - k

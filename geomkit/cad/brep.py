@@ -325,6 +325,23 @@ def _chain(srf, loop, size):
     return out
 
 
+_SEGMENT_KNOTS = np.array([0.0, 0.0, 1.0, 1.0])
+_SEGMENT_KNOTS.setflags(write=False)
+_TWO_ONES = np.ones(2)
+_TWO_ONES.setflags(write=False)
+
+
+def _segment(q):
+    """The UV segment between the two (finite) rows of ``q`` as a trim polyline (what
+    ``TrimCurve.polyline`` builds, without its checks: thousands per part); two equal
+    points or a non-finite one are left to it (an error naming them)."""
+    if not ((q[0, 0] != q[1, 0] or q[0, 1] != q[1, 1]) and np.isfinite(q).all()):
+        return TrimCurve.polyline(q)
+    q = np.array(q, dtype=np.float64)
+    q.setflags(write=False)
+    return TrimCurve(1, _SEGMENT_KNOTS, q, _TWO_ONES)
+
+
 def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
     pieces = []
     for e, ab in zip(loop, chains):
@@ -351,7 +368,7 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
                     q[:, 0] = fu(q[:, 0])
                 if fv is not None:
                     q[:, 1] = fv(q[:, 1])
-                c = TrimCurve.polyline(q)
+                c = _segment(q)
             else:
                 c = _fit(srf, e, ab, fu, fv, tol)
         pieces.append(c)

@@ -141,6 +141,10 @@ def clip_to_domain(pieces, domain, rel: float, refit_rel: float = 0.0):
     eps = rel * max(u1 - u0, v1 - v0)
     out, moves = [], []
     for c in pieces:
+        lo, hi = c.control_points.min(axis=0), c.control_points.max(axis=0)
+        if lo[0] >= u0 and hi[0] <= u1 and lo[1] >= v0 and hi[1] <= v1:
+            out.append(c)  # inside: nothing to move
+            continue
         P = np.array(c.control_points)
         Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
         moved = float(np.abs(Q - P).max())

@@ -25,13 +25,13 @@ like a single face left out of a mesh; the other blocks still answer.
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from geomkit._kernels.bezier import curve_points
 from geomkit.errors import FaceFailedWarning, GeomkitError
 from geomkit.query import results as R
 from geomkit.query.projection import Projector
@@ -57,20 +57,19 @@ _FIELDS = ("point", "uv", "surface", "distance", "signed_distance", "normal", "s
 
 
 def _trim_box(s: Surface):
-    """The parameter box holding the trimmed face: the trim segments' control points
-    (a rational Bézier arc lies in their hull when its weights are positive), cut to
-    the domain; the domain when untrimmed or a weight is not positive."""
+    """The parameter box holding the trimmed face: its trim pieces' control points (a
+    NURBS curve lies in their hull when its weights are positive), cut to the
+    domain; the domain when untrimmed or a weight is not positive."""
     (u0, u1), (v0, v1) = s.domain
     if not s.is_trimmed:
         return u0, u1, v0, v1
-    seg, deg, _, _ = s.trim_segments()
-    w = seg[..., 2]
-    live = np.arange(seg.shape[1])[None, :] <= deg[:, None]
-    if not (w[live] > 0).all():
+    pieces = [c for lp in s.trim for c in lp.pieces]
+    if not all(float(c.weights.min()) > 0 for c in pieces):
         return u0, u1, v0, v1
-    X = seg[..., :2][live] / w[live][:, None]
-    return (max(u0, X[:, 0].min()), min(u1, X[:, 0].max()),
-            max(v0, X[:, 1].min()), min(v1, X[:, 1].max()))
+    lo = np.min([c.control_points.min(axis=0) for c in pieces], axis=0)
+    hi = np.max([c.control_points.max(axis=0) for c in pieces], axis=0)
+    return (max(u0, float(lo[0])), min(u1, float(hi[0])),
+            max(v0, float(lo[1])), min(v1, float(hi[1])))
 
 
 def _acting(U, p, n, a, b):
@@ -97,32 +96,37 @@ def face_box(s: Surface) -> np.ndarray:
     return np.array([X.min(axis=0) - e, X.max(axis=0) + e])
 
 
-def _bezier_point(Q, t):
-    """Point at ``t`` of rational Bézier segments ``Q`` (k, p+1, 3) in homogeneous UV."""
-    p = Q.shape[1] - 1
-    c = np.array([math.comb(p, i) * t ** i * (1 - t) ** (p - i) for i in range(p + 1)])
-    h = np.einsum("i,kij->kj", c, Q)
-    return h[:, :2] / h[:, 2:]
+ANCHORS_PER_POLYLINE = 16
+"""Most vertices of one trim polyline taken as anchors (evenly by index)."""
+
+
+def _piece_anchors(c) -> np.ndarray:
+    """UV points on a trim piece: a polyline's vertices (at most
+    :data:`ANCHORS_PER_POLYLINE`), else its start and the middle of its range."""
+    P = c.control_points
+    if c.degree == 1:
+        if P.shape[0] > ANCHORS_PER_POLYLINE:
+            P = P[np.linspace(0, P.shape[0] - 1, ANCHORS_PER_POLYLINE).astype(np.int64)]
+        return P
+    p = c.degree
+    t = np.array([0.5 * (c.knots[p] + c.knots[-p - 1])])
+    out = np.empty((1, 1, 2))
+    curve_points(c.homogeneous, p, c.knots, t, 0, out)
+    return np.vstack([P[:1], out[:, 0]])
 
 
 def face_anchors(s: Surface) -> np.ndarray:
-    """(k, 3) points of the trimmed face: its surface at the ends and middles of the
-    trim segments (on the face's boundary), or at a 3 x 3 grid of its domain."""
+    """(k, 3) points of the trimmed face: its surface at points of its trim pieces
+    (on the face's boundary: :func:`_piece_anchors`), or at a 3 x 3 grid of its
+    domain."""
     (u0, u1), (v0, v1) = s.domain
     if s.is_trimmed:
-        seg, deg, _, _ = s.trim_segments()
-        uv = []
-        for p in np.unique(deg):
-            Q = seg[deg == p, :p + 1]
-            if (Q[..., 2] > 0).all():
-                uv += [_bezier_point(Q, 0.0), _bezier_point(Q, 0.5)]
-        uv = np.concatenate(uv) if uv else np.empty((0, 2))
-        uv[:, 0] = np.clip(uv[:, 0], u0, u1)
-        uv[:, 1] = np.clip(uv[:, 1], v0, v1)
+        uv = np.concatenate([_piece_anchors(c) for lp in s.trim for c in lp.pieces])
         uv = uv[np.isfinite(uv).all(axis=1)]
-        if uv.shape[0]:
-            return s.evaluate(uv)
-        return np.empty((0, 3))
+        if not uv.shape[0]:
+            return np.empty((0, 3))
+        uv = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+        return s.evaluate(uv)
     g = np.array([0.0, 0.5, 1.0])
     uu, vv = np.meshgrid(u0 + g * (u1 - u0), v0 + g * (v1 - v0), indexing="ij")
     return s.evaluate(np.c_[uu.ravel(), vv.ravel()])

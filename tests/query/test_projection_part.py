@@ -68,6 +68,25 @@ def test_boxes_hold_the_faces_and_anchors_lie_on_them():
         assert np.nanmax(pr.distance) <= 1e-9 * s.size
 
 
+def test_boxes_and_anchors_of_a_real_part():
+    """Every face of a NIST part (planes, cylinders, cones, tori, B-splines, trims of
+    many pieces): its box (from the trim pieces' control points) holds its mesh, its
+    anchors lie on it."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(DATA / "parts" / "nist_ctc_01_ap203.stp", cache=False)
+    mesh = geomkit.tessellate(case.surfaces, 1e-3 * max(s.size for s in case.surfaces))
+    for k, s in enumerate(case.surfaces):
+        lo, hi = face_box(s)
+        V = mesh.vertices[np.unique(mesh.faces[mesh.face_surface == k])]
+        e = 1e-9 * s.size
+        assert (V >= lo - e).all() and (V <= hi + e).all(), k
+        A = face_anchors(s)
+        assert A.shape[0] >= 2, k
+        d = geomkit.project_points(s, A).distance
+        assert np.nanmax(d) <= 1e-9 * s.size + s.approx_error, k
+
+
 def test_same_answers_as_one_projector(scene):
     S, full, part = scene
     P = _points(S, 3000, 5.0, 0)
