@@ -32,7 +32,15 @@ Method (Paper 1 step 1, then beyond it):
    polygon (the trim polylines) is triangulated once, without cells, by the
    constrained Delaunay rule (:mod:`geomkit.mesh.trim_polylines`).  Deviation 0; the
    boundary is the trim polylines of step 2.
-6. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
+6. **Grids first.**  A surface untrimmed, or trimmed only by its domain rectangle
+   (a STEP face bounded by its surface's own edges: most cylinders and cones of real
+   parts; :func:`geomkit.mesh.trim_polylines.domain_rectangle_only`), is tried as one
+   uniform grid of cells (:func:`geomkit.mesh.quadtree.uniform_grid`, every cell's
+   two triangles measured).  A trimmed curved surface is tried on such a grid too:
+   cells inside the region keep their measured triangles, cells the trim crosses are
+   clipped as in step 3 and their triangles measured.  A grid that is refused or has
+   a triangle above ``tol`` leaves the surface to the adaptive cells of steps 1-4.
+7. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
    closed seams) are merged and the triangles they collapse dropped, so a sphere is
    watertight and no triangle has zero area; faces are counter-clockwise in UV, i.e.
    oriented with ``S_u x S_v``.
