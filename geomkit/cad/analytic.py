@@ -72,18 +72,19 @@ def cross3(a, b) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
-def unwrap(x) -> np.ndarray:
-    """``np.unwrap(x)`` of a 1-D array of angles (same values, without its generic
-    argument handling: the readers unwrap thousands of short edges)."""
+def unwrap(x, period: float = 2 * math.pi) -> np.ndarray:
+    """``np.unwrap(x, period=period)`` of a 1-D array (same values, without its
+    generic argument handling: the readers unwrap thousands of short edges)."""
     x = np.asarray(x, float)
     out = x.copy()
     if x.size < 2:
         return out
+    half = period / 2
     d = np.diff(x)
-    dm = np.mod(d + math.pi, 2 * math.pi) - math.pi
-    dm[(dm == -math.pi) & (d > 0)] = math.pi
+    dm = np.mod(d + half, period) - half
+    dm[(dm == -half) & (d > 0)] = half
     corr = dm - d
-    corr[np.abs(d) < math.pi] = 0.0
+    corr[np.abs(d) < half] = 0.0
     out[1:] += np.cumsum(corr)
     return out
 

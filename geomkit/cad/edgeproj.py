@@ -19,7 +19,7 @@ from geomkit._kernels.surface import surface_derivatives
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
-from geomkit.cad.analytic import curve_eval
+from geomkit.cad.analytic import curve_eval, unwrap
 from geomkit.nurbs.evaluation import evaluate
 from geomkit.query.projection_part import project_points
 
@@ -100,37 +100,59 @@ def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
             out[:, c] = lo[c] + np.mod(uv[:, c] - lo[c], per[c])
         return out
 
+    # the edges of the loop are refined together: each round projects the new points
+    # of every edge in one call (the per-call cost of the inversion dominates)
     inverse = _Inverse(base)
-    pieces, worst = [], 0.0
-    for k, e in enumerate(edges):
-        s = np.linspace(0.0, 1.0, 17)
-        raw, dist = inverse(e.points(17), tol)
-        while True:
+    n0 = 17
+    S = [np.linspace(0.0, 1.0, n0) for _ in edges]
+    raw0, dist0 = inverse(np.concatenate([e.points(n0) for e in edges]), tol)
+    RAW = [raw0[k * n0:(k + 1) * n0] for k in range(len(edges))]
+    DIST = [dist0[k * n0:(k + 1) * n0] for k in range(len(edges))]
+    UV = [None] * len(edges)
+    worst = 0.0
+    active = list(range(len(edges)))
+    while active:
+        rounds = []
+        for k in active:
+            dist = DIST[k]
             off = float(np.nanmax(dist)) if np.all(np.isfinite(dist)) else np.inf
             if off > tol:
                 raise Unsupported(f"{what}: edge {k} is not on the surface (a point is "
                                   f"{off:.3g} from it, tolerance {tol:.3g})")
-            uv = raw.copy()
+            uv = RAW[k].copy()
             for c in np.flatnonzero(wrapped):
-                uv[:, c] = np.unwrap(uv[:, c], period=per[c])
-            sm = 0.5 * (s[1:] + s[:-1])
-            Xm = curve_eval(e.curve, e.ts(sm))
-            dev = np.linalg.norm(evaluate(base, inside(0.5 * (uv[1:] + uv[:-1]))) - Xm,
-                                 axis=1)
+                uv[:, c] = unwrap(uv[:, c], per[c])
+            sm = 0.5 * (S[k][1:] + S[k][:-1])
+            rounds.append((k, off, uv, sm))
+        mid = evaluate(base, inside(np.concatenate([0.5 * (uv[1:] + uv[:-1])
+                                                    for _, _, uv, _ in rounds])))
+        todo, new_X, o = [], [], 0
+        for k, off, uv, sm in rounds:
+            e = edges[k]
+            dev = np.linalg.norm(mid[o:o + sm.size] - curve_eval(e.curve, e.ts(sm)), axis=1)
+            o += sm.size
             bad = dev > tol
             if not bad.any():
                 worst = max(worst, float(dev.max()), off)
-                break
-            if len(s) + int(bad.sum()) > _MAX_POINTS:
+                UV[k] = uv
+                continue
+            if len(S[k]) + int(bad.sum()) > _MAX_POINTS:
                 raise Unsupported(f"{what}: edge {k} has no UV polyline within {tol:.3g} "
                                   f"of {_MAX_POINTS} points (its projection jumps: a "
                                   "seam?)")
-            # only the new points are projected
             new = sm[bad]
-            nuv, nd = inverse(curve_eval(e.curve, e.ts(new)), tol)
-            order = np.argsort(np.concatenate([s, new]), kind="stable")
-            s = np.concatenate([s, new])[order]
-            raw = np.concatenate([raw, nuv])[order]
-            dist = np.concatenate([dist, nd])[order]
-        pieces.append(TrimCurve.polyline(uv, f"{what}.edge{k}"))
+            todo.append((k, new))
+            new_X.append(curve_eval(e.curve, e.ts(new)))
+        if todo:  # only the new points are projected
+            nuv_all, nd_all = inverse(np.concatenate(new_X), tol)
+            o = 0
+            for k, new in todo:
+                nuv, nd = nuv_all[o:o + new.size], nd_all[o:o + new.size]
+                o += new.size
+                order = np.argsort(np.concatenate([S[k], new]), kind="stable")
+                S[k] = np.concatenate([S[k], new])[order]
+                RAW[k] = np.concatenate([RAW[k], nuv])[order]
+                DIST[k] = np.concatenate([DIST[k], nd])[order]
+        active = [k for k, _ in todo]
+    pieces = [TrimCurve.polyline(uv, f"{what}.edge{k}") for k, uv in enumerate(UV)]
     return pieces, worst

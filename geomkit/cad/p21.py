@@ -65,9 +65,30 @@ _ENUMS = {"T": True, "F": False, "U": None}
 
 
 def _strip_comments(text: str) -> str:
+    """Comments ``/* ... */`` outside strings made one space.  Walks the comments
+    (a file has few) keeping the parity of the quotes before each: odd, it is inside
+    a string (``''`` escapes count twice); a text whose strings do not close is
+    left to :data:`_COMMENT`."""
     if "/*" not in text:
         return text
-    return _COMMENT.sub(lambda m: m.group(0) if m.group(0)[0] == "'" else " ", text)
+    out, pos, scan, odd = [], 0, 0, False
+    i = text.find("/*")
+    while i >= 0:
+        odd ^= bool(text.count("'", scan, i) % 2)
+        scan = i
+        if odd:  # inside a string
+            i = text.find("/*", i + 2)
+            continue
+        j = text.find("*/", i + 2)
+        if j < 0:
+            break
+        out += [text[pos:i], " "]
+        pos = scan = j + 2
+        i = text.find("/*", pos)
+    if odd ^ bool(text.count("'", scan) % 2):  # a string left open outside comments
+        return _COMMENT.sub(lambda m: m.group(0) if m.group(0)[0] == "'" else " ", text)
+    out.append(text[pos:])
+    return "".join(out)
 
 
 def _unexpected(s: str, where: str):

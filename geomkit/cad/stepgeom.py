@@ -62,11 +62,25 @@ class Curve:
         then Newton on ``(C - X) . C'``."""
         p, U, Pw = self.spline
         lo, hi = float(U[p]), float(U[-p - 1])
-        # a vertex is most often the end control point of a clamped end itself: then
-        # it is that end's parameter
-        for k, t, ends in ((0, lo, U[:p + 1]), (-1, hi, U[-p - 1:])):
-            if np.all(ends == t) and np.array_equal(Pw[k, :3] / Pw[k, 3], X):
-                return t
+        # a vertex is most often at a clamped end (its control point): that end's
+        # parameter when the vertex is that point, or lies within 1e-6 of the curve's
+        # extent of it on the outer side of the end's tangent (the end is then the
+        # local minimum Newton would reach, clamped)
+        # (the nearer end of a closed curve)
+        P = Pw[:, :3] / Pw[:, 3:]
+        near = 1e-6 * float(np.ptp(P, axis=0).max())
+        best = None
+        for k, t, ends, step in ((0, lo, U[:p + 1], P[1] - P[0]),
+                                 (-1, hi, U[-p - 1:], P[-2] - P[-1])):
+            if not np.all(ends == t):
+                continue
+            d = P[k] - X
+            dd = float(d @ d)
+            if dd == 0.0 or (dd <= near * near and step.any() and float(d @ step) >= 0.0):
+                if best is None or dd < best[1]:
+                    best = (t, dd)
+        if best is not None:
+            return best[0]
         t = np.linspace(lo, hi, max(65, 8 * (len(U) - p)))
         D = curve_derivs(self.spline, t, 0)[:, 0, :]
         t0 = float(t[int(np.argmin(np.linalg.norm(D - X, axis=1)))])
