@@ -23,6 +23,7 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
+from .trim import MAX_DEPTH as TRIM_MAX_DEPTH, OUTSIDE as TRIM_OUTSIDE, classify_point
 
 PRUNE = 0
 MONO_U = 1
@@ -372,37 +373,165 @@ def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, 
     Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL = borrow_all((
         Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL))
     for i in range(uv.shape[0]):
-        u = uv[i, 0]
-        v = uv[i, 1]
-        f = 0.0
-        for it in range(maxit + 1):
-            surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
-            f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
-                 + plane[3])
-            if abs(f) <= ftol or it == maxit:
-                break
-            gu = plane[0] * SKL[1, 0, 0] + plane[1] * SKL[1, 0, 1] + plane[2] * SKL[1, 0, 2]
-            gv = plane[0] * SKL[0, 1, 0] + plane[1] * SKL[0, 1, 1] + plane[2] * SKL[0, 1, 2]
-            g2 = gu * gu + gv * gv
-            if not g2 > 0.0:
-                break
-            un = u - f * gu / g2
-            vn = v - f * gv / g2
-            du = un - uv[i, 0]
-            dv = vn - uv[i, 1]
-            dist = np.sqrt(du * du + dv * dv)
-            if dist > maxstep[i]:
-                un = uv[i, 0] + du * maxstep[i] / dist
-                vn = uv[i, 1] + dv * maxstep[i] / dist
-            un = min(max(un, box[0]), box[1])
-            vn = min(max(vn, box[2]), box[3])
-            if un == u and vn == v:
-                break
-            u = un
-            v = vn
+        u, v, f = _project_point(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], maxstep[i], box,
+                                 ftol, maxit, bin_, scr, SKL)
         out_uv[i, 0] = u
         out_uv[i, 1] = v
         out_f[i] = f
+
+
+@jit
+def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin_, scr,
+                   SKL):
+    """One start point of :func:`project`: returns (u, v, f)."""
+    u = u0
+    v = v0
+    f = 0.0
+    for it in range(maxit + 1):
+        surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
+        f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
+             + plane[3])
+        if abs(f) <= ftol or it == maxit:
+            break
+        gu = plane[0] * SKL[1, 0, 0] + plane[1] * SKL[1, 0, 1] + plane[2] * SKL[1, 0, 2]
+        gv = plane[0] * SKL[0, 1, 0] + plane[1] * SKL[0, 1, 1] + plane[2] * SKL[0, 1, 2]
+        g2 = gu * gu + gv * gv
+        if not g2 > 0.0:
+            break
+        un = u - f * gu / g2
+        vn = v - f * gv / g2
+        du = un - u0
+        dv = vn - v0
+        dist = np.sqrt(du * du + dv * dv)
+        if dist > maxstep:
+            un = u0 + du * maxstep / dist
+            vn = v0 + dv * maxstep / dist
+        un = min(max(un, box[0]), box[1])
+        vn = min(max(vn, box[2]), box[3])
+        if un == u and vn == v:
+            break
+        u = un
+        v = vn
+    return u, v, f
+
+
+@jit
+def densify(Pw, p, q, U, V, plane, uv, h, box, ftol, maxdepth):
+    """Exact curve points inserted into the polyline ``uv`` (n, 2) until consecutive
+    points are at most ``h`` apart in UV; returns the (m, 2) polyline.
+
+    A segment ``a -> b`` longer than ``h`` is halved at :func:`project` of its midpoint
+    (the move limited to its length ``|b - a|``, stopping at ``|f| <= ftol``, clamped to
+    ``box``), and both halves are examined again, down to ``maxdepth`` halvings of an
+    input segment (each segment depends on its own ends only: the points are those of
+    halving all long segments in rounds, ``maxdepth`` rounds).
+    """
+    bin_ = _binomial_table(D1)
+    scr = derivs_scratch(p, q, D1)
+    SKL = np.empty((2, 2, 3))
+    n = uv.shape[0]
+    out = np.empty((max(2 * n, 16), 2))
+    nout = 0
+    stack = np.empty((maxdepth + 2, 2))   # right ends of the pending halves
+    sdepth = np.empty(maxdepth + 2, np.int64)
+    for i in range(n - 1):
+        au = uv[i, 0]
+        av = uv[i, 1]
+        stack[0, 0] = uv[i + 1, 0]
+        stack[0, 1] = uv[i + 1, 1]
+        sdepth[0] = 0
+        top = 1
+        while top > 0:
+            bu = stack[top - 1, 0]
+            bv = stack[top - 1, 1]
+            d = sdepth[top - 1]
+            du = bu - au
+            dv = bv - av
+            seg = np.sqrt(du * du + dv * dv)
+            if seg > h and d < maxdepth:
+                mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
+                                            0.5 * (av + bv), seg, box, ftol, 40, bin_, scr,
+                                            SKL)
+                sdepth[top - 1] = d + 1       # (m, b) after (a, m)
+                stack[top, 0] = mu
+                stack[top, 1] = mv
+                sdepth[top] = d + 1
+                top += 1
+                continue
+            if nout == out.shape[0]:
+                bigger = np.empty((2 * nout, 2))
+                bigger[:nout] = out
+                out = bigger
+            out[nout, 0] = au
+            out[nout, 1] = av
+            nout += 1
+            au = bu
+            av = bv
+            top -= 1
+    if n > 0:
+        if nout == out.shape[0]:
+            bigger = np.empty((nout + 1, 2))
+            bigger[:nout] = out
+            out = bigger
+        out[nout, 0] = uv[n - 1, 0]
+        out[nout, 1] = uv[n - 1, 1]
+        nout += 1
+    return out[:nout].copy()
+
+
+@jit
+def _outside(seg, seg_deg, seg_loop, nloops, u, v, box, tol, winding, stack, depths, left,
+             right):
+    """``Surface.classify_uv((u, v), tol) == OUTSIDE``: outside the domain rectangle by
+    more than ``tol``, or outside the trim loops (:func:`.trim.classify_point`)."""
+    d = min(min(u - box[0], box[1] - u), min(v - box[2], box[3] - v))
+    if d < -tol:
+        return True
+    if nloops == 0:
+        return False
+    return classify_point(seg, seg_deg, seg_loop, nloops, u, v, tol, winding, stack,
+                          depths, left, right) == TRIM_OUTSIDE
+
+
+@jit
+def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol, seg,
+                   seg_deg, seg_loop, nloops, iters, stop):
+    """Bisection along the exact curve between inside points ``a`` (n, 2) and outside
+    points ``b`` (n, 2), in place: the curve point at the middle (:func:`project` from
+    the UV midpoint, the move limited to ``|b - a|``, to ``|f| <= ftol``) replaces
+    ``b`` when it is outside the trimmed face (:func:`_outside` with the band ``band``,
+    or ``wide_tol`` where ``wide[i]``), else ``a``; until ``|b - a| <= stop`` or
+    ``iters`` steps.  ``seg``, ``seg_deg``, ``seg_loop``, ``nloops``: the trim loops as
+    packed by ``Surface.trim_segments``."""
+    bin_ = _binomial_table(D1)
+    scr = derivs_scratch(p, q, D1)
+    SKL = np.empty((2, 2, 3))
+    p1 = seg.shape[1]
+    winding = np.empty(max(nloops, 1), dtype=np.int64)
+    cstack = np.empty((TRIM_MAX_DEPTH + 2, p1, 3))
+    depths = np.empty(TRIM_MAX_DEPTH + 2, dtype=np.int64)
+    left = np.empty((p1, 3))
+    right = np.empty((p1, 3))
+    for i in range(a.shape[0]):
+        tol = wide_tol if wide[i] else band
+        for _ in range(iters):
+            du = b[i, 0] - a[i, 0]
+            dv = b[i, 1] - a[i, 1]
+            mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (a[i, 0] + b[i, 0]),
+                                        0.5 * (a[i, 1] + b[i, 1]),
+                                        np.sqrt(du * du + dv * dv), box, ftol, 40, bin_,
+                                        scr, SKL)
+            if _outside(seg, seg_deg, seg_loop, nloops, mu, mv, box, tol, winding, cstack,
+                        depths, left, right):
+                b[i, 0] = mu
+                b[i, 1] = mv
+            else:
+                a[i, 0] = mu
+                a[i, 1] = mv
+            du = b[i, 0] - a[i, 0]
+            dv = b[i, 1] - a[i, 1]
+            if not np.sqrt(du * du + dv * dv) > stop:
+                break
 
 
 @jit

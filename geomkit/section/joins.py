@@ -18,6 +18,8 @@ A curve is a dict with ``uv`` (k, 2), ``sid`` (k,) (surface of each point), ``X`
 
 from __future__ import annotations
 
+import heapq
+
 import numpy as np
 
 __all__ = ["split_at_poles", "drop_shared_edges", "join_ends", "join_across_edges",
@@ -150,9 +152,116 @@ def join_ends(curves, tol, bridged=None, exact=0.0):
     neighbours rather than bridged over); close curves whose two ends meet.  An end
     point within ``exact`` of the end it is joined to is dropped as a duplicate;
     farther ones are kept (the curve then bridges the gap).  ``bridged[0]`` is raised
-    to the largest distance joined."""
+    to the largest distance joined.
+
+    The pair joined next is the nearest of all open ends (a curve's own two ends
+    count ``exact`` farther, and not at all with two points or fewer), ties going to
+    the ends first in the list of open curves (each curve's start, then its end; a
+    joined curve goes last).  The distances are measured once (a joined curve's ends
+    are ends of the curves it joins) and only the pairs within ``tol + exact`` are
+    kept, in a heap (any other pair is farther than ``tol``, and farther than every
+    pair that can still join); above :data:`HEAP_PAIRS` of them, every pair is measured
+    again at each join."""
     bridged = [0.0] if bridged is None else bridged
     curves = list(curves)
+    opens = [i for i, c in enumerate(curves) if not c["closed"]]
+    if not opens:
+        return curves
+    E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+    D = np.linalg.norm(E[:, None] - E[None], axis=2)
+    np.fill_diagonal(D, np.inf)
+    # end 2 k / 2 k + 1: start / end of opens[k]; a curve is known by its dict (a
+    # joined curve is a new one); an end joined or closed has no owner any more
+    owner = [curves[i] for i in opens for _ in (0, 1)]
+    side = [0, 1] * len(opens)          # 0: the owner's start, 1: its end
+    mate = [e ^ 1 for e in range(len(owner))]   # the other end of the same curve
+    pa, pb = np.nonzero(np.triu(D <= tol + exact, 1))
+    if len(pa) > HEAP_PAIRS:
+        return _join_ends_each(curves, tol, bridged, exact)
+    heap = [(float(D[x, y]), int(x), int(y)) for x, y in zip(pa, pb)]
+    heapq.heapify(heap)
+
+    def value(x, y):
+        """The pair's distance now (None: an end is gone), with the own-curve rule."""
+        cx, cy = owner[x], owner[y]
+        if cx is None or cy is None:
+            return None
+        d = float(D[x, y])
+        if cx is cy:
+            return d + exact if len(cx["X"]) > 2 else np.inf
+        return d
+
+    while heap:
+        # the nearest pairs (stored values only grow: a stale entry goes back)
+        v, x, y = heapq.heappop(heap)
+        cur = value(x, y)
+        if cur is None or cur == np.inf:
+            continue
+        if cur != v:
+            heapq.heappush(heap, (cur, x, y))
+            continue
+        group = [(x, y)]
+        while heap and heap[0][0] == v:
+            _, p, q = heapq.heappop(heap)
+            cur = value(p, q)
+            if cur == v:
+                group.append((p, q))
+            elif cur is not None and cur != np.inf:
+                heapq.heappush(heap, (cur, p, q))
+        if len(group) > 1:   # ties: the first in the list of open ends
+            pos = {id(c): k for k, c in enumerate(c for c in curves if not c["closed"])}
+
+            def at(e):
+                return 2 * pos[id(owner[e])] + side[e]
+
+            group.sort(key=lambda t: (min(at(t[0]), at(t[1])), max(at(t[0]), at(t[1]))))
+            for t in group[1:]:
+                heapq.heappush(heap, (v, *t))
+            x, y = group[0]
+            ea, eb = (x, y) if at(x) < at(y) else (y, x)
+        else:
+            ea, eb = group[0]
+            if owner[ea] is owner[eb]:
+                ea, eb = (ea, eb) if side[ea] == 0 else (eb, ea)
+            elif not _first(curves, owner[ea], owner[eb]):
+                ea, eb = eb, ea
+        dist = float(np.linalg.norm(E[ea] - E[eb]))
+        if not dist <= tol:
+            return curves
+        bridged[0] = max(bridged[0], dist)
+        ci, cj = owner[ea], owner[eb]
+        dup = dist <= exact
+        if ci is cj:
+            ci["closed"] = True
+            if dup:
+                for k in ("uv", "sid", "X"):
+                    ci[k] = ci[k][:-1]
+            owner[ea] = owner[eb] = None
+            continue
+        A = ci if side[ea] else _rev(ci)   # A ends at end ea
+        B = _rev(cj) if side[eb] else cj   # B starts at end eb
+        merged = {k: (np.concatenate([A[k], B[k][int(dup):]]) if k in ("uv", "sid", "X")
+                      else A[k]) for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        # ci's other end starts the merged curve, cj's other end ends it (ea itself
+        # where B was one duplicate point)
+        first, last = mate[ea], (ea if len(B["X"]) <= int(dup) else mate[eb])
+        for e in (ea, eb, mate[ea], mate[eb]):
+            owner[e] = None
+        owner[first], side[first], mate[first] = merged, 0, last
+        owner[last], side[last], mate[last] = merged, 1, first
+        curves = [c for c in curves if c is not ci and c is not cj] + [merged]
+    return curves
+
+
+HEAP_PAIRS = 20000
+"""Above this many pairs of ends within reach, :func:`join_ends` measures all pairs
+again at each join (:func:`_join_ends_each`; the tie groups of the heap grow
+with the square of the ends stacked at one point)."""
+
+
+def _join_ends_each(curves, tol, bridged, exact):
+    """:func:`join_ends` measuring every pair of open ends at each join."""
     while True:
         opens = [i for i, c in enumerate(curves) if not c["closed"]]
         if not opens:
@@ -185,6 +294,16 @@ def join_ends(curves, tol, bridged=None, exact=0.0):
                       else A[k]) for k in A}
         merged["chord"] = max(A["chord"], B["chord"])
         curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+def _first(curves, ca, cb) -> bool:
+    """Whether curve ``ca`` comes before ``cb`` in ``curves`` (both in it)."""
+    for c in curves:
+        if c is ca:
+            return True
+        if c is cb:
+            return False
+    raise ValueError("curves not in the list")
 
 
 EDGE_REACH = 8.0
@@ -265,6 +384,14 @@ def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8):
     r, j = np.reshape(r, (len(P), k)), np.reshape(j, (len(P), k))
     out = _segment_distances(P[:, None, :], A[j], B[j]).min(axis=1)
     far = np.flatnonzero((out > r[:, -1] - h) & (r[:, 0] - h <= upto)) if k < len(A) else []
+    # the uncertain points against 8 times more nearest segments, until certified
+    # (the same minimum as against all of them) or nearly all are needed
+    while len(far) and 8 * k < len(A) // 2:
+        k *= 8
+        r, j = tree.query(P[far], k)
+        d = _segment_distances(P[far, None, :], A[j], B[j]).min(axis=1)
+        out[far] = d
+        far = far[d > r[:, -1] - h]
     step = max(1, (1 << 20) // len(A))   # points per block: ~1e6 pairs
     for i in range(0, len(far), step):
         f = far[i:i + step]

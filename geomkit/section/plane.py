@@ -36,6 +36,7 @@ from geomkit.section.export import fit_curves, plot, to_csv, to_dxf, to_json
 from geomkit.section.joins import (boundary_distance, drop_shared_edges,
                                    join_across_edges, join_ends, split_at_poles)
 from geomkit.section.trace import _Eval, trace_surface
+from geomkit.tolerances import TRIM_TOL
 from geomkit.validate import as_float_array
 from geomkit.errors import FaceFailedWarning, InvalidInputError
 from geomkit.nurbs.trimming import OUTSIDE
@@ -46,6 +47,13 @@ __all__ = ["plane_section", "Section", "as_plane"]
 TRIM_STEP = 1.0 / 1024
 """On trimmed surfaces, curve points are at most ``TRIM_STEP * domain size`` apart in
 UV before they are classified (a trim loop smaller than that can be missed)."""
+
+BOUNDS_MARGIN = 1e-9
+"""A surface whose control points all lie on one side of the plane, farther than its
+zero band plus ``BOUNDS_MARGIN`` times the model scale (``|D| + max |P|``), is not
+sectioned at all: its Bézier patches' control points are convex combinations of
+them (in homogeneous coordinates, weights > 0), so every patch would be pruned
+(``stats``: 0 sub-patches).  The margin covers the round-off of the extraction."""
 
 
 @dataclass(eq=False)
@@ -203,12 +211,17 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
         raise InvalidInputError(f"must be a finite number >= 0, got {gap!r}", "gap")
     curves, contacts, coplanar, stats, failed = [], [], [], {}, {}
     for k, s in enumerate(surfs):
-        P = s.control_points.reshape(-1, 3)
-        scale = float(np.abs(abcd[3]) + np.abs(P).max())
+        P, pmax = _net(s)
+        scale = float(np.abs(abcd[3]) + pmax)
         zsnap = 64 * np.finfo(float).eps * scale
-        hmax = float(np.abs(P @ abcd[:3] + abcd[3]).max())
+        h = P @ abcd[:3] + abcd[3]
+        hmax = float(np.abs(h).max())
         if hmax <= zsnap:
             coplanar.append(k)
+            continue
+        reach = zsnap + BOUNDS_MARGIN * scale
+        if h.min() > reach or h.max() < -reach:   # the net misses: so does the face
+            stats[k] = {"subpatches": 0, "leaves": 0, "unresolved": 0}
             continue
         min_diam = max(0.25 * tol, 1e-13 * scale)
         try:
@@ -262,6 +275,16 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
                                     default=0.0))
 
 
+def _net(s):
+    """The control points of ``s`` (m, 3) and their largest absolute coordinate, kept
+    on the surface (a part is sectioned at many planes)."""
+    net = s._cache.get("section_net")
+    if net is None:
+        P = s.control_points.reshape(-1, 3)
+        net = s._cache["section_net"] = (P, np.abs(P).max())
+    return net
+
+
 def _points(ev, uv, sid):
     X = np.empty((len(uv), 3))
     for k in np.unique(sid):
@@ -285,7 +308,7 @@ def _clip_trims(s, plane, chains, zsnap, reach=0.0):
             uv = np.concatenate([uv, uv[:1]])
         uv = _densify(ev, uv, TRIM_STEP * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2]),
                       zsnap)
-        inside = s.classify_uv(uv) != OUTSIDE
+        inside = _not_outside(s, uv)
         if not inside.all() and reach > 0:
             inside = _along_trim(s, ev, uv, inside, c["closed"], reach)
         if inside.all():
@@ -349,6 +372,12 @@ def _along_trim(s, ev, uv, inside, closed, reach):
         runs = [r for r in runs if r[0] > 0 and r[-1] < len(ins) - 1]
     if not runs:
         return ins
+    # the middle point of each run first: a run crossing a hole is out at once
+    mid = np.array([r[len(r) // 2] for r in runs])
+    near = boundary_distance(s, ev.points(uv[mid]), reach) <= reach
+    runs = [r for r, o in zip(runs, near) if o]
+    if not runs:
+        return ins
     idx = np.concatenate(runs)
     near = boundary_distance(s, ev.points(uv[idx]), reach) <= reach
     ok = np.split(near, np.cumsum([len(r) for r in runs])[:-1])
@@ -360,20 +389,16 @@ def _along_trim(s, ev, uv, inside, closed, reach):
 
 def _densify(ev, uv, h, zsnap):
     """Insert exact curve points until consecutive UV points are at most ``h`` apart
-    (so that a trim loop crossing the curve is seen by point classification)."""
-    for _ in range(40):
-        seg = np.linalg.norm(np.diff(uv, axis=0), axis=1)
-        long_ = np.nonzero(seg > h)[0]
-        if not len(long_):
-            break
-        mid, _f = ev.project(0.5 * (uv[long_] + uv[long_ + 1]), seg[long_], 0.25 * zsnap)
-        uv = np.insert(uv, long_ + 1, mid, axis=0)
-    return uv
+    (so that a trim loop crossing the curve is seen by point classification): each
+    segment longer than ``h`` halved at the curve point projected from its middle, up
+    to 40 times (:func:`geomkit._kernels.section.densify`)."""
+    return _finite(ev.densify(uv, h, 0.25 * zsnap, 40))
 
 
 def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     """The curve points on the trim boundary between inside points ``a_in`` (n, 2) and
-    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once.
+    outside points ``b_out`` (n, 2): bisection along the exact curve, all at once
+    (:func:`geomkit._kernels.section.trim_crossings`).
 
     A point is inside when ``classify_uv`` does not call it OUTSIDE within a round-off
     band (``1e-14`` of the domain): the ends land on the exact trim.  Where ``a_in`` is
@@ -384,25 +409,75 @@ def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     sample, up to ``TRIM_STEP`` of the domain short of the trim corner where that edge
     ends; such ends are bisected with the band ``a_in`` was classified with, and
     reach the corner within it."""
-    a, b = a_in.copy(), b_out.copy()
-    band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
-    along = s.classify_uv(a, band) == OUTSIDE   # inside only within the wide band
-    act = np.arange(len(a))
-    for _ in range(iters):
-        m, _f = ev.project(0.5 * (a[act] + b[act]), np.linalg.norm(b[act] - a[act], axis=1),
-                           0.25 * zsnap)
-        o = np.empty(len(act), bool)
-        wide = along[act]
-        if (~wide).any():
-            o[~wide] = s.classify_uv(m[~wide], band) == OUTSIDE
-        if wide.any():
-            o[wide] = s.classify_uv(m[wide]) == OUTSIDE
-        b[act[o]] = m[o]
-        a[act[~o]] = m[~o]
-        act = act[np.linalg.norm(b[act] - a[act], axis=1) > 1e-13]
-        if not len(act):
-            break
-    return a
+    dom = max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
+    band = 1e-14 * dom
+    along = s.classify_uv(a_in, band) == OUTSIDE   # inside only within the wide band
+    a = np.array(a_in, dtype=np.float64, order="C")
+    b = np.array(b_out, dtype=np.float64, order="C")
+    ev.trim_crossings(a, b, along, 0.25 * zsnap, band, TRIM_TOL * dom, iters, 1e-13)
+    return _finite(a)
+
+
+CLASSIFY_RUN = 16
+"""Points classified together by :func:`_not_outside` (a run of consecutive curve
+points whose box is far from every trim curve gets the class of its first)."""
+
+
+def _not_outside(s, uv):
+    """(n,) bool: ``s.classify_uv(uv) != OUTSIDE`` for the points of a curve ``uv``
+    (n, 2), classifying one point per run of :data:`CLASSIFY_RUN` consecutive points
+    whose UV box lies more than twice the classification band from the box of every
+    trim segment's control points (which holds the segment).
+
+    The classification of a point farther than the band from every trim curve is the
+    exact parity of the loops around it (:func:`geomkit.classify_uv`), the same for
+    every point of such a box (convex, meeting no trim curve); the domain rectangle is
+    checked point by point.  The runs near a trim are classified point by point."""
+    n = len(uv)
+    if n <= 2 * CLASSIFY_RUN or not s.is_trimmed:
+        return s.classify_uv(uv) != OUTSIDE
+    (u0, u1), (v0, v1) = s.domain
+    tol = TRIM_TOL * max(u1 - u0, v1 - v0)
+    lo_s, hi_s = _trim_boxes(s)
+    starts = np.arange(0, n, CLASSIFY_RUN)
+    lo = np.minimum.reduceat(uv, starts, axis=0)
+    hi = np.maximum.reduceat(uv, starts, axis=0)
+    sep = 2 * tol
+    far = ((lo[:, None, :] - hi_s[None] > sep) | (lo_s[None] - hi[:, None, :] > sep)).any(
+        axis=2).all(axis=1)
+    # the domain rectangle as classify_uv tests it, point by point
+    d = np.minimum(np.minimum(uv[:, 0] - u0, u1 - uv[:, 0]),
+                   np.minimum(uv[:, 1] - v0, v1 - uv[:, 1]))
+    rect_out = d < -tol
+    far &= ~np.logical_or.reduceat(rect_out, starts)
+    run = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, n]))
+    one = far[run]
+    one[starts[far]] = False            # the first point of a far run is classified
+    idx = np.flatnonzero(~one)
+    out = np.empty(n, bool)
+    out[idx] = s.classify_uv(uv[idx]) != OUTSIDE
+    out[one] = out[starts[run[one]]]
+    return out
+
+
+def _trim_boxes(s):
+    """(S, 2) lower and upper corners of the boxes of the control points of
+    ``s.trim_segments()`` (each holds its segment: convex hull, weights > 0); kept."""
+    boxes = s._cache.get("section_trim_boxes")
+    if boxes is None:
+        seg, deg, _lp, _n = s.trim_segments()
+        X = seg[..., :2] / seg[..., 2:3]
+        pad = np.arange(seg.shape[1])[None, :] > deg[:, None]
+        lo = np.where(pad[..., None], np.inf, X).min(axis=1)
+        hi = np.where(pad[..., None], -np.inf, X).max(axis=1)
+        boxes = s._cache["section_trim_boxes"] = (lo, hi)
+    return boxes
+
+
+def _finite(uv):
+    """``uv`` checked finite, as ``classify_uv`` checks its input (a face whose curve
+    points are not finite fails, named, instead of giving NaN points)."""
+    return as_float_array(uv, "uv")
 
 
 def _contact_points(ev, contacts, curves, plane, tol):

@@ -58,6 +58,19 @@ class _Eval:
                   ftol, maxit, out, f)
         return out, f
 
+    def trim_crossings(self, a, b, wide, ftol, band, wide_tol, iters, stop):
+        """:func:`geomkit._kernels.section.trim_crossings` against the surface's trims:
+        ``a``, ``b`` (n, 2) float64 C arrays, bisected in place."""
+        seg, deg, lp, nloops = self.s.trim_segments()
+        K.trim_crossings(*self.args, a, b, np.ascontiguousarray(wide, dtype=np.bool_),
+                         self.box, float(ftol), float(band), float(wide_tol), seg, deg, lp,
+                         nloops, int(iters), float(stop))
+
+    def densify(self, uv, h, ftol, maxdepth):
+        """:func:`geomkit._kernels.section.densify` of the polyline ``uv`` (n, 2)."""
+        uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
+        return K.densify(*self.args, uv, float(h), self.box, float(ftol), int(maxdepth))
+
 
 def _merge_nodes(uv, radius):
     """Union nodes closer than ``radius`` in UV; returns (representative index per node)."""
@@ -252,17 +265,17 @@ def _midpoints(ev, leaves, a, b, leaf, zsnap):
     out = m.copy()
     state = leaves[leaf, 4]
     done = np.zeros(len(m), bool)
-    for st, c in ((K.MONO_U, 0), (K.MONO_V, 1)):
-        sel = np.nonzero(state == st)[0]
-        if not len(sel):
-            continue
-        lo = m[sel].copy()
-        hi = m[sel].copy()
-        lo[:, c] = leaves[leaf[sel], 2 * c]
-        hi[:, c] = leaves[leaf[sel], 2 * c + 1]
-        flo, fhi = ev.f(lo), ev.f(hi)
-        flo[np.abs(flo) <= zsnap] = 0.0
-        fhi[np.abs(fhi) <= zsnap] = 0.0
+    sel = np.nonzero((state == K.MONO_U) | (state == K.MONO_V))[0]
+    if len(sel):
+        c = (state[sel] == K.MONO_V).astype(np.intp)   # MONO_U: along u; MONO_V: v
+        rows = np.arange(len(sel))
+        lo = m[sel]
+        hi = lo.copy()
+        lo[rows, c] = leaves[leaf[sel], 2 * c]
+        hi[rows, c] = leaves[leaf[sel], 2 * c + 1]
+        fl = ev.f(np.concatenate([lo, hi]))
+        fl[np.abs(fl) <= zsnap] = 0.0
+        flo, fhi = fl[:len(sel)], fl[len(sel):]
         br = flo * fhi < 0
         if np.any(br):
             i = sel[br]
@@ -303,13 +316,15 @@ def _refine(ev, leaves, uv, segleaf, tol, zsnap):
         # an S-shaped arc (inflection) has its midpoint on the chord: check the quarter
         # points of the segments about to be accepted too
         ok = np.nonzero(~split & ~tiny)[0]
-        if len(ok):
-            for lo_, hi_ in ((a[ok], mid[ok]), (mid[ok], b[ok])):
-                Q = ev.points(_midpoints(ev, leaves, lo_, hi_, segleaf[idx[ok]], zsnap))
-                tq = np.clip(np.einsum("ij,ij->i", Q - A[ok], d[ok])
-                             / np.where(ll[ok] > 0, ll[ok], 1.0), 0, 1)
-                eq = np.linalg.norm(A[ok] + tq[:, None] * d[ok] - Q, axis=1)
-                err[ok] = np.maximum(err[ok], eq)
+        if len(ok):   # both quarter points of each segment in one batch
+            lq = np.tile(segleaf[idx[ok]], 2)
+            Q = ev.points(_midpoints(ev, leaves, np.concatenate([a[ok], mid[ok]]),
+                                     np.concatenate([mid[ok], b[ok]]), lq, zsnap))
+            Ak, dk = np.tile(A[ok], (2, 1)), np.tile(d[ok], (2, 1))
+            llk = np.tile(ll[ok], 2)
+            tq = np.clip(np.einsum("ij,ij->i", Q - Ak, dk) / np.where(llk > 0, llk, 1.0), 0, 1)
+            eq = np.linalg.norm(Ak + tq[:, None] * dk - Q, axis=1)
+            err[ok] = np.maximum(err[ok], np.maximum(eq[:len(ok)], eq[len(ok):]))
             split = (err > 0.5 * tol) & ~tiny
         if np.any(~split):
             chord = max(chord, float(err[~split].max()))

@@ -1,0 +1,269 @@
+"""The shortcuts of plane_section give exactly what the plain steps give.
+
+Each fast path (faces rejected by their control net's bounds, the densification and
+trim bisection kernels, classification of a run of curve points by one, the pairing of
+curve ends from one distance matrix, the nearest-segment search of the boundary
+distance) is compared, bit for bit, with the plain computation it replaces, written
+out here as the oracle (the loops plane_section ran before)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import geomkit
+from geomkit import samples
+from geomkit.nurbs.trimming import OUTSIDE
+from geomkit.section import joins, plane as plane_mod
+from geomkit.section.trace import _Eval, trace_surface
+from geomkit.cad.occ import HAVE_OCP
+from helpers.paths import DATA
+
+
+def _plate():
+    return samples.load("plate_with_hole")[0]
+
+
+def _chains(s, plane, tol=1e-6):
+    plane = plane_mod.as_plane(plane)
+    P = s.control_points.reshape(-1, 3)
+    scale = float(np.abs(plane[3]) + np.abs(P).max())
+    zsnap = 64 * np.finfo(float).eps * scale
+    chains, _, _ = trace_surface(s, plane, tol, zsnap, max(0.25 * tol, 1e-13 * scale))
+    return _Eval(s, plane), chains, zsnap
+
+
+def _dom(ev):
+    return max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
+
+
+# ------------------------------------------------------------- oracles: the plain loops
+def _densify_rounds(ev, uv, h, zsnap):
+    for _ in range(40):
+        seg = np.linalg.norm(np.diff(uv, axis=0), axis=1)
+        long_ = np.nonzero(seg > h)[0]
+        if not len(long_):
+            break
+        mid, _f = ev.project(0.5 * (uv[long_] + uv[long_ + 1]), seg[long_], 0.25 * zsnap)
+        uv = np.insert(uv, long_ + 1, mid, axis=0)
+    return uv
+
+
+def _boundaries_bisection(s, ev, a_in, b_out, zsnap, iters=60):
+    a, b = a_in.copy(), b_out.copy()
+    band = 1e-14 * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
+    along = s.classify_uv(a, band) == OUTSIDE
+    act = np.arange(len(a))
+    for _ in range(iters):
+        m, _f = ev.project(0.5 * (a[act] + b[act]), np.linalg.norm(b[act] - a[act], axis=1),
+                           0.25 * zsnap)
+        o = np.empty(len(act), bool)
+        wide = along[act]
+        if (~wide).any():
+            o[~wide] = s.classify_uv(m[~wide], band) == OUTSIDE
+        if wide.any():
+            o[wide] = s.classify_uv(m[wide]) == OUTSIDE
+        b[act[o]] = m[o]
+        a[act[~o]] = m[~o]
+        act = act[np.linalg.norm(b[act] - a[act], axis=1) > 1e-13]
+        if not len(act):
+            break
+    return a
+
+
+def _join_ends_plain(curves, tol, bridged, exact):
+    curves = list(curves)
+    while True:
+        opens = [i for i, c in enumerate(curves) if not c["closed"]]
+        if not opens:
+            return curves
+        E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+        D = np.linalg.norm(E[:, None] - E[None], axis=2)
+        np.fill_diagonal(D, np.inf)
+        for k, i in enumerate(opens):
+            D[2 * k, 2 * k + 1] = D[2 * k + 1, 2 * k] = (
+                D[2 * k, 2 * k + 1] + exact if len(curves[i]["X"]) > 2 else np.inf)
+        a, b = divmod(int(np.argmin(D)), len(E))
+        dist = float(np.linalg.norm(E[a] - E[b]))
+        if not (np.isfinite(D[a, b]) and dist <= tol):
+            return curves
+        bridged[0] = max(bridged[0], dist)
+        i, j = opens[a // 2], opens[b // 2]
+        dup = dist <= exact
+        if i == j:
+            c = curves[i]
+            c["closed"] = True
+            if dup:
+                for k in ("uv", "sid", "X"):
+                    c[k] = c[k][:-1]
+            continue
+        A = curves[i] if a % 2 else joins._rev(curves[i])
+        B = joins._rev(curves[j]) if b % 2 else curves[j]
+        merged = {k: (np.concatenate([A[k], B[k][int(dup):]]) if k in ("uv", "sid", "X")
+                      else A[k]) for k in A}
+        merged["chord"] = max(A["chord"], B["chord"])
+        curves = [c for k, c in enumerate(curves) if k not in (i, j)] + [merged]
+
+
+# ------------------------------------------------------------- kernels against loops
+@pytest.mark.parametrize("plane", [[0, 1, 0, -50], [1, -1, 0, 0], [1, 0.3, 0, -60]])
+def test_densify_and_trim_bisection_kernels_give_the_loops_points(plane):
+    s = _plate()
+    ev, chains, zsnap = _chains(s, plane)
+    assert chains
+    rng = np.random.default_rng(3)
+    for c in chains:
+        for h in (1e-3, 1.0 / 64, 0.3):
+            h = h * _dom(ev)
+            fast = plane_mod._densify(ev, c["uv"], h, zsnap)
+            assert np.array_equal(fast, _densify_rounds(ev, c["uv"], h, zsnap))
+        uv = plane_mod._densify(ev, c["uv"], plane_mod.TRIM_STEP * _dom(ev), zsnap)
+        out = s.classify_uv(uv) == OUTSIDE
+        i = np.flatnonzero(out[1:] != out[:-1])
+        assert len(i), "the chain crosses the hole"
+        a_in = np.where(out[i][:, None], uv[i + 1], uv[i])
+        b_out = np.where(out[i][:, None], uv[i], uv[i + 1])
+        # and pairs farther apart (more bisection steps), a few with a_in in the band
+        k = rng.integers(0, len(uv), 8)
+        ins = ~out[k]
+        a_more = np.concatenate([a_in, uv[k[ins]]])
+        b_more = np.concatenate([b_out, np.repeat(b_out[:1], ins.sum(), axis=0)])
+        for a, b in ((a_in, b_out), (a_more, b_more)):
+            fast = plane_mod._boundaries(s, ev, a, b, zsnap)
+            assert np.array_equal(fast, _boundaries_bisection(s, ev, a, b, zsnap))
+
+
+def test_run_classification_gives_every_points_class():
+    s = _plate()
+    ev, chains, zsnap = _chains(s, [1, 0.3, 0, -60])
+    h = plane_mod.TRIM_STEP * _dom(ev)
+    uvs = [plane_mod._densify(ev, c["uv"], h, zsnap) for c in chains]
+    rng = np.random.default_rng(7)
+    (u0, u1), (v0, v1) = s.domain
+    # random walks through the domain, grazing the hole and the outer edge
+    for _ in range(20):
+        steps = rng.normal(size=(400, 2)) * 0.004 * (u1 - u0)
+        uvs.append(np.clip(rng.uniform([u0, v0], [u1, v1]) + np.cumsum(steps, axis=0),
+                           [u0 - 1e-3, v0], [u1, v1]))
+    # points on the trim loops and a hair off them
+    from geomkit.nurbs.trims import loop_samples
+    for loop in s.trim:
+        on = loop_samples(loop, 64)
+        uvs += [on, on + 1e-10, on - 3e-9, on[::-1] * (1 + 1e-9)]
+    for uv in uvs:
+        uv = np.ascontiguousarray(uv)
+        assert np.array_equal(plane_mod._not_outside(s, uv), s.classify_uv(uv) != OUTSIDE)
+
+
+def test_boundary_distance_nearest_segments_as_all_segments():
+    s = _plate()
+    rng = np.random.default_rng(11)
+    b = s.bounds
+    P = rng.uniform(b[0] - 5, b[1] + 5, size=(3000, 3))
+    P[:, 2] = rng.normal(size=3000) * 0.01
+    d = joins.boundary_distance(s, P)
+    A, B, _tree, _h = s._cache[("boundary_polyline", 256)]
+    brute = np.concatenate([joins._segment_distances(P[i:i + 200, None, :], A[None], B[None])
+                            .min(axis=1) for i in range(0, len(P), 200)])
+    np.testing.assert_allclose(d, brute, rtol=0, atol=1e-12 * s.size)
+    near = joins.boundary_distance(s, P, upto=1.0)
+    ok = brute <= 1.0
+    np.testing.assert_allclose(near[ok], brute[ok], rtol=0, atol=1e-12 * s.size)
+    assert (near[~ok] > 1.0).all()
+
+
+# ------------------------------------------------------------- joins against the loop
+def _random_curves(rng, n):
+    """Open and closed curves whose ends meet (exactly, within a hair, within tol),
+    with ties, two-point curves and curves that close on themselves."""
+    hubs = rng.uniform(-1, 1, size=(max(2, n // 2), 3))
+    curves = []
+    for k in range(n):
+        m = int(rng.choice([2, 2, 3, 5, 9]))
+        X = rng.uniform(-1, 1, size=(m, 3))
+        X[0] = hubs[rng.integers(len(hubs))]
+        X[-1] = hubs[rng.integers(len(hubs))]
+        for e in (0, -1):
+            r = rng.random()
+            if r < 0.3:
+                X[e] += rng.normal(size=3) * 1e-9
+            elif r < 0.5:
+                X[e] += rng.normal(size=3) * 1e-4
+        curves.append({"uv": rng.random((m, 2)), "sid": np.full(m, k), "X": X,
+                       "closed": bool(rng.random() < 0.1), "chord": float(rng.random())})
+    return curves
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_join_ends_joins_as_the_loop_over_all_pairs(seed, monkeypatch):
+    if seed % 4 == 3:   # the fallback for stacks of ends: the loop itself
+        monkeypatch.setattr(joins, "HEAP_PAIRS", 0)
+    rng = np.random.default_rng(seed)
+    curves = _random_curves(rng, int(rng.integers(1, 30)))
+    tol, exact = (1e-3, 1e-8) if seed % 2 else (2e-4, 0.0)
+    copy = [{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
+            for c in curves]
+    b1, b2 = [0.0], [0.0]
+    fast = joins.join_ends(curves, tol, b1, exact=exact)
+    plain = _join_ends_plain(copy, tol, b2, exact)
+    assert b1 == b2 and len(fast) == len(plain)
+    for c, d in zip(fast, plain):
+        assert c["closed"] == d["closed"] and c["chord"] == d["chord"]
+        for k in ("uv", "sid", "X"):
+            assert np.array_equal(c[k], d[k])
+
+
+# ------------------------------------------------------------- faces rejected by bounds
+def _same_section(a, b):
+    assert len(a.curves) == len(b.curves) and a.closed == b.closed
+    for x, y in zip(a.curves, b.curves):
+        assert np.array_equal(x, y)
+    for x, y in zip(a.uv, b.uv):
+        assert np.array_equal(x, y)
+    assert np.array_equal(a.points, b.points) and a.coplanar == b.coplanar
+    assert a.max_chord_error == b.max_chord_error and a.max_residual == b.max_residual
+    assert a.max_gap_bridged == b.max_gap_bridged and a.failed == b.failed
+
+
+def _with_and_without_rejection(monkeypatch, surfaces, plane, tol, gap=0.0):
+    sec = geomkit.plane_section(surfaces, plane, tol, gap=gap)
+    with monkeypatch.context() as m:
+        m.setattr(plane_mod, "BOUNDS_MARGIN", np.inf)   # nothing rejected
+        every = geomkit.plane_section(surfaces, plane, tol, gap=gap)
+    _same_section(sec, every)
+    abcd = sec.plane
+    rejected = [k for k, st in sec.stats.items() if st["subpatches"] == 0]
+    for k in rejected:
+        h = surfaces[k].control_points.reshape(-1, 3) @ abcd[:3] + abcd[3]
+        assert h.min() > 0 or h.max() < 0
+        assert every.stats[k]["leaves"] == 0
+    assert all(every.stats[k]["subpatches"] > 0 for k in every.stats)
+    return sec, rejected
+
+
+def test_faces_rejected_by_their_bounds_change_nothing(monkeypatch):
+    case = samples.load_case("sphere_pair")
+    for plane in ([0, 1, 0, 0], [0, 0, 1, -3], [1, 0, 0, -100]):
+        _with_and_without_rejection(monkeypatch, case.surfaces, plane, 1e-5)
+    plate = _plate()
+    sec, rejected = _with_and_without_rejection(monkeypatch, [plate], [0, 1, 0, -500], 1e-6)
+    assert rejected == [0] and len(sec.curves) == 0
+
+
+@pytest.mark.occ
+@pytest.mark.skipif(not HAVE_OCP, reason="reading STEP needs cadquery-ocp")
+def test_faces_rejected_by_their_bounds_change_nothing_on_a_real_part(monkeypatch):
+    """NIST CTC-01 at its mid-plane z (the slowest section in docs/benchmarks.md):
+    most faces miss the plane and are not sectioned; the 11 closed loops are the same
+    bits."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(DATA / "parts" / "nist_ctc_01_ap203.stp")
+    S = case.surfaces
+    B = np.array([s.bounds for s in S])
+    lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    sec, rejected = _with_and_without_rejection(
+        monkeypatch, S, [0, 0, 1, -0.5 * (lo[2] + hi[2])], 1e-4 * size, case.edge_gap)
+    assert (len(sec.curves), sum(sec.closed)) == (11, 11)
+    assert len(rejected) > len(S) // 4
