@@ -218,6 +218,20 @@ class _Edge:
             X = self._cache[k] = curve_eval(self.curve, np.linspace(self.t0, self.t1, n))
         return X[::-1] if self.reverse else X
 
+    def local(self, srf, n: int):
+        """``srf.local`` of :meth:`points` (copies: callers unwrap them in place),
+        computed once per surface and curve (a seam cut and the face's chain read
+        the same samples)."""
+        key = (srf, id(self.curve), n)
+        v = self._cache.get(key)
+        if v is None:
+            self.points(n)
+            v = self._cache[key] = srf.local(self._cache[(id(self.curve), n)])
+        ab, rho = v
+        if self.reverse:
+            return ab[::-1].copy(), rho[::-1]
+        return ab.copy(), rho
+
     def ts(self, s):
         s = np.asarray(s, float)
         if self.reverse:
@@ -298,7 +312,7 @@ def _chain(srf, loop, size):
     s = np.linspace(0.0, 1.0, _NS)
     out, first, prev, prev_pole = [], {}, None, False
     for e in loop:
-        ab, rho = srf.local(e.points(_NS))
+        ab, rho = e.local(srf, _NS)
         pole = rho <= 1e-9 * size
         if pole.all():
             raise Unsupported("an edge lies on the surface's axis")

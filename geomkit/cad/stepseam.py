@@ -49,7 +49,7 @@ def _angles(srf, e, n=65, full=False):
     axis (a pole or an apex), unless ``full``: then the angle there is the
     neighbour's."""
     X = e.points(n)
-    ab, rho = srf.local(X)
+    ab, rho = e.local(srf, n)
     b = ab[:, 1]
     on = rho <= 1e-9 * max(1.0, float(np.ptp(X, axis=0).max()))
     if on.any() and not full:  # through the pole or apex: no turn is defined
