@@ -82,7 +82,9 @@ class Section:
         do not meet exactly.
     approx_error : float, the largest ``Surface.approx_error`` of the surfaces cut: the
         section points lie on the NURBS; the surfaces they stand for are within this.
-    stats : dict, counts (sub-patches, leaves, crossings) per surface.
+    stats : dict, counts (sub-patches, leaves, crossings) per surface; 0 sub-patches:
+        the surface's control net misses the plane (not sectioned, see
+        :data:`BOUNDS_MARGIN`).
     failed : dict, surface index -> why it could not be sectioned (left out, with a
         :class:`~geomkit.errors.FaceFailedWarning`; the other surfaces are unaffected).
     """
