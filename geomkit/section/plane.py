@@ -462,18 +462,41 @@ def _not_outside(s, uv):
     return out
 
 
+TRIM_BOX_SPLITS = 3
+""":func:`_trim_boxes` halves each trim segment this many times (8 boxes each)."""
+
+
 def _trim_boxes(s):
-    """(S, 2) lower and upper corners of the boxes of the control points of
-    ``s.trim_segments()`` (each holds its segment: convex hull, weights > 0); kept."""
+    """(S, 2) lower and upper corners of boxes whose union holds the trim curves:
+    those of the control points of the pieces of ``s.trim_segments()`` halved
+    :data:`TRIM_BOX_SPLITS` times (de Casteljau; each piece lies in its control
+    points' box: convex hull, weights > 0); kept on the surface."""
     boxes = s._cache.get("section_trim_boxes")
     if boxes is None:
         seg, deg, _lp, _n = s.trim_segments()
-        X = seg[..., :2] / seg[..., 2:3]
-        pad = np.arange(seg.shape[1])[None, :] > deg[:, None]
-        lo = np.where(pad[..., None], np.inf, X).min(axis=1)
-        hi = np.where(pad[..., None], -np.inf, X).max(axis=1)
-        boxes = s._cache["section_trim_boxes"] = (lo, hi)
+        lo, hi = [], []
+        for Q, d in zip(seg, deg):
+            pieces = [Q[:d + 1]]
+            for _ in range(TRIM_BOX_SPLITS):
+                pieces = [h for q in pieces for h in _halves(q)]
+            for q in pieces:
+                X = q[:, :2] / q[:, 2:3]
+                lo.append(X.min(axis=0))
+                hi.append(X.max(axis=0))
+        boxes = s._cache["section_trim_boxes"] = (np.reshape(lo, (-1, 2)),
+                                                  np.reshape(hi, (-1, 2)))
     return boxes
+
+
+def _halves(Q):
+    """The two halves of a homogeneous Bézier control polygon ``Q`` (d+1, 3) split at
+    its middle (de Casteljau)."""
+    left, right, P = [Q[0]], [Q[-1]], Q
+    for _ in range(len(Q) - 1):
+        P = 0.5 * (P[:-1] + P[1:])
+        left.append(P[0])
+        right.append(P[-1])
+    return np.array(left), np.array(right[::-1])
 
 
 def _finite(uv):
