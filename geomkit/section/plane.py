@@ -34,7 +34,8 @@ import numpy as np
 
 from geomkit.section.export import fit_curves, plot, to_csv, to_dxf, to_json
 from geomkit.section.joins import (boundary_distance, drop_shared_edges,
-                                   join_across_edges, join_ends, split_at_poles)
+                                   join_across_edges, join_ends, merge_point_curves,
+                                   split_at_poles)
 from geomkit.section.trace import _Eval, trace_surface
 from geomkit.tolerances import TRIM_TOL
 from geomkit.validate import as_float_array
@@ -250,6 +251,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
     bridged = [0.0]
     curves = split_at_poles(curves, surfs)
     curves = drop_shared_edges(curves, gap + 2 * tol)
+    curves = merge_point_curves(curves, tol)
     curves = join_ends(curves, max(tol, gap), bridged, exact=tol)
     if gap > 0:
         curves = join_across_edges(curves, surfs, gap, bridged)
