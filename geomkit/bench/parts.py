@@ -3,10 +3,12 @@
 For each STEP part (default: the real parts in the repository's ``tests/data/parts``,
 see its README for their sources), beside OCC in the same process:
 
-* **read** -- :func:`geomkit.cad.step.read_step` (geomkit's own STEP reader: parse,
-  convert every face with its trims from the 3-D edges, edge gaps) against
-  ``STEPControl_Reader.ReadFile`` + ``TransferRoots`` alone.  No error column: the
-  faces are checked against OCC face by face in ``tests/cad/test_real_parts.py``.
+* **read** -- :func:`geomkit.cad.step.read_step` with ``cache=False`` (geomkit's own
+  STEP reader: parse, convert every face with its trims from the 3-D edges, edge
+  gaps) against ``STEPControl_Reader.ReadFile`` + ``TransferRoots`` alone.  No error
+  column: the faces are checked against OCC face by face in
+  ``tests/cad/test_real_parts.py``.  **read again**: the same file read a second time,
+  from the read cache (:mod:`geomkit.cad.readcache`), against the same OCC read.
 * **tessellate** at 1e-3 of the part's size -- :func:`geomkit.tessellate` against
   ``BRepMesh_IncrementalMesh`` at the same linear deflection.  Error (both): the
   largest distance to the exact model of triangle centroids and edge midpoints of up to
@@ -168,9 +170,11 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
             continue
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            read_step(path)                                   # warm-up (OCC, JIT)
-            tg, res, k = median_time(lambda: read_step(path), repeat)
+            read_step(path, cache=False)                      # warm-up (OCC, JIT)
+            tg, res, k = median_time(lambda: read_step(path, cache=False), repeat)
             to, shape, _ = median_time(lambda: _occ_read(path), k)
+            read_step(path)                                   # into the read cache
+            tc, _, kc = median_time(lambda: read_step(path), repeat)
         S = res.surfaces
         gap = res.edge_gap or 0.0
         B = np.array([s.bounds for s in S])
@@ -180,6 +184,10 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
                              "OCC STEPControl_Reader", to, None, repeats=k,
                              note="OCC: read + transfer; geomkit: its own reader, every "
                                   "face converted"))
+        rows.append(make_row("parts", name, "read again faces", len(S), tc, None,
+                             "OCC STEPControl_Reader", to, None, repeats=kc,
+                             note="geomkit: the same file again, from the read cache "
+                                  "(this process's copy: unpickled)"))
         # tessellate at the same linear deflection
         tol = 1e-3 * size
         tm, mesh, k = median_time(lambda: geomkit.tessellate(S, tol), repeat)
