@@ -165,6 +165,15 @@ def merge_point_curves(curves, exact):
     return keep
 
 
+def _end_distances(curves, opens):
+    """``(E, D)``: the ends of the curves ``opens`` (row 2 k the start, 2 k + 1 the end
+    of ``curves[opens[k]]``) and their distances (inf on the diagonal)."""
+    E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
+    D = np.linalg.norm(E[:, None] - E[None], axis=2)
+    np.fill_diagonal(D, np.inf)
+    return E, D
+
+
 def join_ends(curves, tol, bridged=None, exact=0.0):
     """Join open curves whose ends coincide within ``tol`` (seams, shared edges), the
     nearest pair of ends first (so a sliver face's short piece is joined between its
@@ -186,9 +195,7 @@ def join_ends(curves, tol, bridged=None, exact=0.0):
     opens = [i for i, c in enumerate(curves) if not c["closed"]]
     if not opens:
         return curves
-    E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
-    D = np.linalg.norm(E[:, None] - E[None], axis=2)
-    np.fill_diagonal(D, np.inf)
+    E, D = _end_distances(curves, opens)
     # end 2 k / 2 k + 1: start / end of opens[k]; a curve is known by its dict (a
     # joined curve is a new one); an end joined or closed has no owner any more
     owner = [curves[i] for i in opens for _ in (0, 1)]
@@ -285,9 +292,7 @@ def _join_ends_each(curves, tol, bridged, exact):
         opens = [i for i, c in enumerate(curves) if not c["closed"]]
         if not opens:
             return curves
-        E = np.array([[curves[i]["X"][0], curves[i]["X"][-1]] for i in opens]).reshape(-1, 3)
-        D = np.linalg.norm(E[:, None] - E[None], axis=2)
-        np.fill_diagonal(D, np.inf)
+        E, D = _end_distances(curves, opens)
         # a curve closes on itself only with > 2 points, and only where no other
         # curve's end is as near (to within ``exact``: duplicates join first)
         for k, i in enumerate(opens):
