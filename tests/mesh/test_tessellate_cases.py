@@ -309,7 +309,7 @@ def test_measured_triangles_are_found_only_when_identical():
     same six UV coordinates (bit for bit), NaN otherwise."""
     import importlib
 
-    _Measured = importlib.import_module("geomkit.mesh.tessellate")._Measured
+    _Measured = importlib.import_module("geomkit.mesh.cells")._Measured
     rng = np.random.default_rng(0)
     tri = rng.random((500, 3, 2))
     cache = _Measured()

@@ -26,6 +26,8 @@ from geomkit.mesh.tessellate import tessellate
 from helpers.paths import DATA
 
 T = importlib.import_module("geomkit.mesh.tessellate")  # the module, not the function
+C = importlib.import_module("geomkit.mesh.cells")
+W = importlib.import_module("geomkit.mesh.weld")
 REF = DATA / "tess_fastpath_reference.npz"
 FIELDS = ("faces", "face_surface", "vertex_surface", "vertices", "uv", "face_uv",
           "face_deviation")
@@ -57,11 +59,11 @@ def test_meshes_match_the_reference_before_the_fast_paths(key):
 
 def _grid(name, tol):
     s = samples.load(name)[0]
-    ub = T._breakpoints(s.knots_u, s.degree_u)
-    vb = T._breakpoints(s.knots_v, s.degree_v)
+    ub = C.breakpoints(s.knots_u, s.degree_u)
+    vb = C.breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
-    g = qt.uniform_grid(s, ub, vb, m, T.SAMPLES_PER_EDGE, tol, T.CELL_TARGET * tol,
-                        T.EXACT_ABOVE * tol, T.GRID_CELLS)
+    g = qt.uniform_grid(s, ub, vb, m, T.SAMPLES_PER_EDGE, tol, C.CELL_TARGET * tol,
+                        C.EXACT_ABOVE * tol, T.GRID_CELLS)
     assert g is not None
     return s, g
 
@@ -73,8 +75,8 @@ def _grid(name, tol):
 def test_grid_weld_matches_the_general_weld(name, tol):
     """Poles (sphere: faces collapse), seams (sphere, torus) and open surfaces."""
     s, (tri_uv, dev, cells, (u, v, diag)) = _grid(name, tol)
-    got = T._weld_grid(s, u, v, diag, s.size)
-    want = T._weld(s, tri_uv, s.size, near_uv=False)
+    got = W.weld_grid(s, u, v, diag, s.size)
+    want = W.weld(s, tri_uv, s.size, near_uv=False)
     assert got is not None
     for a, b in zip(got, want):
         assert a.dtype == b.dtype and np.array_equal(a, b)
@@ -102,7 +104,7 @@ def test_boundary_pairs_match_brute_force():
         bnd = np.sort(rng.choice(n + 5, size=n, replace=False))
         Q = np.zeros((n + 5, 3))
         Q[bnd] = P
-        got = {tuple(sorted(p)) for p in T._boundary_pairs(Q, bnd, size).tolist()}
+        got = {tuple(sorted(p)) for p in W.boundary_pairs(Q, bnd, size).tolist()}
         d = np.linalg.norm(P[:, None] - P[None], axis=2)
         want = {(int(bnd[a]), int(bnd[b])) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
         assert got == want, trial
@@ -123,7 +125,7 @@ def test_near_uv_pairs_match_brute_force():
             i = rng.choice(n, size=k, replace=False)
             j = rng.choice(n, size=k, replace=False)
             Q[j] = Q[i] + rng.normal(size=(k, 2)) * r * rng.choice([0.0, 0.3, 3.0], size=(k, 1))
-        got = {tuple(sorted(p)) for p in T._near_pairs(Q, r).tolist()}
+        got = {tuple(sorted(p)) for p in W.near_pairs(Q, r).tolist()}
         d = np.linalg.norm(Q[:, None] - Q[None], axis=2)
         want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
         assert got == want, trial
@@ -134,7 +136,7 @@ def test_breakpoints_and_span_samples_match_numpy():
     for name in samples.names():
         for s in samples.load(name):
             for U, p in ((s.knots_u, s.degree_u), (s.knots_v, s.degree_v)):
-                assert np.array_equal(T._breakpoints(U, p), np.unique(U[p: len(U) - p]))
+                assert np.array_equal(C.breakpoints(U, p), np.unique(U[p: len(U) - p]))
     for n in range(2, 30):
         t = np.unique(np.cumsum(rng.random(n) * rng.choice([1e-7, 1.0, 1e4], n)) - 3.0)
         want = np.concatenate([np.linspace(a, b, 5) for a, b in zip(t[:-1], t[1:])])
@@ -148,7 +150,7 @@ def test_boundary_pairs_far_from_the_origin():
     P = 1e6 + rng.random((30, 3))
     r = tols.WELD_REL * 1.0
     P[20:] = P[:10] + rng.normal(size=(10, 3)) * (0.5 * r / np.sqrt(3) / 3)
-    got = {tuple(sorted(p)) for p in T._boundary_pairs(P, np.arange(30), 1.0).tolist()}
+    got = {tuple(sorted(p)) for p in W.boundary_pairs(P, np.arange(30), 1.0).tolist()}
     d = np.linalg.norm(P[:, None] - P[None], axis=2)
     want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
     assert got == want and len(want) >= 5

@@ -1,0 +1,148 @@
+"""Vertices of a face's triangles: UV corners merged into shared vertices on the surface.
+
+* :func:`points` -- ``S(uv)`` for parameters the tessellator made (no validation).
+* :func:`weld` -- triangles given by their UV corners become vertices and faces: equal
+  UVs merged (and, optionally, UVs within rounding of each other: trim crossings
+  computed in two cells), then vertices on the domain boundary that coincide in 3-D
+  (poles, closed seams); the triangles that collapse are dropped.
+* :func:`weld_grid` -- the same for a tensor grid of cells, from the grid's indices.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geomkit.tolerances import WELD_REL
+from geomkit._kernels.surface import surface_points_range, surface_points
+from geomkit.nurbs.surface import Surface
+
+SERIAL_POINTS = 2048
+"""Surface points evaluated in the calling thread up to this count (a thread-pool
+dispatch costs ~0.1 ms on an idle machine, milliseconds on a busy one; 2,048 points
+cost ~0.2 ms)."""
+
+
+def points(s: Surface, uv: np.ndarray) -> np.ndarray:
+    """S(uv) for (n, 2) parameters already in the domain (no validation: the callers
+    make them; :func:`geomkit.nurbs.evaluation.evaluate` checks user input)."""
+    uv = np.ascontiguousarray(uv, dtype=np.float64)
+    out = np.empty((uv.shape[0], 3))
+    if uv.shape[0] <= SERIAL_POINTS:  # in this thread: a dispatch costs more
+        surface_points_range(0, uv.shape[0], s.homogeneous, s.degree_u, s.degree_v,
+                              s.knots_u, s.knots_v, uv, out)
+    else:
+        surface_points(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, uv, out)
+    return out
+
+
+
+def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
+    """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
+    UVs within rounding of each other: trim crossings computed in two cells), then
+    coincident boundary vertices in 3-D (poles, seams); drops the triangles that
+    collapse."""
+    flat = tri_uv.reshape(-1, 2)
+    (u0, u1), (v0, v1) = s.domain
+    # crossing points computed in two neighbouring cells may differ by rounding
+    dom = max(u1 - u0, v1 - v0)
+    z = np.ascontiguousarray(flat).view(np.complex128).ravel()  # (u, v) as u + iv
+    uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
+    uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
+    inv = inv.ravel()
+    pairs = [near_pairs(uniq, 1e-13 * dom)] if near_uv else []
+    P = points(s, uniq)
+    eps = 1e-12 * dom
+    bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
+                     | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
+    if len(bnd):
+        pairs.append(boundary_pairs(P, bnd, size))
+    pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
+    return merge(P, uniq, inv, pairs)
+
+
+def near_pairs(Q, r):
+    """Pairs of the rows of ``Q`` (n, 2) closer than ``r``; the KD-tree only when the
+    points' projections on an oblique unit direction, sorted, have a gap below ``2 r``
+    plus rounding (a pair within ``r`` projects within ``r``: see
+    :func:`boundary_pairs`)."""
+    if len(Q) < 2:
+        return np.empty((0, 2), np.int64)
+    gaps = np.diff(np.sort(Q @ _NEAR_DIRECTION))
+    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+        return np.empty((0, 2), np.int64)
+    from scipy.spatial import cKDTree
+
+    return cKDTree(Q).query_pairs(r, output_type="ndarray")
+
+
+_NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes
+
+
+def merge(P, uniq, inv, pairs):
+    """Vertices ``P`` / ``uniq`` merged along ``pairs`` (k, 2) (each component keeps
+    its first member), faces ``inv`` (3m,) renumbered and the mask of faces with three
+    distinct corners."""
+    n = len(uniq)
+    if not len(pairs):  # nothing to merge
+        F = inv.reshape(-1, 3)
+        good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+        return P, F, uniq, good
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    # representative of each component: its first member
+    first = np.full(label.max() + 1, n, dtype=np.int64)
+    np.minimum.at(first, label, np.arange(n))
+    F = label.ravel()[inv].reshape(-1, 3)
+    good = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+    return P[first], F, uniq[first], good
+
+
+_WELD_DIRECTION = np.array([0.35, 0.48, 0.8])  # |w| < 1, oblique to the axes and planes
+
+
+def boundary_pairs(P, bnd, size):
+    """Pairs of the vertices ``bnd`` (domain-boundary indices) closer than
+    ``WELD_REL * size`` in 3-D."""
+    if len(bnd) < 2:
+        return np.empty((0, 2), np.int64)
+    r = WELD_REL * size
+    Q = P[bnd]
+    # no pair when the points' projections on a unit-or-shorter direction, sorted, are
+    # all further apart than r plus the projections' rounding (a pair within r projects
+    # within r; a dot product of 3 terms errs by at most ~5 ulp of max |Q| each, so
+    # 1e-14 max |Q| and a factor 2 on r are ample): an open surface skips the tree
+    gaps = np.diff(np.sort(Q @ _WELD_DIRECTION))
+    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+        return np.empty((0, 2), np.int64)
+    from scipy.spatial import cKDTree
+
+    return bnd[cKDTree(Q).query_pairs(r, output_type="ndarray")]
+
+
+def weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: float):
+    """:func:`weld` (``near_uv=False``) of the triangles of a tensor grid
+    (:func:`geomkit.mesh.quadtree.uniform_grid`: lines ``u`` x ``v``, two triangles per cell
+    by ``diag``), from the grid's indices: its vertices, sorted by u then v, are the
+    sorted unique corners.  None when the lines are not strictly increasing."""
+    if not (np.all(u[1:] > u[:-1]) and np.all(v[1:] > v[:-1])):
+        return None
+    nu1, nv1 = len(u), len(v)
+    UV = np.empty((nu1, nv1, 2))
+    UV[..., 0] = u[:, None]
+    UV[..., 1] = v
+    UV = UV.reshape(-1, 2)
+    P = points(s, UV)
+    (u0, u1), (v0, v1) = s.domain
+    eps = 1e-12 * max(u1 - u0, v1 - v0)
+    on = ((u <= u0 + eps) | (u >= u1 - eps))[:, None] | ((v <= v0 + eps) | (v >= v1 - eps))
+    base = (np.arange(nu1 - 1)[:, None] * nv1 + np.arange(nv1 - 1)).ravel()
+    off = np.array([[0, nv1, nv1 + 1, 0, nv1 + 1, 1], [0, nv1, 1, nv1, nv1 + 1, 1]])
+    inv = (base[:, None] + off[diag]).ravel()
+    pairs = boundary_pairs(P, np.nonzero(on.ravel())[0], size)
+    if not len(pairs):  # distinct grid corners: every face kept
+        return P, inv.reshape(-1, 3), UV, np.ones(len(inv) // 3, dtype=bool)
+    return merge(P, UV, inv, pairs)
+
