@@ -315,41 +315,49 @@ def _edge_roots_loop(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out, scratch):
     Pw, U, V, plane, a, b, fa, fb, out, (Nu, Nv, left, right, tmp, X) = borrow_all((
         Pw, U, V, plane, a, b, fa, fb, out, scratch))
     for i in range(a.shape[0]):
-        lo = 0.0
-        hi = 1.0
-        flo = fa[i]
-        fhi = fb[i]
-        side = 0
-        t = 0.5
-        for it in range(200):
-            if hi - lo <= ttol:
-                break
-            if it % 3 == 2:
+        out[i] = edge_root(Pw, p, q, U, V, plane, a[i, 0], a[i, 1], b[i, 0], b[i, 1], fa[i],
+                           fb[i], ttol, Nu, Nv, left, right, tmp, X)
+
+
+@jit
+def edge_root(Pw, p, q, U, V, plane, au, av, bu, bv, fa, fb, ttol, Nu, Nv, left, right,
+              tmp, X):
+    """The root parameter t of :func:`edge_roots` on one segment ``(au, av) -> (bu, bv)``
+    (``fa * fb < 0``); scratch as for :func:`surface_point`."""
+    lo = 0.0
+    hi = 1.0
+    flo = fa
+    fhi = fb
+    side = 0
+    t = 0.5
+    for it in range(200):
+        if hi - lo <= ttol:
+            break
+        if it % 3 == 2:
+            t = 0.5 * (lo + hi)
+        else:
+            t = lo + (hi - lo) * flo / (flo - fhi)
+            if not (t > lo and t < hi):
                 t = 0.5 * (lo + hi)
-            else:
-                t = lo + (hi - lo) * flo / (flo - fhi)
-                if not (t > lo and t < hi):
-                    t = 0.5 * (lo + hi)
-            u = a[i, 0] + t * (b[i, 0] - a[i, 0])
-            v = a[i, 1] + t * (b[i, 1] - a[i, 1])
-            ft = _f_at(Pw, p, q, U, V, plane, u, v, Nu, Nv, left, right, tmp, X)
-            if ft == 0.0:
-                lo = t
-                hi = t
-                break
-            if (ft < 0.0) == (flo < 0.0):
-                lo = t
-                flo = ft
-                if side == -1:
-                    fhi *= 0.5
-                side = -1
-            else:
-                hi = t
-                fhi = ft
-                if side == 1:
-                    flo *= 0.5
-                side = 1
-        out[i] = 0.5 * (lo + hi)
+        ft = _f_at(Pw, p, q, U, V, plane, au + t * (bu - au), av + t * (bv - av), Nu, Nv,
+                   left, right, tmp, X)
+        if ft == 0.0:
+            lo = t
+            hi = t
+            break
+        if (ft < 0.0) == (flo < 0.0):
+            lo = t
+            flo = ft
+            if side == -1:
+                fhi *= 0.5
+            side = -1
+        else:
+            hi = t
+            fhi = ft
+            if side == 1:
+                flo *= 0.5
+            side = 1
+    return 0.5 * (lo + hi)
 
 
 @jit

@@ -12,9 +12,12 @@ from scipy.spatial import cKDTree
 
 from geomkit.tolerances import EDGE_ROOT_TOL
 from geomkit._kernels import section as K
+from geomkit._kernels.section_refine import refine_chains
 from geomkit._kernels.surface import surface_points
 
-MAX_ROUNDS = 60       # chord-refinement rounds (each halves the open segments)
+MAX_ROUNDS = 60
+"""Chord refinement halves a chain segment at most this many times
+(:func:`geomkit._kernels.section_refine.refine_chains`)."""
 
 
 class _Eval:
@@ -204,12 +207,20 @@ def trace_surface(surface, plane, tol, zsnap, min_diam, max_depth=80):
     chains = _chains(edges)
     stats["crossings"] = int(len(roots))
     out = []
-    for nodes, closed in chains:
-        segleaf = np.array([edges[(min(a, b), max(a, b))] for a, b in zip(nodes[:-1], nodes[1:])])
-        uv, chord = _refine(ev, leaves, node_uv[nodes], segleaf, tol, zsnap)
-        if closed:
-            uv = uv[:-1]
-        out.append({"uv": uv, "closed": bool(closed), "chord": chord})
+    if chains:
+        # every chain of the surface refined in one kernel call
+        starts = np.cumsum([0] + [len(nodes) for nodes, _ in chains])
+        allnodes = np.concatenate([nodes for nodes, _ in chains])
+        segleaf = np.zeros(len(allnodes), np.int64)
+        for (nodes, _), s0 in zip(chains, starts):
+            segleaf[s0:s0 + len(nodes) - 1] = [edges[(min(a, b), max(a, b))]
+                                               for a, b in zip(nodes[:-1], nodes[1:])]
+        ruv, rstarts, chord = refine_chains(
+            *ev.args, leaves, np.ascontiguousarray(node_uv[allnodes]), segleaf, starts,
+            float(tol), float(zsnap), EDGE_ROOT_TOL, ev.box, MAX_ROUNDS)
+        for k, (_nodes, closed) in enumerate(chains):
+            uv = ruv[rstarts[k]:rstarts[k + 1] - (1 if closed else 0)]
+            out.append({"uv": uv, "closed": bool(closed), "chord": float(chord[k])})
     return out, contacts, stats
 
 
@@ -252,97 +263,3 @@ def _chains(edges):
                 path = walk(n, m)
                 out.append((path, path[0] == path[-1]))
     return out
-
-
-def _midpoints(ev, leaves, a, b, leaf, zsnap):
-    """Exact curve points between consecutive exact points ``a``, ``b`` (n, 2).
-
-    In a leaf monotone in u the curve is a graph over v: the midpoint is the root on
-    the u-line through the middle v (bracketed by the leaf's sides); likewise for v.
-    Elsewhere (unresolved leaves, no bracket) Newton along the gradient.
-    """
-    m = 0.5 * (a + b)
-    out = m.copy()
-    state = leaves[leaf, 4]
-    done = np.zeros(len(m), bool)
-    sel = np.nonzero((state == K.MONO_U) | (state == K.MONO_V))[0]
-    if len(sel):
-        c = (state[sel] == K.MONO_V).astype(np.intp)   # MONO_U: along u; MONO_V: v
-        rows = np.arange(len(sel))
-        lo = m[sel]
-        hi = lo.copy()
-        lo[rows, c] = leaves[leaf[sel], 2 * c]
-        hi[rows, c] = leaves[leaf[sel], 2 * c + 1]
-        fl = ev.f(np.concatenate([lo, hi]))
-        fl[np.abs(fl) <= zsnap] = 0.0
-        flo, fhi = fl[:len(sel)], fl[len(sel):]
-        br = flo * fhi < 0
-        if np.any(br):
-            i = sel[br]
-            out[i] = ev.roots(lo[br], hi[br], flo[br], fhi[br])
-            done[i] = True
-    rest = np.nonzero(~done)[0]
-    if len(rest):
-        step = np.linalg.norm(b[rest] - a[rest], axis=1)
-        out[rest], _ = ev.project(m[rest], step, 0.25 * zsnap)
-    return out
-
-
-def _refine(ev, leaves, uv, segleaf, tol, zsnap):
-    """Insert exact midpoints until every segment's chord deviation is <= tol.
-
-    Returns the refined (k, 2) UV polyline and the largest chord deviation measured
-    at the accepted segments (distance of the exact midpoint from the 3-D chord).
-    """
-    X = ev.points(uv)
-    active = np.ones(len(uv) - 1, bool)
-    chord = 0.0
-    for _ in range(MAX_ROUNDS):
-        idx = np.nonzero(active)[0]
-        if not len(idx):
-            break
-        a, b = uv[idx], uv[idx + 1]
-        mid = _midpoints(ev, leaves, a, b, segleaf[idx], zsnap)
-        M = ev.points(mid)
-        A, B = X[idx], X[idx + 1]
-        d = B - A
-        ll = np.einsum("ij,ij->i", d, d)
-        t = np.clip(np.einsum("ij,ij->i", M - A, d) / np.where(ll > 0, ll, 1.0), 0, 1)
-        err = np.linalg.norm(A + t[:, None] * d - M, axis=1)
-        tiny = np.linalg.norm(b - a, axis=1) <= 1e-13
-        # safety factor 2: the midpoint deviation estimates the arc's largest one
-        # (exact for a circular arc; near a singular crossing the corner can be missed)
-        split = (err > 0.5 * tol) & ~tiny
-        # an S-shaped arc (inflection) has its midpoint on the chord: check the quarter
-        # points of the segments about to be accepted too
-        ok = np.nonzero(~split & ~tiny)[0]
-        if len(ok):   # both quarter points of each segment in one batch
-            lq = np.tile(segleaf[idx[ok]], 2)
-            Q = ev.points(_midpoints(ev, leaves, np.concatenate([a[ok], mid[ok]]),
-                                     np.concatenate([mid[ok], b[ok]]), lq, zsnap))
-            Ak, dk = np.tile(A[ok], (2, 1)), np.tile(d[ok], (2, 1))
-            llk = np.tile(ll[ok], 2)
-            tq = np.clip(np.einsum("ij,ij->i", Q - Ak, dk) / np.where(llk > 0, llk, 1.0), 0, 1)
-            eq = np.linalg.norm(Ak + tq[:, None] * dk - Q, axis=1)
-            err[ok] = np.maximum(err[ok], np.maximum(eq[:len(ok)], eq[len(ok):]))
-            split = (err > 0.5 * tol) & ~tiny
-        if np.any(~split):
-            chord = max(chord, float(err[~split].max()))
-        if not np.any(split):
-            break
-        # insert the midpoints of the split segments
-        s_idx = idx[split]
-        n = len(uv)
-        new_uv = np.insert(uv, s_idx + 1, mid[split], axis=0)
-        new_X = np.insert(X, s_idx + 1, M[split], axis=0)
-        new_leaf = np.insert(segleaf, s_idx + 1, segleaf[s_idx])
-        new_active = np.zeros(n - 1 + len(s_idx), bool)
-        pos = s_idx + np.arange(len(s_idx))   # position of the left half after insertion
-        new_active[pos] = True
-        new_active[pos + 1] = True
-        uv, X, segleaf, active = new_uv, new_X, new_leaf, new_active
-    else:
-        idx = np.nonzero(active)[0]
-        if len(idx):  # out of rounds: report what was reached
-            chord = max(chord, np.inf)
-    return uv, chord
