@@ -56,6 +56,28 @@ def as_points(value, dim, field) -> tuple[np.ndarray, tuple]:
     return np.ascontiguousarray(arr.reshape(-1, dim)), lead
 
 
+_SHORT_KNOTS = 64
+"""Knot vectors up to this length are first checked in plain Python (a reader builds
+thousands of short ones; numpy's per-call cost is then most of the check)."""
+
+
+def _plain_knots(U: list, degree: int, count: int) -> bool:
+    """Whether the (finite, right-length) knots ``U`` pass every check of
+    :func:`check_knots`; False sends them to its checks, which name the fault."""
+    lo, hi = U[degree], U[count]
+    if not hi > lo:
+        return False
+    run, prev = 0, None
+    for j, x in enumerate(U):
+        if prev is not None and x < prev:
+            return False
+        run = run + 1 if x == prev else 1
+        prev = x
+        if run > degree + 1 or (run > degree and lo < x < hi):
+            return False
+    return True
+
+
 def check_knots(knots, degree, count, field, error) -> np.ndarray:
     """Validate a full knot vector for ``count`` control points of ``degree``.
 
@@ -70,6 +92,8 @@ def check_knots(knots, degree, count, field, error) -> np.ndarray:
             f"({count} control points, degree {degree})",
             field,
         )
+    if need <= _SHORT_KNOTS and _plain_knots(U.tolist(), degree, count):
+        return U
     dec = np.nonzero(np.diff(U) < 0)[0]
     if dec.size:
         i = int(dec[0])

@@ -202,3 +202,40 @@ def _curve_points_range(i0, i1, Pw, p, U, t, d, out):
 def curve_points(Pw, p, U, t, d, out):
     """Batch curve points and derivatives: ``out`` (m, d+1, k), parallel over ``t``."""
     prun(_curve_points_range, t.shape[0], CURVE_CHUNK, Pw, p, U, t, d, out)
+
+
+@jit
+def curve_nearest_param(Pw, p, U, X, m):
+    """The parameter of the point of a 3-D NURBS curve nearest to ``X`` (3,) from a
+    start point: the nearest of ``m`` equally spaced parameters, then Newton on
+    ``(C - X) . C'`` (clamped to the domain, at most 30 steps, stopped when a step
+    is below 1e-15 of the domain or the second derivative term is not positive)."""
+    n = Pw.shape[0]
+    lo, hi = U[p], U[n]
+    d = 2 if p >= 2 else p
+    dN = np.empty((d + 1, p + 1))
+    D = np.empty((d + 1, 3))
+    best, t0 = np.inf, lo
+    for i in range(m):
+        t = lo + (hi - lo) * (i / (m - 1))
+        curve_derivs(Pw, p, U, t, 0, dN, D)
+        dd = (D[0, 0] - X[0]) ** 2 + (D[0, 1] - X[1]) ** 2 + (D[0, 2] - X[2]) ** 2
+        if dd < best:
+            best, t0 = dd, t
+    for _ in range(30):
+        curve_derivs(Pw, p, U, t0, d, dN, D)
+        f = 0.0
+        fp = 0.0
+        for c in range(3):
+            f += (D[0, c] - X[c]) * D[1, c]
+            fp += D[1, c] * D[1, c]
+            if d >= 2:
+                fp += (D[0, c] - X[c]) * D[2, c]
+        if not fp > 0:
+            break
+        t1 = min(hi, max(lo, t0 - f / fp))
+        if abs(t1 - t0) <= 1e-15 * max(1.0, hi - lo):
+            t0 = t1
+            break
+        t0 = t1
+    return t0

@@ -99,6 +99,34 @@ def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
     return np.clip(theta0 + (k + r) * d, theta0, theta1)
 
 
+class AngleMap:
+    """:func:`angle_to_param` of the arc ``[theta0, theta1]`` as a callable that names
+    its arc (the readers' edge fits hand it to a kernel)."""
+
+    __slots__ = ("theta0", "theta1")
+
+    def __init__(self, theta0: float, theta1: float):
+        self.theta0, self.theta1 = float(theta0), float(theta1)
+
+    def __call__(self, theta) -> np.ndarray:
+        th = np.asarray(theta, float)
+        if th.ndim == 1 and th.size <= 4:  # a segment's ends: the formula per value
+            # (numpy's per-call cost is most of it on so few)
+            t0, t1 = self.theta0, self.theta1
+            n, d = _spans(t0, t1)
+            q = math.tan(d / 4)
+            out = np.empty(th.size)
+            for i, x in enumerate(th.tolist()):
+                if not math.isfinite(x):
+                    return angle_to_param(th, t0, t1)
+                k = min(max(math.floor((x - t0) / d), 0), n - 1)
+                mid = t0 + (k + 0.5) * d
+                r = 0.5 * (math.tan(0.5 * (x - mid)) / q + 1.0)
+                out[i] = min(max(t0 + (k + r) * d, t0), t1)
+            return out
+        return angle_to_param(th, self.theta0, self.theta1)
+
+
 def turn_into(x, a0: float, a1: float) -> np.ndarray:
     """Angles outside ``[a0, a1]`` moved by whole turns into it where they fit (files
     may write ``[-pi/2, 0]`` for ``[3pi/2, 2pi]``)."""

@@ -14,8 +14,9 @@ parametrisation conventions differ between writers: OCC writes angles in degrees
 * On a plane the map is affine, so the pcurve is the edge's own NURBS with mapped
   control points (exact).  On the others an edge that is an iso-line (a circle or a
   generator line: all of OCC's primitives and fillets) is a straight UV segment,
-  carried exactly through the angle reparametrisation; any other edge is a cubic
-  interpolant within ``PCURVE_TOL`` (:func:`geomkit.cad.uvmap.map_pcurve`).
+  carried exactly through the angle reparametrisation; any other edge is a
+  piecewise-quintic interpolant within ``PCURVE_TOL`` (:func:`geomkit.cad.uvmap.map_edge`:
+  one compiled call per edge).
 * Consecutive pieces that do not meet in UV (a pole, a degenerate edge) are joined by
   a straight UV segment, which maps to one point there.
 * The surfaces are revolutions (:func:`geomkit.cad.analytic.revolve`) of a line or an
@@ -30,13 +31,14 @@ import numpy as np
 
 from geomkit.tolerances import ISO_TOL
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.cad.analytic import (angle_to_param, arc_curve, cross3, curve_eval, line_curve,
+from geomkit.cad.analytic import (AngleMap, arc_curve, cross3, curve_eval, line_curve,
                                   plane_patch, revolve, unwrap)
 from geomkit.cad.iges.entities import curve3d
 from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
-from geomkit.cad.uvmap import map_pcurve
+from geomkit.cad.uvmap import map_edge, map_pcurve
+from geomkit._kernels.pcurve_map import CONE, CYLINDER, SPHERE, TORUS
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -45,6 +47,8 @@ ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical
             194: "right circular conical surface", 196: "spherical surface",
             198: "toroidal surface"}
 _NS = 65  # samples per edge for the inversion
+KIND_CODE = {"cylinder": CYLINDER, "cone": CONE, "sphere": SPHERE, "torus": TORUS}
+"""The compiled kernels' code of each kind of :class:`Analytic` surface of revolution."""
 TWO_PI = 2 * math.pi
 
 
@@ -132,7 +136,7 @@ class Analytic:
         O, X, A = self.O, self.X, self.A
         if self.kind == "plane":
             return plane_patch(O, X, self.Y, a0, a1, b0, b1), None, None
-        fv = lambda t, b0=b0, b1=b1: angle_to_param(t, b0, b1)  # noqa: E731
+        fv = AngleMap(b0, b1)
         if self.kind in ("cylinder", "cone"):
             ta = math.tan(self.alpha)
             gen = line_curve(O + (self.R + a0 * ta) * X + a0 * A,
@@ -140,10 +144,10 @@ class Analytic:
             fu = None
         elif self.kind == "sphere":
             gen = arc_curve(O, X, A, self.R, a0, a1)
-            fu = lambda t, a0=a0, a1=a1: angle_to_param(t, a0, a1)  # noqa: E731
+            fu = AngleMap(a0, a1)
         else:
             gen = arc_curve(O + self.R * X, X, A, self.r, a0, a1)
-            fu = lambda t, a0=a0, a1=a1: angle_to_param(t, a0, a1)  # noqa: E731
+            fu = AngleMap(a0, a1)
         return revolve(gen, O, A, b0, b1), fu, fv
 
 
@@ -231,6 +235,17 @@ class _Edge:
         if self.reverse:
             return ab[::-1].copy(), rho[::-1]
         return ab.copy(), rho
+
+    def unwrapped(self, srf, n: int, c: int) -> np.ndarray:
+        """``unwrap`` of coordinate ``c`` of :meth:`local` (read-only), computed once
+        per surface, curve and direction (a seam cut and the face's chain unwrap the
+        same angles)."""
+        key = (srf, id(self.curve), n, self.reverse, c)
+        v = self._cache.get(key)
+        if v is None:
+            v = self._cache[key] = unwrap(self.local(srf, n)[0][:, c])
+            v.setflags(write=False)
+        return v
 
     def ts(self, s):
         s = np.asarray(s, float)
@@ -324,7 +339,7 @@ def _chain(srf, loop, size):
         for c in (0, 1):
             if not srf.periodic[c]:
                 continue
-            ab[:, c] = unwrap(ab[:, c])
+            ab[:, c] = unwrap(ab[:, c]) if pole.any() else e.unwrapped(srf, _NS, c)
             if prev is None:
                 continue
             if c == 1 and prev_pole and e.key in first:
@@ -398,8 +413,10 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
 
 
 def _fit(srf, e, ab, fu, fv, tol):
-    """A non-iso edge: cubic interpolant of its mapped local coordinates (angles on
-    the branch of the chained samples)."""
+    """A non-iso edge: piecewise-quintic interpolant of its mapped local coordinates
+    (angles on the branch of the chained samples); compiled on the surfaces of
+    revolution, :func:`~geomkit.cad.uvmap.map_pcurve` of the closed-form inversion
+    otherwise."""
     s0 = np.linspace(0.0, 1.0, len(ab))
     last = [None, None]  # the parameters of the last call and their local coordinates
 
@@ -425,6 +442,14 @@ def _fit(srf, e, ab, fu, fv, tol):
     if sk.size < 2:
         sk = np.array([0.0, 1.0])
     diag = TrimCurve.polyline(np.column_stack([sk, sk]))
+    code = KIND_CODE.get(srf.kind)
+    if code is not None and all(f is None or isinstance(f, AngleMap) for f in (fu, fv)):
+        frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
+        maps = [None if f is None else (f.theta0, f.theta1) for f in (fu, fv)]
+        c, _ = map_edge(e.curve, e.reverse, code, frame,
+                        (srf.R, srf.r, math.tan(srf.alpha)), srf.periodic, ab, maps, diag,
+                        tol)
+        return c
     c, _ = map_pcurve(diag, lambda s: loc(s, 0), lambda s: loc(s, 1), tol)
     return c
 

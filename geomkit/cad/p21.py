@@ -21,6 +21,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from geomkit.errors import FileFormatError
 
 __all__ = ["P21", "Ref", "Enum", "Typed", "DERIVED", "read_p21"]
@@ -147,8 +149,9 @@ def _tokens_fast(s: str):
     return out
 
 
-def _parse(s: str, where: str):
-    """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
+def _items(s: str, where: str):
+    """The top-level items of a record body, token by token (raises naming the
+    fault)."""
     toks = _tokens_fast(s)
     if toks is None:
         if _VALID.fullmatch(s) is None:
@@ -188,10 +191,80 @@ def _parse(s: str, where: str):
             pending = v.upper()
     if stack or pending is not None:
         raise FileFormatError(f"{where}: the record ends inside a parameter list")
+    return cur
+
+
+def _items_fast(s: str):
+    """``(top-level items, deepest nesting a typed parameter closed at)`` of a record
+    body parsed in one pass over its pieces cut at strings and punctuation (what
+    writers produce), or None for anything else (two tokens side by side, a character
+    that is not a token, a malformed nesting): the token-by-token route then parses
+    it or names the fault."""
+    stack: list = []   # (enclosing list, keyword that opened this one or None)
+    cur: list = []
+    pending = None     # a keyword waiting for its '('
+    deep = 0           # the deepest nesting a typed parameter was closed at
+    for j, t in enumerate(_SPLIT.split(s)):
+        if j % 2:  # a string or one of ( ) ,
+            c = t[0]
+            if pending is not None and c != "(":
+                return None
+            if c == "'":
+                cur.append(t[1:-1].replace("''", "'"))
+            elif c == "(":
+                stack.append((cur, pending))
+                cur, pending = [], None
+            elif c == ")":
+                if not stack:
+                    return None
+                done = cur
+                cur, name = stack.pop()
+                if name is None:
+                    cur.append(done)
+                else:
+                    cur.append(Typed(name, done))
+                    deep = max(deep, len(stack))
+            continue
+        t = t.strip()
+        if not t:
+            continue
+        if pending is not None:
+            return None
+        c = t[0]
+        if c == "#":
+            if not (t[1:].isascii() and t[1:].isdigit()):
+                return None
+            cur.append(Ref(t[1:]))
+        elif c == "$" or c == "*":
+            if len(t) != 1:
+                return None
+            cur.append(None if c == "$" else DERIVED)
+        elif _NUMBER.fullmatch(t) is not None:
+            cur.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
+        elif c == ".":
+            if _ENUM.fullmatch(t) is None:
+                return None
+            e = t[1:-1].upper()
+            cur.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        elif _WORD.fullmatch(t) is not None:
+            pending = t.upper()
+        else:
+            return None
+    if stack or pending is not None:
+        return None
+    return cur, deep
+
+
+def _parse(s: str, where: str):
+    """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
+    fast = _items_fast(s)
+    cur, deep = (_items(s, where), 2) if fast is None else fast
     if len(cur) != 1:
         raise FileFormatError(f"{where}: expected one entity, found {len(cur)} items")
     top = cur[0]
     if isinstance(top, Typed):
+        if not deep:  # no typed parameter inside: nothing to unwrap
+            return top.name, top.value
         return top.name, [_unwrap(x) for x in top.value]
     parts = {}
     for part in top:  # '(' A(...) B(...) ')': a complex entity
@@ -325,6 +398,28 @@ class P21:
             return tuple(float(x) for x in m.group(1).split(","))
         except ValueError:
             return None
+
+    def coordinates(self, ids, name: str, k: int):
+        """The coordinates (n, k) of the plain records ``ids`` of entity ``name``, each
+        ``NAME('label', (k numbers))`` (:meth:`numbers` for many records at once), or
+        None when any is not of that form (then each is read on its own)."""
+        raw, names, groups = self._raw, self.names, []
+        for i in ids:
+            i = int(i)
+            body = raw.get(i)
+            if body is None or names.get(i) != name:
+                return None
+            m = _COORDS.fullmatch(body)
+            if m is None or m.group(1).count(",") != k - 1:
+                return None
+            groups.append(m.group(1))
+        if not groups:
+            return np.empty((0, k))
+        try:
+            out = np.array([float(x) for x in ",".join(groups).split(",")])
+        except ValueError:
+            return None
+        return out.reshape(-1, k)
 
     def of_type(self, *names: str) -> list[int]:
         """Ids of the simple records of these entity names, in file order."""

@@ -21,6 +21,7 @@ from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.p21 import P21, Ref
 from geomkit.errors import FileFormatError
+from geomkit._kernels.bezier import curve_nearest_param
 
 __all__ = ["StepGeometry", "Curve", "reverse_curve"]
 
@@ -81,22 +82,9 @@ class Curve:
                     best = (t, dd)
         if best is not None:
             return best[0]
-        t = np.linspace(lo, hi, max(65, 8 * (len(U) - p)))
-        D = curve_derivs(self.spline, t, 0)[:, 0, :]
-        t0 = float(t[int(np.argmin(np.linalg.norm(D - X, axis=1)))])
-        for _ in range(30):
-            d = curve_derivs(self.spline, np.array([t0]), min(2, p))[0]
-            f = (d[0] - X) @ d[1]
-            fp = d[1] @ d[1] + ((d[0] - X) @ d[2] if p >= 2 else 0.0)
-            if not fp > 0:
-                break
-            step = f / fp
-            t1 = min(hi, max(lo, t0 - step))
-            if abs(t1 - t0) <= 1e-15 * max(1.0, hi - lo):
-                t0 = t1
-                break
-            t0 = t1
-        return t0
+        return float(curve_nearest_param(np.ascontiguousarray(Pw, float), int(p),
+                                         np.asarray(U, float), np.ascontiguousarray(X, float),
+                                         max(65, 8 * (len(U) - p))))
 
     @property
     def bounds(self):
@@ -176,6 +164,13 @@ class StepGeometry:
         if x.size != 3:
             raise self._bad(i, f"a point of {x.size} coordinates")
         return x
+
+    def points(self, ids) -> np.ndarray:
+        """:meth:`point` of many records: (n, 3)."""
+        X = self.p.coordinates(ids, "CARTESIAN_POINT", 3)
+        if X is not None and np.isfinite(X).all():
+            return X
+        return np.array([self.point(k) for k in ids]).reshape(-1, 3)
 
     def direction(self, i):
         x = self.p.numbers(i, "DIRECTION")
@@ -265,7 +260,9 @@ class StepGeometry:
             p, pts = int(a[1]), a[2]
             kn = a[6:8] if name == "B_SPLINE_CURVE_WITH_KNOTS" else None
             weights, sub = None, (None if kn is not None else name)
-        P = np.array([self.point(k) for k in pts]).reshape(-1, 3)
+        if not isinstance(pts, list):
+            raise self._bad(i, "B-spline curve control points are not a list")
+        P = self.points(pts)
         n = len(P)
         if n < 2:
             raise self._bad(i, f"a B-spline curve of {n} control point(s)")
@@ -343,7 +340,11 @@ class StepGeometry:
             p, q, net = int(a[1]), int(a[2]), a[3]
             kn = a[8:12] if name == "B_SPLINE_SURFACE_WITH_KNOTS" else None
             W, sub = None, (None if kn is not None else name)
-        P = np.array([[self.point(k) for k in row] for row in net])
+        rows = [len(row) if isinstance(row, list) else -1 for row in net] \
+            if isinstance(net, list) else [-1]
+        if min(rows, default=-1) < 2 or len(set(rows)) != 1:
+            raise self._bad(i, "a B-spline surface whose control net is not rectangular")
+        P = self.points([k for row in net for k in row]).reshape(len(rows), rows[0], 3)
         if P.ndim != 3 or P.shape[0] < 2 or P.shape[1] < 2:
             raise self._bad(i, "a B-spline surface whose control net is not rectangular")
         nu, nv = P.shape[:2]

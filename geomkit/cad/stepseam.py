@@ -6,8 +6,8 @@ loop per boundary on a patch of exactly one turn:
 * **A loop around the axis** (a full circle on a cylinder, a profile going once around
   a revolution): the turn's start angle ``theta`` is chosen where every such loop
   crosses once and no other loop passes (:func:`cut_at_seam`), and each such loop is
-  cut there (:func:`_split_edge`: bisection on the edge to 1e-16 of its range), so its
-  ends are the patch's two seam sides.
+  cut there (:func:`_split_edge`: the crossing bracketed on the edge to 1e-17 of its
+  range, in one compiled call), so its ends are the patch's two seam sides.
 * **Two such loops** (a band, written without a seam edge) become one loop joined by
   two seam segments; **one** (a cap, a cone ending at its apex) is closed along the
   collapsed side of the domain (:func:`merge_winding`), the pole chosen by the face's
@@ -18,13 +18,16 @@ loop per boundary on a patch of exactly one turn:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from geomkit.cad.analytic import curve_eval, unwrap
-from geomkit.cad.brep import _Edge
+from geomkit.cad.analytic import unwrap
+from geomkit.cad.brep import KIND_CODE, _Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
+from geomkit._kernels.pcurve_map import CYLINDER, seam_crossing
 
 __all__ = ["cut_at_seam", "cap_point", "merge_winding", "start_inside"]
 
@@ -52,7 +55,9 @@ def _angles(srf, e, n=65, full=False):
     ab, rho = e.local(srf, n)
     b = ab[:, 1]
     on = rho <= 1e-9 * max(1.0, float(np.ptp(X, axis=0).max()))
-    if on.any() and not full:  # through the pole or apex: no turn is defined
+    if not on.any():
+        return e.unwrapped(srf, n, 1)
+    if not full:  # through the pole or apex: no turn is defined
         return None
     if on.all():
         return None
@@ -79,24 +84,22 @@ def _split_edge(srf, e, target):
     if on.size:
         return float(on[0]) / (n - 1) if on[0] in (0, n - 1) else _cut(srf, e, on[0] / (n - 1))
     s = np.linspace(0.0, 1.0, n)
-    for j in range(n - 1):
-        lo_lev = target + TWO_PI * np.floor((min(b[j], b[j + 1]) - target) / TWO_PI + 1)
-        if not (min(b[j], b[j + 1]) < lo_lev < max(b[j], b[j + 1])):
-            continue
-        lo, hi, up = s[j], s[j + 1], b[j + 1] > b[j]
+    # the first pair of consecutive samples with a level strictly between them
+    lo_b, hi_b = np.minimum(b[:-1], b[1:]), np.maximum(b[:-1], b[1:])
+    levels = target + TWO_PI * np.floor((lo_b - target) / TWO_PI + 1)
+    crossed = np.flatnonzero((lo_b < levels) & (levels < hi_b))
+    for j in crossed[:1].tolist():
         # the crossing bracketed on the loop's parameter s, 32 samples a round (each
         # round narrows it 32 times: as fine as bisection's 60 halvings in 12 rounds)
-        for _ in range(12):
-            if not hi - lo > 1e-17:
-                break
-            sm = np.linspace(lo, hi, 33)[1:-1]
-            bm = srf.local(curve_eval(e.curve, e.ts(sm)))[0][:, 1]
-            bm = b[j] + ((bm - b[j] + np.pi) % TWO_PI - np.pi)
-            before = (bm < lo_lev) == up  # still on the start's side
-            k = int(np.argmin(before)) if not before.all() else sm.size
-            lo = sm[k - 1] if k > 0 else lo
-            hi = sm[k] if k < sm.size else hi
-        return _cut(srf, e, 0.5 * (lo + hi))
+        p, U, Pw = e.curve
+        code = CYLINDER if srf.kind == "revolution" else KIND_CODE[srf.kind]
+        frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
+        R, r, alpha = (getattr(srf, k, 0.0) for k in ("R", "r", "alpha"))
+        sc = seam_crossing(np.ascontiguousarray(Pw, float), int(p), np.asarray(U, float),
+                           e.t0, e.t1, bool(e.reverse), code, frame, float(R), float(r),
+                           math.tan(alpha), float(s[j]), float(s[j + 1]), float(b[j]),
+                           float(levels[j]), bool(b[j + 1] > b[j]))
+        return _cut(srf, e, sc)
     return None
 
 

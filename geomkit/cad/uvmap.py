@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from geomkit._kernels.pcurve_map import fit_edge_pcurve
 from geomkit.nurbs.trimming import evaluate_trim_curve
 from geomkit.nurbs.surface import TrimCurve
 
-__all__ = ["map_pcurve"]
+__all__ = ["map_pcurve", "map_edge", "spans_curve"]
 
 DEGREE = 5
 """Degree of the interpolating Bézier spans: the error falls as ``h^6``, so a curve
@@ -100,11 +101,50 @@ def map_pcurve(c: TrimCurve, fu, fv, tol: float):
         j = np.arange(int(m.sum())) - np.repeat(np.cumsum(m) - m, m)
         a = lo + j * step
         b = np.where(j + 1 == np.repeat(m, m), np.repeat(b[split], m), lo + (j + 1) * step)
-    A = np.concatenate(done_a)
-    order = np.argsort(A, kind="stable")
-    bez = np.concatenate(done_bez)[order]
-    B = np.concatenate([A[order][1:], brk[-1:]])
+    return spans_curve(np.concatenate(done_a), np.concatenate(done_bez), brk[-1]), max(errs)
+
+
+def map_edge(edge, rev: bool, kind: int, frame, radii, periodic, ref, maps,
+             diag: TrimCurve, tol: float):
+    """``(TrimCurve, error)``: :func:`map_pcurve` of the pcurve ``diag`` (a polyline
+    ``(s, s)`` over the loop parameter ``s`` in [0, 1], its vertices the starting
+    spans) mapped by the local coordinates of the edge's point at ``s`` on a surface
+    of revolution, in one kernel call (:func:`geomkit._kernels.pcurve_map.fit_edge_pcurve`
+    documents the arguments).  ``edge`` is the ``(p, U, Pw)`` curve, run backwards when
+    ``rev``; ``radii`` is ``(R, r, tan(alpha))``; ``periodic[c]`` whether coordinate
+    ``c`` is an angle kept on the branch of the reference samples ``ref``;
+    ``maps[c]`` the arc ``(theta0, theta1)`` the coordinate is mapped by, or None."""
+    p, U, Pw = edge
+    U = np.asarray(U, float)
+    M = np.zeros((2, 3))
+    for c, m in enumerate(maps):
+        if m is not None:
+            M[c] = 1.0, m[0], m[1]
+    T = np.ascontiguousarray(diag.knots[1:-1])
+    S = np.ascontiguousarray(diag.control_points[:, 0])
+    starts, bez, err = fit_edge_pcurve(
+        np.ascontiguousarray(Pw, float), int(p), U, float(U[p]), float(U[-p - 1]),
+        bool(rev), int(kind), np.ascontiguousarray(frame, float), float(radii[0]),
+        float(radii[1]), float(radii[2]), np.ascontiguousarray(ref, float),
+        np.asarray(periodic, np.int64), M, T, S, float(tol), _BINV, _CHECK, _CB,
+        _MAX_SPANS, _MAX_SPLIT)
+    return spans_curve(starts, bez, float(T[-1])), float(err)
+
+
+def spans_curve(starts: np.ndarray, bez: np.ndarray, end: float) -> TrimCurve:
+    """The C0 chain of quintic Bézier spans (k, 6, 2) that start at the parameters
+    ``starts`` (any order) and end, the last one, at ``end``."""
+    order = np.argsort(starts, kind="stable")
+    A = starts[order]
+    bez = bez[order]
     pts = np.concatenate([bez[:1, 0], bez[:, 1:].reshape(-1, 2)])
-    knots = np.concatenate([[A[order][0]] * (DEGREE + 1), np.repeat(B[:-1], DEGREE),
-                            [B[-1]] * (DEGREE + 1)])
-    return TrimCurve.create(DEGREE, knots, pts), max(errs)
+    knots = np.concatenate([np.full(DEGREE + 1, A[0]), np.repeat(A[1:], DEGREE),
+                            np.full(DEGREE + 1, end)])
+    if not (np.isfinite(pts).all() and A[0] < end and (A[1:] > A[:-1]).all()
+            and A[-1] < end):
+        return TrimCurve.create(DEGREE, knots, pts)  # the error that names the fault
+    # clamped, interior knots of multiplicity DEGREE: what create() would check
+    w = np.ones(len(pts))
+    for a in (knots, pts, w):
+        a.setflags(write=False)
+    return TrimCurve(DEGREE, knots, pts, w)

@@ -55,6 +55,18 @@ def test_parser_values():
     assert p.of_type("face_bound") == [4] and p.complex_ids() == [2]
 
 
+def test_coordinates_of_many_points_at_once():
+    p = P21(_file("#1=CARTESIAN_POINT('',(1.,-2.5E-1,3));#2=CARTESIAN_POINT('p',( 4 , 5.5,6.));"
+                  "#3=CARTESIAN_POINT('',(1.,2.));#4=CARTESIAN_POINT('',(1.D0,2.,3.));"
+                  "#5=DIRECTION('',(0.,0.,1.));#6=CARTESIAN_POINT('',(1.,2.,3.,4.));"))
+    np.testing.assert_array_equal(p.coordinates([2, 1, 2], "CARTESIAN_POINT", 3),
+                                  [[4, 5.5, 6], [1, -0.25, 3], [4, 5.5, 6]])
+    assert p.coordinates([], "CARTESIAN_POINT", 3).shape == (0, 3)
+    # anything else is left to the record-by-record reading (which names the fault)
+    for ids in ([1, 3], [4], [5], [1, 6], [1, 99]):
+        assert p.coordinates(ids, "CARTESIAN_POINT", 3) is None, ids
+
+
 @pytest.mark.parametrize("data, message", [
     ("#1=LINE('',#2,#3;", "inside a parameter list"),
     ("#1=LINE('',#2));", "unbalanced"),

@@ -60,8 +60,12 @@ def restrict(p, U, Pw, t0, t1):
     t1 = min(t1, hi) if t1 > t0 else hi
     eps = 1e-12 * (hi - lo)
     # an end within rounding of a knot is that knot (no sliver span of ~1e-17)
-    t0, t1 = (float(U[np.argmin(np.abs(U - t))]) if np.abs(U - t).min() <= eps else t
-              for t in (t0, t1))
+    ends = []
+    for t in (t0, t1):
+        d = np.abs(U - t)
+        k = int(d.argmin())
+        ends.append(float(U[k]) if d[k] <= eps else t)
+    t0, t1 = ends
     if t0 <= lo and t1 >= hi:
         return U, Pw
     Pw = np.ascontiguousarray(Pw, float)

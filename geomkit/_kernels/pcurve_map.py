@@ -1,0 +1,248 @@
+"""A model-space edge on a surface of revolution as a UV pcurve of piecewise quintics.
+
+The reader's edges on cylinders, cones, spheres and tori that are not iso-lines are
+carried into the surface's NURBS parameters by interpolation (the method of
+:mod:`geomkit.cad.uvmap`, where it is documented): the edge point at loop parameter
+``s`` is inverted in closed form to local coordinates ``(a, b)`` (height or angle,
+angle about the axis), each angle kept on the branch of the reference samples, then
+mapped by the arc parametrisation (:func:`angle_to_param` of
+:mod:`geomkit.cad.analytic`).  Spans of quintic Bézier interpolants at 6 parameters
+are checked at 9 more and split until within ``tol``.
+
+One call fits one edge with no Python between rounds (a part has hundreds of such
+edges, each needing several rounds of small evaluations).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .numba_ext.policy import jit_plain as jit
+from .basis import basis_funs, find_span
+
+CYLINDER, CONE, SPHERE, TORUS = 0, 1, 2, 3
+TWO_PI = 2.0 * math.pi
+
+
+@jit
+def _angle_param(th, th0, th1):
+    """The arc parameter at angle ``th`` of the arc ``[th0, th1]`` (its quarter-turn
+    spans; :func:`geomkit.cad.analytic.angle_to_param`)."""
+    n = max(1, int(math.ceil((th1 - th0) / (0.5 * math.pi) - 1e-12)))
+    d = (th1 - th0) / n
+    k = math.floor((th - th0) / d)
+    k = min(max(k, 0.0), n - 1.0)
+    mid = th0 + (k + 0.5) * d
+    r = 0.5 * (math.tan(0.5 * (th - mid)) / math.tan(d / 4) + 1.0)
+    return min(max(th0 + (k + r) * d, th0), th1)
+
+
+@jit
+def _interp(x, xs, ys):
+    """``np.interp`` at one point (``xs`` increasing)."""
+    n = xs.shape[0]
+    if x <= xs[0]:
+        return ys[0]
+    if x >= xs[n - 1]:
+        return ys[n - 1]
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        m = (lo + hi) // 2
+        if xs[m] <= x:
+            lo = m
+        else:
+            hi = m
+    if xs[hi] == xs[lo]:
+        return ys[hi]
+    return ys[lo] + (x - xs[lo]) * (ys[hi] - ys[lo]) / (xs[hi] - xs[lo])
+
+
+@jit
+def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
+    """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
+    revolution (closed form: :meth:`geomkit.cad.brep.Analytic.local`; CYLINDER with
+    ``R = 0`` gives height and angle about any axis).  ``N``, ``left``, ``right``:
+    scratch of length p + 1."""
+    span = find_span(Pw.shape[0] - 1, p, te, U)
+    basis_funs(span, te, p, U, N, left, right)
+    wx = wy = wz = w = 0.0
+    for j in range(p + 1):
+        q = span - p + j
+        wx += N[j] * Pw[q, 0]
+        wy += N[j] * Pw[q, 1]
+        wz += N[j] * Pw[q, 2]
+        w += N[j] * Pw[q, 3]
+    dx = wx / w - frame[0]
+    dy = wy / w - frame[1]
+    dz = wz / w - frame[2]
+    x = dx * frame[3] + dy * frame[4] + dz * frame[5]
+    y = dx * frame[6] + dy * frame[7] + dz * frame[8]
+    z = dx * frame[9] + dy * frame[10] + dz * frame[11]
+    rho = math.hypot(x, y)
+    th = math.atan2(y, x)
+    if kind == CYLINDER or kind == CONE:
+        a = z
+        if kind == CONE and R + z * tan_a < 0:
+            th += math.pi
+    elif kind == SPHERE:
+        a = math.atan2(z, rho)
+    else:
+        a = math.atan2(z, rho - R)
+        if r > R and abs(math.hypot(rho + R, z) - r) < abs(math.hypot(rho - R, z) - r):
+            a = math.atan2(z, -rho - R)
+            th += math.pi
+    return a, th
+
+
+@jit
+def _mapped(t, Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, sref, ref, periodic,
+            maps, T, S, N, left, right):
+    """The mapped UV point ``(u, v)`` at the pcurve parameter ``t``."""
+    t = min(max(t, T[0]), T[T.shape[0] - 1])
+    s = min(max(_interp(t, T, S), 0.0), 1.0)
+    te = e0 + ((1.0 - s) if rev else s) * (e1 - e0)
+    out0, out1 = _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right)
+    for c in range(2):
+        v = out0 if c == 0 else out1
+        if periodic[c]:
+            rf = _interp(s, sref, ref[:, c])
+            v = rf + ((v - rf + math.pi) % TWO_PI) - math.pi
+        if maps[c, 0] > 0:
+            v = _angle_param(v, maps[c, 1], maps[c, 2])
+        if c == 0:
+            out0 = v
+        else:
+            out1 = v
+    return out0, out1
+
+
+@jit
+def seam_crossing(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, lo, hi, b_lo, level, up):
+    """The loop parameter in ``[lo, hi]`` where the edge's angle about the axis crosses
+    ``level``, bracketed to 1e-17 by 31 samples a round (each round narrows the bracket
+    32 times, at most 12 rounds).  ``b_lo``: the (unwrapped) angle at ``lo``, the
+    branch the samples are taken on; ``up``: whether the angle increases across the
+    bracket.  Arguments as :func:`fit_edge_pcurve`'s."""
+    N = np.empty(p + 1)
+    left = np.empty(p + 1)
+    right = np.empty(p + 1)
+    for _ in range(12):
+        if not hi - lo > 1e-17:
+            break
+        step = (hi - lo) / 32.0
+        nlo, nhi = lo, hi
+        for j in range(1, 32):
+            sm = lo + j * step
+            te = e0 + ((1.0 - sm) if rev else sm) * (e1 - e0)
+            _, b = _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right)
+            b = b_lo + ((b - b_lo + math.pi) % TWO_PI - math.pi)
+            if (b < level) != up:  # past the level: the bracket ends here
+                nhi = sm
+                break
+            nlo = sm
+        lo, hi = nlo, nhi
+    return 0.5 * (lo + hi)
+
+
+@jit
+def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, periodic, maps,
+                    T, S, tol, binv, check, cb, max_spans, max_split):
+    """Quintic spans of the mapped pcurve of one edge.
+
+    ``Pw`` (n, 4), ``p``, ``U``: the edge's homogeneous NURBS over ``[e0, e1]``, run
+    backwards when ``rev``; ``kind`` one of CYLINDER / CONE / SPHERE / TORUS;
+    ``frame`` (12,): origin, X, Y, A of the surface; ``R``, ``r``, ``tan_a``: its radii
+    and the cone's half-angle tangent; ``ref`` (m, 2): local coordinates at ``m``
+    equally spaced loop parameters (the branch each angle is kept on); ``periodic``
+    (2,) int; ``maps`` (2, 3): per coordinate ``(mapped?, th0, th1)``; ``T``, ``S``:
+    the pcurve parameter at the loop parameters ``S`` (the starting span ends);
+    ``binv`` (6, 6), ``check`` (9,), ``cb`` (9, 6): interpolation and check matrices.
+
+    Returns ``(starts (k,), bez (k, 6, 2), error)``: the spans (unsorted), their Bézier
+    points and the largest check error of the accepted spans.
+    """
+    nb = binv.shape[0]
+    nc = check.shape[0]
+    sref = np.empty(ref.shape[0])
+    for i in range(sref.shape[0]):
+        sref[i] = i / (sref.shape[0] - 1)
+    N = np.empty(p + 1)
+    left = np.empty(p + 1)
+    right = np.empty(p + 1)
+    a = T[:-1].copy()
+    b = T[1:].copy()
+    hmin = 1e-9 * (T[T.shape[0] - 1] - T[0])
+    cap = max(16, 4 * a.shape[0])
+    out_a = np.empty(cap)
+    out_b = np.empty((cap, nb, 2))
+    nout = 0
+    err = 0.0
+    X = np.empty((nb, 2))
+    C = np.empty((nc, 2))
+    B = np.empty((nb, 2))
+    while a.shape[0] > 0:
+        k = a.shape[0]
+        m = np.zeros(k, dtype=np.int64)
+        bez = np.empty((k, nb, 2))
+        e = np.empty(k)
+        for i in range(k):
+            h = b[i] - a[i]
+            for j in range(nb):
+                X[j, 0], X[j, 1] = _mapped(a[i] + h * (j / (nb - 1)), Pw, p, U, e0, e1, rev,
+                                           kind, frame, R, r, tan_a, sref, ref, periodic,
+                                           maps, T, S, N, left, right)
+            for j in range(nc):
+                C[j, 0], C[j, 1] = _mapped(a[i] + h * check[j], Pw, p, U, e0, e1, rev, kind,
+                                           frame, R, r, tan_a, sref, ref, periodic, maps,
+                                           T, S, N, left, right)
+            for j in range(nb):
+                for c in range(2):
+                    acc = 0.0
+                    for q in range(nb):
+                        acc += binv[j, q] * X[q, c]
+                    B[j, c] = acc
+                    bez[i, j, c] = acc
+            ei = 0.0
+            for j in range(nc):
+                for c in range(2):
+                    acc = 0.0
+                    for q in range(nb):
+                        acc += cb[j, q] * B[q, c]
+                    ei = max(ei, abs(acc - C[j, c]))
+            e[i] = ei
+            if ei > tol and h > hmin:
+                mi = math.ceil(1.25 * (ei / tol) ** (1.0 / 6.0))
+                m[i] = min(max(mi, 2), max_split)
+        if nout + m.sum() > max_spans:
+            m[:] = 0  # give up refining: the error found is returned
+        nxt = 0
+        for i in range(k):
+            if m[i] == 0:
+                if nout == out_a.shape[0]:
+                    grown_a = np.empty(2 * nout)
+                    grown_a[:nout] = out_a
+                    grown_b = np.empty((2 * nout, nb, 2))
+                    grown_b[:nout] = out_b
+                    out_a, out_b = grown_a, grown_b
+                out_a[nout] = a[i]
+                out_b[nout] = bez[i]
+                nout += 1
+                err = max(err, e[i])
+            else:
+                nxt += m[i]
+        na = np.empty(nxt)
+        nbb = np.empty(nxt)
+        j = 0
+        for i in range(k):
+            mi = m[i]
+            if mi == 0:
+                continue
+            step = (b[i] - a[i]) / mi
+            for q in range(mi):
+                na[j] = a[i] + q * step
+                nbb[j] = b[i] if q + 1 == mi else a[i] + (q + 1) * step
+                j += 1
+        a, b = na, nbb
+    return out_a[:nout].copy(), out_b[:nout].copy(), err
