@@ -42,7 +42,7 @@ from geomkit.errors import (FileFormatError, FileRecoveredWarning, InvalidInputE
 from geomkit.cad.elementary import carry_pcurve, elementary_patch
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.occ import HAVE_OCP
-from geomkit.cad.readcache import cached_read
+from geomkit.cad.readcache import cached_read, gc_paused
 from geomkit.cad.stepbrep import UnreadFaces, check_read, read_native
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.mesh.tessellate import closed_directions
@@ -354,7 +354,8 @@ def _read_step(p: Path, skip_invalid, skip_unsupported, reader) -> IgesResult:
             raise MissingDependencyError(INSTALL_HINT)
         return _occ_isolated(p, skip_invalid, skip_unsupported, "")
     try:
-        return read_native(p, skip_invalid, skip_unsupported)
+        with gc_paused():
+            return read_native(p, skip_invalid, skip_unsupported)
     except (Unsupported, UnreadFaces) as exc:
         if reader == "geomkit" or not HAVE_OCP:
             if isinstance(exc, UnreadFaces):

@@ -106,3 +106,22 @@ def test_unwritable_cache_folder_still_reads(monkeypatch, tmp_path):
     r = geomkit.read_step(PART)
     assert len(r.surfaces) == 117
     readcache._memory.clear()
+
+
+def test_reads_pause_the_garbage_collector_and_restore_it():
+    import gc
+
+    assert gc.isenabled()
+    with readcache.gc_paused():
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError), readcache.gc_paused():
+        raise ValueError("a failed read")
+    assert gc.isenabled()  # restored after a failure too
+    gc.disable()
+    try:
+        with readcache.gc_paused():
+            pass
+        assert not gc.isenabled()  # a caller's own setting is kept
+    finally:
+        gc.enable()
