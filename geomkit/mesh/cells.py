@@ -125,7 +125,33 @@ def clip_triangulate(ruv, ring_id, trim):
     import shapely
 
     polys = shapely.polygons(shapely.linearrings(ruv, indices=ring_id))
-    pieces = shapely.intersection(polys, trim.region)
+    return triangulate_pieces(shapely.intersection(polys, trim.region))
+
+
+def clip_rectangles(c: np.ndarray, trim, inside_area: float):
+    """The trimmed region's pieces in the axis-aligned cells ``c`` (n, 4) ``u0, u1, v0,
+    v1`` (cells without hanging nodes).  GEOS's rectangle clipping (~8x faster than
+    the overlay on the grid faces of real parts) is kept when its pieces are valid
+    and, with the cells wholly inside (``inside_area``), add up to the region's area;
+    it can return a wrong sliver where the region's edge runs along a cell edge
+    within rounding, and then the overlay (:func:`shapely.intersection`) decides."""
+    import shapely
+
+    region = trim.region
+    pieces = shapely.lib.clip_by_rect(region, c[:, 0], c[:, 2], c[:, 1], c[:, 3])
+    cut_area = float(np.sum((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))
+    if shapely.is_valid(pieces).all() and abs(inside_area + float(shapely.area(pieces).sum())
+                                              - region.area) <= 1e-9 * cut_area:
+        return pieces
+    return shapely.intersection(shapely.box(c[:, 0], c[:, 2], c[:, 1], c[:, 3]), region)
+
+
+def triangulate_pieces(pieces):
+    """Pieces of the trimmed region (shapely polygons, one per cell) triangulated by
+    the constrained Delaunay rule: UV triangles (n, 3, 2) counter-clockwise, and the
+    piece of each."""
+    import shapely
+
     try:
         tri = shapely.constrained_delaunay_triangles(pieces)
     except shapely.errors.GEOSException:

@@ -67,8 +67,10 @@ import numpy as np
 
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.cells import (CELL_TARGET, EXACT_ABOVE, adaptive_cells, breakpoints,
-                                clip_triangulate, closed_directions, deviation)
+                                clip_rectangles, closed_directions, deviation,
+                                triangulate_pieces)
 from geomkit.mesh.fallback import fallback_face
+from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import points, weld, weld_grid
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
                                          planar_trimmed)
@@ -118,10 +120,14 @@ def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
     if not used.all():
         index = np.cumsum(used) - 1
         uv, F = uv[used], index[F]
-    stats = {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
-             "closed_u": False, "closed_v": False, "planar_trimmed": True,
-             "seconds": time.perf_counter() - t0}
-    return points(s, uv), F, uv, np.zeros(len(F)), uv[F], stats
+    return points(s, uv), F, uv, np.zeros(len(F)), uv[F], \
+        _planar_stats(time.perf_counter() - t0)
+
+
+def _planar_stats(seconds: float) -> dict:
+    return {"cells": 0, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
+            "closed_u": False, "closed_v": False, "planar_trimmed": True,
+            "seconds": seconds}
 
 
 def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: float,
@@ -141,10 +147,10 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     keep = np.repeat(state == 1, 2)  # two triangles per cell, in cell order
     tri_uv, dev = tri_uv[keep], dev[keep]
     if len(cut):
-        c = cells[cut]
-        ruv = np.stack([c[:, [0, 2]], c[:, [1, 2]], c[:, [1, 3]], c[:, [0, 3]]], axis=1)
-        cuv, _ = clip_triangulate(ruv.reshape(-1, 2), np.repeat(np.arange(len(cut)), 4),
-                                  trim)
+        inside = cells[state == 1]
+        cuv, _ = triangulate_pieces(clip_rectangles(
+            cells[cut], trim, float(np.sum((inside[:, 1] - inside[:, 0])
+                                           * (inside[:, 3] - inside[:, 2])))))
         cdev = deviation(s, cuv, k, tol)
         if not (cdev <= tol).all():
             return None
@@ -162,12 +168,18 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
 
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
-                    trim_target: float = TRIM_TARGET, fallback: str | None = None):
+                    trim_target: float = TRIM_TARGET, fallback: str | None = None,
+                    planar=None):
     """One face's part of the mesh, ``(V, F, UV, dev, tri_uv, stats)``: the fast paths
     (planes, grids), then the adaptive cells.  With ``fallback`` (why this route failed
-    for the face) the fallback route instead (:func:`geomkit.mesh.fallback.fallback_face`)."""
+    for the face) the fallback route instead (:func:`geomkit.mesh.fallback.fallback_face`);
+    with ``planar``, the face's triangles from :func:`geomkit.mesh.planes.planar_batch`
+    (False: it found the surface is not a plane)."""
     if fallback is not None:
         return fallback_face(s, tol, max_angle, max_edge, k, trim_target, fallback)
+    if planar:
+        uv, F, seconds = planar
+        return points(s, uv), F, uv, np.zeros(len(F)), uv[F], _planar_stats(seconds)
     t0 = time.perf_counter()
     size = s.size
     if not s.trim and max_angle is None and max_edge is None:
@@ -176,7 +188,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             return flat + ({"cells": 1, "cut_cells": 0, "rounds": 0, "collapsed_dropped": 0,
                             "closed_u": False, "closed_v": False, "affine_plane": True,
                             "seconds": time.perf_counter() - t0},)
-    if s.trim and max_edge is None:  # a plane's normals agree: max_angle holds
+    # a plane's normals agree: max_angle holds (planar False: the batch found no plane)
+    if s.trim and max_edge is None and planar is None:
         planar = _planar_trimmed(s, tol, size, t0, trim_target)
         if planar is not None:
             return planar
@@ -258,12 +271,12 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
                                   TRIM_TARGET)
 
 
-def _mesh_face(i: int, s: Surface, args: tuple):
+def _mesh_face(i: int, s: Surface, args: tuple, planar=None):
     """Face ``i``'s part of the mesh by the primary route, else by the fallback route
     (a :class:`~geomkit.errors.FaceFailedWarning` says which face and why): ``(part,
     None)``, or ``(None, why)`` when both routes fail."""
     try:
-        return _tessellate_one(s, *args), None
+        return _tessellate_one(s, *args, planar=planar), None
     except Exception as exc:  # noqa: BLE001 - GEOS and numeric failures: the fallback
         why = f"{type(exc).__name__}: {exc}"
     name = f"surface {i}" + (f" ({s.name})" if s.name else "")
@@ -304,7 +317,8 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
     if max_angle is not None and max_angle >= np.pi:
         raise InvalidInputError(f"must be < pi radians, got {max_angle!r}", "max_angle")
     k = as_int(samples_per_edge, "samples_per_edge", minimum=2)
-    args = (tol, max_angle, max_edge, k, float(trim_target))
+    trim_target = float(trim_target)
+    args = (tol, max_angle, max_edge, k, trim_target)
     if len(surfaces) == 1:  # one surface: its arrays as they are, no concatenation
         part, why = _mesh_face(0, surfaces[0], args)
         if part is None:
@@ -313,10 +327,12 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
         return Mesh(V, F.astype(np.int64, copy=False), UV, np.zeros(len(V), dtype=np.int32),
                     np.zeros(len(F), dtype=np.int32), dev, tol, {"surfaces": [st]},
                     np.ascontiguousarray(tuv))
+    # the trimmed planes together: one constrained triangulation
+    planes = planar_batch(surfaces, trim_target * tol) if max_edge is None else {}
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        part, why = _mesh_face(i, s, args)
+        part, why = _mesh_face(i, s, args, planes.get(i))
         if part is None:  # one face never sinks the model: named in the stats
             name = f"surface {i}" + (f" ({s.name})" if s.name else "")
             warnings.warn(f"{name} left out of the mesh: {why}", FaceFailedWarning,

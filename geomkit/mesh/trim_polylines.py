@@ -66,16 +66,37 @@ class TrimPolylines:
         if self._region is None:
             import shapely
 
-            (u0, u1), (v0, v1) = self.surface.domain
-            box = shapely.box(u0, v0, u1, v1)
-            region = box if self.domain_loop or not self.loops else None
-            for pts in self.loops:
-                poly = shapely.make_valid(shapely.Polygon(pts))
-                region = poly if region is None else shapely.symmetric_difference(region, poly)
+            rings = self.rings()
+            region = shapely.Polygon(rings[0], rings[1:])
+            # loops that cross or nest deeper than shell and holes: the even-odd
+            # region of the loops, one at a time
+            if not shapely.is_valid(region):
+                (u0, u1), (v0, v1) = self.surface.domain
+                box = shapely.box(u0, v0, u1, v1)
+                region = box if self.domain_loop or not self.loops else None
+                for pts in self.loops:
+                    poly = shapely.make_valid(shapely.Polygon(pts))
+                    region = poly if region is None else shapely.symmetric_difference(region,
+                                                                                      poly)
             # the polylines are clipped to the domain: the region lies in the box
             shapely.prepare(region)
             self._region = region
         return self._region
+
+    def rings(self) -> list[np.ndarray]:
+        """The closed rings of the trimmed region when it is one polygon with holes:
+        the domain rectangle first when a loop was that rectangle (or there are no
+        loops), else the loop of the largest area, then the others (its holes).
+        Whether they make a valid polygon is for GEOS to say."""
+        loops = self.loops
+        if self.domain_loop or not loops:
+            (u0, u1), (v0, v1) = self.surface.domain
+            return [np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])] + loops
+        if len(loops) == 1:
+            return loops
+        area = [abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1])) for p in loops]
+        k = int(np.argmax(area))
+        return [loops[k]] + loops[:k] + loops[k + 1:]
 
     @property
     def tree(self):
@@ -261,9 +282,17 @@ def _span_samples(t: np.ndarray, num: int) -> np.ndarray:
 
 # ------------------------------------------------------------------ planes
 def _greville(knots: np.ndarray, p: int, n: int) -> np.ndarray:
+    """``mean(knots[i+1 : i+p+1])`` for i < n: below 8 terms numpy's mean is the
+    left-to-right sum divided by p, the sums here in that order (the same bits)."""
     if p == 1:
         return np.asarray(knots[1:n + 1], dtype=np.float64)
-    return np.array([knots[i + 1: i + p + 1].mean() for i in range(n)])
+    if p >= 8:
+        return np.array([knots[i + 1: i + p + 1].mean() for i in range(n)])
+    k = np.asarray(knots, dtype=np.float64)
+    acc = k[1:n + 1] + k[2:n + 2]
+    for j in range(3, p + 1):
+        acc += k[j:n + j]
+    return acc / p
 
 
 def affine_map(s: Surface, size: float):
@@ -288,6 +317,16 @@ def affine_map(s: Surface, size: float):
         if twist > AFFINE_REL * size:
             return None
     else:
+        du, dv = gu[-1] - gu[0], gv[-1] - gv[0]
+        if du > 0 and dv > 0:
+            # quick rejection (most curved nets): the affine map through three corners.
+            # Had the least-squares map a residual <= eps at every point, this one would
+            # differ from it by an affine function bounded by eps at those corners, so
+            # by at most 3 eps on the Greville box: its residual would be <= 4 eps.
+            R = P - P[0, 0] - np.multiply.outer(gu - gu[0], (P[-1, 0] - P[0, 0]) / du)[:, None] \
+                - np.multiply.outer(gv - gv[0], (P[0, -1] - P[0, 0]) / dv)[None]
+            if np.abs(R).max() > 4.5 * AFFINE_REL * size:
+                return None
         G = np.stack([np.ones(nu * nv), np.repeat(gu, nv), np.tile(gv, nu)], axis=1)
         X = P.reshape(-1, 3)
         coef = np.linalg.lstsq(G, X, rcond=None)[0]
