@@ -16,6 +16,7 @@ import importlib
 
 import numpy as np
 import pytest
+import shapely
 
 from geomkit.mesh import quadtree as qt
 from geomkit import samples
@@ -154,3 +155,95 @@ def test_boundary_pairs_far_from_the_origin():
     d = np.linalg.norm(P[:, None] - P[None], axis=2)
     want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
     assert got == want and len(want) >= 5
+
+
+# ------------------------------------------------------------------ whole-part batches
+@pytest.fixture(scope="module")
+def ctc01():
+    from geomkit.cad.step import read_step
+
+    S = read_step(DATA / "parts" / "nist_ctc_01_ap203.stp", reader="geomkit").surfaces
+    B = np.array([s.bounds for s in S])
+    return S, 1e-3 * float(np.linalg.norm(B[:, 1].max(axis=0) - B[:, 0].min(axis=0)))
+
+
+def test_planes_batch_matches_face_by_face(ctc01):
+    """The trimmed planes of NIST CTC-01 triangulated together: for each, the same
+    vertices as the face-by-face triangulation of its region, as many triangles,
+    covering the region's area, every boundary edge kept; non-planes marked False."""
+    from geomkit.mesh.planes import planar_batch
+    from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, planar_trimmed
+
+    S, tol = ctc01
+    out = planar_batch(S, 0.5 * tol)
+    planes = [i for i, s in enumerate(S) if s.trim and affine_map(s, s.size) is not None]
+    assert len(planes) > 50 and all(out[i] is False for i in range(len(S))
+                                    if S[i].trim and i not in planes)
+    for i in planes:
+        trim = TrimPolylines(S[i], 0.5 * tol, affine=True)
+        uv0, F0 = planar_trimmed(trim)
+        uv, F, _ = out[i]
+        used = np.unique(F0)
+        assert np.array_equal(uv, uv0[used]) and len(F) == len(F0), i
+        t = uv[F]
+        a2 = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+            - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+        assert (a2 > 0).all()  # counter-clockwise
+        assert abs(0.5 * a2.sum() - trim.region.area) <= 1e-12 * trim.region.area
+        e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        u, c = np.unique(e, axis=0, return_counts=True)
+        outline = shapely.union_all(shapely.linestrings(uv[u[c == 1]]))
+        assert shapely.equals(shapely.line_merge(outline), shapely.line_merge(
+            shapely.union_all(trim.region.boundary))), i
+
+
+def test_rectangle_clip_matches_the_overlay(ctc01, monkeypatch):
+    """Cut cells of a trimmed cylinder's grid: the rectangle clip's pieces have the
+    overlay's areas; a clip that returns a wrong piece is caught by the area sum and
+    the overlay's pieces are used."""
+    import geomkit.mesh.cells as C
+    from geomkit.mesh.trim_polylines import TrimPolylines
+
+    S, tol = ctc01
+    s = S[19]
+    trim = TrimPolylines(s, 0.5 * tol)
+    (u0, u1), (v0, v1) = s.domain
+    g = np.stack(np.meshgrid(np.linspace(u0, u1, 41)[:-1], np.linspace(v0, v1, 37)[:-1],
+                             indexing="ij"), axis=-1).reshape(-1, 2)
+    du, dv = (u1 - u0) / 40, (v1 - v0) / 36
+    cells = np.c_[g[:, 0], g[:, 0] + du, g[:, 1], g[:, 1] + dv]
+    state = trim.classify_uv(cells)
+    cut, inside = cells[state == 2], cells[state == 1]
+    ia = float(len(inside) * du * dv)
+    want = shapely.area(shapely.intersection(shapely.box(cut[:, 0], cut[:, 2], cut[:, 1],
+                                                         cut[:, 3]), trim.region))
+    got = C.clip_rectangles(cut, trim, ia)
+    np.testing.assert_allclose(shapely.area(got), want, rtol=0, atol=1e-12 * du * dv)
+    real = shapely.lib.clip_by_rect
+
+    def sliver(*a):
+        out = real(*a)
+        out[0] = shapely.box(a[1][0], a[2][0], a[1][0] + 1e-3 * du, a[2][0] + 1e-3 * dv)
+        return out
+    monkeypatch.setattr(shapely.lib, "clip_by_rect", sliver)
+    got = C.clip_rectangles(cut, trim, ia)
+    np.testing.assert_allclose(shapely.area(got), want, rtol=0, atol=1e-12 * du * dv)
+
+
+def test_weld_components_match_scipy():
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(4)
+    for trial in range(500):
+        n = int(rng.integers(1, 60))
+        if trial % 3 == 0 and n > 1:  # one long chain
+            p = rng.permutation(n)
+            pairs = np.stack([p[:-1], p[1:]], axis=1)
+        else:
+            pairs = rng.integers(0, n, size=(int(rng.integers(1, 3 * n + 1)), 2))
+        _, label = connected_components(coo_matrix((np.ones(len(pairs)), (pairs[:, 0],
+                                                   pairs[:, 1])), shape=(n, n)), directed=False)
+        root = W.components(n, pairs)
+        first = np.flatnonzero(root == np.arange(n))
+        assert np.array_equal(np.searchsorted(first, root), label), trial
