@@ -177,6 +177,53 @@ def surface_derivatives(Pw, p, q, U, V, uv, d, out):
     prun(_surface_derivatives_range, uv.shape[0], CHUNK, Pw, p, q, U, V, uv, d, out)
 
 
+@jit
+def _invert_range(i0, i1, Pw, p, q, U, V, X, uv, u0, u1, v0, v1, stop, dist):
+    bin_ = _binomial_table(D1)
+    scr = derivs_scratch(p, q, D1)
+    SKL = np.empty((2, 2, 3))
+    for i in range(i0, i1):
+        u = uv[i, 0]
+        v = uv[i, 1]
+        for _ in range(12):
+            surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
+            a = b = c = g1 = g2 = 0.0
+            for k in range(3):
+                r = X[i, k] - SKL[0, 0, k]
+                su = SKL[1, 0, k]
+                sv = SKL[0, 1, k]
+                a += su * su
+                b += su * sv
+                c += sv * sv
+                g1 += su * r
+                g2 += sv * r
+            det = a * c - b * b
+            du = dv = 0.0
+            if det > 1e-300:
+                du = (c * g1 - b * g2) / det
+                dv = (a * g2 - b * g1) / det
+            u = min(max(u + du, u0), u1)
+            v = min(max(v + dv, v0), v1)
+            if max(abs(du), abs(dv)) <= stop:
+                break
+        uv[i, 0] = u
+        uv[i, 1] = v
+        surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
+        dd = 0.0
+        for k in range(3):
+            dd += (SKL[0, 0, k] - X[i, k]) ** 2
+        dist[i] = np.sqrt(dd)
+
+
+def invert_points(Pw, p, q, U, V, X, uv, u0, u1, v0, v1, stop, dist):
+    """Gauss-Newton from the parameters ``uv`` (n, 2), updated in place, towards the
+    points ``X`` (n, 3) near the surface: at most 12 steps per point, each clamped to
+    the domain, stopped when a step is at most ``stop`` in both parameters; ``dist``
+    (n,) gets the distance from each point to the surface point reached."""
+    prun(_invert_range, X.shape[0], CHUNK, Pw, p, q, U, V, X, uv, u0, u1, v0, v1, stop,
+         dist)
+
+
 @jit_inline
 def _cross_into(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from geomkit._kernels.surface import surface_derivatives
+from geomkit._kernels.surface import invert_points
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
@@ -43,37 +43,15 @@ class _Inverse:
         self.grid = np.column_stack([uu.ravel(), vv.ravel()])
         self.tree = cKDTree(base.evaluate(self.grid))
 
-    def _derivs(self, uv):
-        """First derivatives at parameters already inside the domain (the kernel
-        without :meth:`Surface.derivatives`' validation: called a dozen times per
-        edge)."""
-        b = self.base
-        out = np.empty((uv.shape[0], 2, 2, 3))
-        if uv.shape[0]:
-            surface_derivatives(b.homogeneous, b.degree_u, b.degree_v, b.knots_u, b.knots_v,
-                                np.ascontiguousarray(uv), 1, out)
-        return out
-
     def __call__(self, X, tol):
         (u0, u1), (v0, v1) = self.dom
-        uv = self.grid[self.tree.query(X)[1]].copy()
-        scale = max(u1 - u0, v1 - v0)
-        for _ in range(12):
-            D = self._derivs(uv)
-            S, Su, Sv = D[:, 0, 0], D[:, 1, 0], D[:, 0, 1]
-            r = X - S
-            a, b, c = (Su * Su).sum(1), (Su * Sv).sum(1), (Sv * Sv).sum(1)
-            g1, g2 = (Su * r).sum(1), (Sv * r).sum(1)
-            det = a * c - b * b
-            ok = det > 1e-300
-            det = np.where(ok, det, 1.0)
-            step = np.where(ok[:, None], np.column_stack([(c * g1 - b * g2) / det,
-                                                          (a * g2 - b * g1) / det]), 0.0)
-            uv[:, 0] = np.clip(uv[:, 0] + step[:, 0], u0, u1)
-            uv[:, 1] = np.clip(uv[:, 1] + step[:, 1], v0, v1)
-            if float(np.abs(step).max(initial=0.0)) <= 1e-14 * scale:
-                break
-        dist = np.linalg.norm(self.base.evaluate(uv) - X, axis=1)
+        uv = np.ascontiguousarray(self.grid[self.tree.query(X)[1]])
+        b = self.base
+        dist = np.empty(len(X))
+        if len(X):
+            invert_points(b.homogeneous, b.degree_u, b.degree_v, b.knots_u, b.knots_v,
+                          np.ascontiguousarray(X, float), uv, u0, u1, v0, v1,
+                          1e-14 * max(u1 - u0, v1 - v0), dist)
         far = ~(dist <= tol)
         if far.any():
             pr = project_points([self.base], X[far])
