@@ -38,6 +38,7 @@ from geomkit.section.joins import (boundary_distance, drop_shared_edges,
                                    split_at_poles)
 from geomkit.section.trace import _Eval, trace_surface
 from geomkit.tolerances import TRIM_TOL
+from geomkit._kernels.section_clip import INSIDE_ALL, MIXED, OUTSIDE_ALL, chain_side
 from geomkit.validate import as_float_array
 from geomkit.errors import FaceFailedWarning, InvalidInputError
 from geomkit.nurbs.trimming import OUTSIDE
@@ -305,14 +306,23 @@ def _clip_trims(s, plane, chains, zsnap, reach=0.0):
     if not s.is_trimmed:
         return chains
     ev = _Eval(s, plane)
+    h = TRIM_STEP * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
     out, pending, req_in, req_out = [], [], [], []
     for c in chains:
         uv = c["uv"]
         if c["closed"]:
             uv = np.concatenate([uv, uv[:1]])
-        uv = _densify(ev, uv, TRIM_STEP * max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2]),
-                      zsnap)
-        inside = _not_outside(s, uv)
+        side, dense, inside = _chain_side(s, ev, uv, h, zsnap)
+        if side == INSIDE_ALL:
+            out.append(c)
+            continue
+        if side == OUTSIDE_ALL:
+            continue
+        if side == MIXED:
+            uv = dense
+        else:   # a point is not finite: densified again, the face fails, named
+            uv = _densify(ev, uv, h, zsnap)
+            inside = _not_outside(s, uv)
         if not inside.all() and reach > 0:
             inside = _along_trim(s, ev, uv, inside, c["closed"], reach)
         if inside.all():
@@ -389,6 +399,24 @@ def _along_trim(s, ev, uv, inside, closed, reach):
         if o.all():
             ins[r] = True
     return ins
+
+
+COARSE = 16
+""":func:`_chain_side` densifies a chain first with ``COARSE`` times the step."""
+
+
+def _chain_side(s, ev, uv, h, zsnap):
+    """``(side, points, inside)``: ``INSIDE_ALL`` when every point of
+    ``_densify(ev, uv, h, zsnap)`` is inside the trimmed face (``_not_outside``),
+    ``OUTSIDE_ALL`` when none is; else ``MIXED`` with those points and their classes
+    (:func:`geomkit._kernels.section_clip.chain_side`: the coarse densification with
+    ``COARSE * h``, fine points where it comes near a trim curve or is cut)."""
+    seg, deg, lp, nloops = s.trim_segments()
+    tlo, thi = _trim_boxes(s)
+    (u0, u1), (v0, v1) = s.domain
+    return chain_side(*ev.args, np.ascontiguousarray(uv, dtype=np.float64), float(h),
+                      float(COARSE * h), ev.box, float(0.25 * zsnap), 40, seg, deg, lp,
+                      nloops, tlo, thi, float(TRIM_TOL * max(u1 - u0, v1 - v0)))
 
 
 def _densify(ev, uv, h, zsnap):

@@ -1,0 +1,85 @@
+"""Trim classification of whole chains (geomkit/_kernels/section_clip.py) against the
+plain path: every point of the chain densified and classified.
+
+:func:`geomkit._kernels.section_clip.chain_side` decides from a coarse densification
+whether a chain is inside its trimmed face all along, outside all along or cut, and
+for a cut chain gives the densified points and their classes.  Each call plane_section
+makes is checked against ``_densify`` + ``_not_outside`` (themselves checked against
+the loops and ``classify_uv`` point by point in test_section_fast_paths.py): the same
+side, and for a cut chain the same points and classes, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import geomkit
+from geomkit import samples
+from geomkit._kernels import section_clip as C
+from geomkit.cad.occ import HAVE_OCP
+from geomkit.section import plane as plane_mod
+from helpers.paths import DATA
+
+
+def _checked(monkeypatch, sides):
+    kernel = plane_mod._chain_side
+
+    def both(s, ev, uv, h, zsnap):
+        side, dense, inside = kernel(s, ev, uv, h, zsnap)
+        ref = plane_mod._densify(ev, uv, h, zsnap)
+        ref_in = plane_mod._not_outside(s, ref)
+        want = C.INSIDE_ALL if ref_in.all() else C.OUTSIDE_ALL if not ref_in.any() else C.MIXED
+        assert side == want
+        if side == C.MIXED:
+            assert np.array_equal(dense, ref) and np.array_equal(inside, ref_in)
+        else:
+            assert len(dense) == 0 and len(inside) == 0
+        sides.append(side)
+        return side, dense, inside
+
+    monkeypatch.setattr(plane_mod, "_chain_side", both)
+
+
+@pytest.mark.parametrize("plane", [[0, 1, 0, -50], [1, -1, 0, 0], [1, 0.3, 0, -60],
+                                   [0, 1, 0, -0.0], [1, 0, 0, -100], [1, 0, 0, -70],
+                                   [0.3, 1, 0, -120]])
+def test_chain_side_on_the_plate_with_hole(monkeypatch, plane):
+    """Planes through the hole, along and near the plate's edges, tangent to the hole."""
+    sides = []
+    _checked(monkeypatch, sides)
+    s = samples.load("plate_with_hole")[0]
+    geomkit.plane_section(s, plane, 1e-6)
+    assert sides
+
+
+def test_chain_side_sees_each_case(monkeypatch):
+    """The three sides occur on the plate (a chain crossing the hole is cut)."""
+    sides = []
+    _checked(monkeypatch, sides)
+    s = samples.load("plate_with_hole")[0]
+    for plane in ([0, 1, 0, -50], [1, 0.3, 0, -60], [0, 1, 0, -10], [1, 0, 0, -5]):
+        geomkit.plane_section(s, plane, 1e-6)
+    assert C.MIXED in sides and C.INSIDE_ALL in sides
+
+
+@pytest.mark.occ
+@pytest.mark.skipif(not HAVE_OCP, reason="reading STEP needs cadquery-ocp")
+@pytest.mark.parametrize("part", ["nist_ftc_07_ap242.stp", "nist_ctc_01_ap242.stp",
+                                  "proe_as1_ap203.stp", "nx9_face_recognition_ap214.stp"])
+def test_chain_side_on_real_parts(monkeypatch, part):
+    """Mid-planes of real parts.  FTC-07 at x: a chain along a face's edge starts on
+    the domain's edge, a hair outside the trim (the trim runs 5.5e-4 inside it)."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(DATA / "parts" / part)
+    S = case.surfaces
+    B = np.array([s.bounds for s in S])
+    lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    sides = []
+    _checked(monkeypatch, sides)
+    for ax in range(3):
+        n = np.eye(3)[ax]
+        geomkit.plane_section(S, [*n, -0.5 * (lo[ax] + hi[ax])], 1e-4 * size,
+                              gap=case.edge_gap or 0.0)
+    assert C.MIXED in sides and C.INSIDE_ALL in sides
