@@ -146,7 +146,13 @@ class TrimPolylines:
             t = t[keep]
             if not c.is_polyline and len(t) <= SEED_SPANS:  # a few samples per span to
                 # start; a piece of many spans starts from its knots (each span short)
-                t = np.unique(_span_samples(t, 5))
+                y = _span_samples(t, 5)
+                # rows share their ends (span i ends at t[i+1] exactly, span i+1
+                # starts there): np.unique's result without its sort, unless
+                # rounding made neighbours equal
+                t = np.append(y[:, :-1].ravel(), t[-1])
+                if not np.all(t[1:] > t[:-1]):
+                    t = np.unique(y)
             buf = np.empty((8 * len(t) + 64, 3))
             while True:
                 n = trim_polyline(c.homogeneous, c.degree, c.knots, t, u0, v0, u1, v1,
