@@ -267,3 +267,30 @@ def test_faces_rejected_by_their_bounds_change_nothing_on_a_real_part(monkeypatc
         monkeypatch, S, [0, 0, 1, -0.5 * (lo[2] + hi[2])], 1e-4 * size, case.edge_gap)
     assert (len(sec.curves), sum(sec.closed)) == (11, 11)
     assert len(rejected) > len(S) // 4
+
+
+# ------------------------------------------------------------- distinct rows
+def test_unique_rows_as_numpy_unique():
+    """trace.unique_rows gives np.unique(axis=0, return_inverse=True): rows of a few
+    values (many repeats), signed zeros, integer pairs, and the leaf corners of a
+    section of the plate with a hole."""
+    from geomkit.section.trace import unique_rows
+    from geomkit._kernels import section as K
+
+    rng = np.random.default_rng(5)
+    cases = [rng.choice(rng.normal(size=30), size=(3000, 2)),
+             rng.integers(0, 50, size=(2000, 2)),
+             np.array([[0.0, 1.0], [-0.0, 1.0], [0.0, -0.0], [1.0, 0.0]]),
+             rng.normal(size=(1, 2))]
+    s = _plate()
+    ev, _chains_, zsnap = _chains(s, [1, 0.3, 0, -60])
+    bp = s.bezier_patches()
+    leaves, _ = K.subdivide(bp.homogeneous, bp.u_breaks, bp.v_breaks, ev.plane, zsnap,
+                            1e-7, 80)
+    cases.append(np.stack([leaves[:, [0, 1, 1, 0]].ravel(), leaves[:, [2, 2, 3, 3]].ravel()],
+                          axis=1))
+    for a in cases:
+        u, inv = unique_rows(a)
+        u_np, inv_np = np.unique(a, axis=0, return_inverse=True)
+        assert np.array_equal(u, u_np) and np.array_equal(inv, inv_np.ravel())
+        assert np.array_equal(u[inv], a)
