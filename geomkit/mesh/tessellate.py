@@ -31,7 +31,8 @@ Method (Paper 1 step 1, then beyond it):
    triangle: untrimmed it is its two corner triangles; trimmed, the region's
    polygon (the trim polylines) is triangulated once, without cells, by the
    constrained Delaunay rule (:mod:`geomkit.mesh.trim_polylines`).  Deviation 0; the
-   boundary is the trim polylines of step 2.
+   boundary is the trim polylines of step 2.  The trimmed planes of one call are
+   triangulated together, in one GEOS call (:mod:`geomkit.mesh.planes`).
 6. **Grids first.**  A surface untrimmed, or trimmed only by its domain rectangle
    (a STEP face bounded by its surface's own edges: most cylinders and cones of real
    parts; :func:`geomkit.mesh.trim_polylines.domain_rectangle_only`), is tried as one

@@ -132,8 +132,9 @@ class TrimPolylines:
         for c in loop.pieces:
             if self.affine and c.is_polyline and len(c.knots) == len(c.control_points) + 2:
                 P = c.control_points
-                if np.all(c.knots[2:-1] > c.knots[1:-2]) and (P[:, 0].min() >= u0 and P[:, 0].max() <= u1 and P[:, 1].min() >= v0
-                        and P[:, 1].max() <= v1):
+                if np.all(c.knots[2:-1] > c.knots[1:-2]) and (
+                        P[:, 0].min() >= u0 and P[:, 0].max() <= u1
+                        and P[:, 1].min() >= v0 and P[:, 1].max() <= v1):
                     # S maps the UV segments to 3-D segments: the kernel would keep
                     # just the vertices (C(t_i) = P_i exactly, nothing clipped)
                     out.append(P if not out else P[1:])
