@@ -66,8 +66,11 @@ class MeshingError(GeomkitError, RuntimeError):
 
 
 class FaceFailedWarning(UserWarning):
-    """One face of a model failed (e.g. its triangulation) and was left out of the
-    result; the result's stats name it and why.  The other faces are unaffected."""
+    """One face of a model failed (e.g. its triangulation): it was answered by a
+    fallback route that keeps the result's guarantee (``tessellate``: the face meshed
+    from its untrimmed surface's cells, ``stats["fallback"]``) or, when that failed
+    too, left out of the result (``stats["failed"]``); the stats name the face and
+    why.  The other faces are unaffected."""
 
 
 class ToleranceNotMetWarning(UserWarning):
