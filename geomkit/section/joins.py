@@ -28,11 +28,14 @@ __all__ = ["split_at_poles", "drop_shared_edges", "join_ends", "merge_point_curv
 
 def _collapsed_sides(s) -> np.ndarray:
     """(4,) bool: which sides of the domain (u0, u1, v0, v1) map to one point (a pole,
-    a cone's apex)."""
-    P = s.control_points
-    eps = 1e-10 * s.size
-    return np.array([np.ptp(row, axis=0).max() <= eps
-                     for row in (P[0], P[-1], P[:, 0], P[:, -1])])
+    a cone's apex); kept on the surface (a part is sectioned at many planes)."""
+    sides = s._cache.get("section_poles")
+    if sides is None:
+        P = s.control_points
+        eps = 1e-10 * s.size
+        sides = s._cache["section_poles"] = np.array(
+            [np.ptp(row, axis=0).max() <= eps for row in (P[0], P[-1], P[:, 0], P[:, -1])])
+    return sides
 
 
 def split_at_poles(curves, surfs):
@@ -113,6 +116,21 @@ def _near_polyline(X, Y, tol) -> bool:
     return bool((best <= tol).all())
 
 
+def _longer_than(curves, X, starts, length):
+    """(n,) bool: the polyline of each curve's points (not closed) is longer than
+    ``length``, as ``np.linalg.norm(np.diff(X, axis=0), axis=1).sum()`` says: summed
+    for all curves at once (``X`` their points one after the other, ``starts`` the
+    first of each, every curve with a point), and per curve only where that sum is
+    within 1e-9 of ``length`` (its summation order differs)."""
+    seg = np.append(np.linalg.norm(np.diff(X, axis=0), axis=1), 0.0)
+    seg[starts[1:] - 1] = 0.0   # the step from one curve's last point to the next's first
+    total = np.add.reduceat(seg, starts)
+    out = total > length
+    for i in np.flatnonzero(np.abs(total - length) <= 1e-9 * (abs(length) + total)):
+        out[i] = np.linalg.norm(np.diff(curves[i]["X"], axis=0), axis=1).sum() > length
+    return out
+
+
 def drop_shared_edges(curves, tol):
     """Where the plane contains an edge two faces share, both faces' sections run along
     it: the same curve twice (joined, a closed loop of zero area), or one face's piece
@@ -128,16 +146,21 @@ def drop_shared_edges(curves, tol):
 
     if len(curves) < 2:
         return curves
-    amin = np.array([c["X"].min(axis=0) for c in curves])
-    amax = np.array([c["X"].max(axis=0) for c in curves])
+    n = np.array([len(c["X"]) for c in curves])
+    if not n.all():
+        return curves   # a curve without points (never made): nothing to compare
+    X = np.concatenate([c["X"] for c in curves])
+    starts = np.cumsum(n) - n
+    amin = np.minimum.reduceat(X, starts)
+    amax = np.maximum.reduceat(X, starts)
+    long_ = _longer_than(curves, X, starts, 4 * tol)
     drop = set()
-    for i, a in enumerate(curves):
-        if np.linalg.norm(np.diff(a["X"], axis=0), axis=1).sum() <= 4 * tol:
-            continue
+    for i in np.flatnonzero(long_).tolist():
+        a = curves[i]
         # the curves whose box (grown by tol) holds a's: a may lie along them
         inside = np.flatnonzero((amin[i] >= amin - tol).all(axis=1)
                                 & (amax[i] <= amax + tol).all(axis=1))
-        for j in inside:
+        for j in inside.tolist():
             if j == i or j in drop:
                 continue
             if _near_polyline(a["X"], poly(curves[j]), tol):
@@ -154,9 +177,17 @@ def merge_point_curves(curves, exact):
     one apex); joined, they would be that point again, or part of the curve they
     touch."""
     keep, spots = [], []
-    for c in curves:
+    n = np.array([len(c["X"]) for c in curves], dtype=np.int64)
+    cand = np.ones(len(curves), bool)
+    if len(curves) and n.all():   # the extents of all curves at once: a filter
+        X = np.concatenate([c["X"] for c in curves])
+        starts = np.cumsum(n) - n
+        ext = np.linalg.norm(np.maximum.reduceat(X, starts) - np.minimum.reduceat(X, starts),
+                             axis=1)
+        cand = ext <= exact * (1 + 1e-9)
+    for c, maybe in zip(curves, cand.tolist()):
         X = c["X"]
-        if not c["closed"] and len(X) and \
+        if maybe and not c["closed"] and len(X) and \
                 float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) <= exact:
             if any(float(np.linalg.norm(X[0] - q)) <= exact for q in spots):
                 continue

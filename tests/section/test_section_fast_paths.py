@@ -294,3 +294,105 @@ def test_unique_rows_as_numpy_unique():
         u_np, inv_np = np.unique(a, axis=0, return_inverse=True)
         assert np.array_equal(u, u_np) and np.array_equal(inv, inv_np.ravel())
         assert np.array_equal(u[inv], a)
+
+
+# ------------------------------------------------------------- joins over all curves at once
+def _drop_shared_edges_plain(curves, tol):
+    def poly(c):
+        X = c["X"]
+        return np.vstack([X, X[:1]]) if c["closed"] else X
+
+    if len(curves) < 2:
+        return curves
+    amin = np.array([c["X"].min(axis=0) for c in curves])
+    amax = np.array([c["X"].max(axis=0) for c in curves])
+    drop = set()
+    for i, a in enumerate(curves):
+        if np.linalg.norm(np.diff(a["X"], axis=0), axis=1).sum() <= 4 * tol:
+            continue
+        inside = np.flatnonzero((amin[i] >= amin - tol).all(axis=1)
+                                & (amax[i] <= amax + tol).all(axis=1))
+        for j in inside:
+            if j == i or j in drop:
+                continue
+            if joins._near_polyline(a["X"], poly(curves[j]), tol):
+                drop.add(i)
+                break
+    return [c for k, c in enumerate(curves) if k not in drop]
+
+
+def _merge_point_curves_plain(curves, exact):
+    keep, spots = [], []
+    for c in curves:
+        X = c["X"]
+        if not c["closed"] and len(X) and \
+                float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) <= exact:
+            if any(float(np.linalg.norm(X[0] - q)) <= exact for q in spots):
+                continue
+            spots.append(X[0])
+        keep.append(c)
+    return keep
+
+
+def _pieces(rng, n, tol):
+    """Open and closed polylines: long ones, copies of parts of them a hair off (shared
+    edges), points (one or many samples within tol), and pieces exactly 4 tol long."""
+    out = []
+    for k in range(n):
+        kind = k % 5
+        if kind == 0:
+            X = np.cumsum(rng.normal(size=(rng.integers(2, 40), 3)), axis=0)
+        elif kind == 1 and out:
+            Y = out[rng.integers(len(out))]["X"]
+            X = Y[: max(1, len(Y) // 2)] + rng.normal(size=(1, 3)) * 0.3 * tol
+        elif kind == 2:
+            X = rng.normal(size=(1, 3)) + rng.uniform(0, 0.4 * tol, size=(rng.integers(1, 5), 3))
+        elif kind == 3:
+            d = rng.normal(size=3)
+            X = np.array([[0.0, 0, 0], 4 * tol * d / np.linalg.norm(d)]) + rng.normal(size=3)
+        else:
+            X = rng.normal(size=(rng.integers(3, 9), 3))
+        out.append({"X": X, "closed": bool(kind == 4 and rng.integers(2))})
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_shared_edges_and_point_pieces_as_the_loops_over_curves(seed):
+    rng = np.random.default_rng(seed)
+    tol = 10.0 ** rng.uniform(-4, -1)
+    curves = _pieces(rng, 60 + 40 * seed, tol)
+    got = joins.drop_shared_edges(curves, tol)
+    want = _drop_shared_edges_plain(curves, tol)
+    assert [id(c) for c in got] == [id(c) for c in want]
+    got = joins.merge_point_curves(curves, tol)
+    want = _merge_point_curves_plain(curves, tol)
+    assert [id(c) for c in got] == [id(c) for c in want]
+
+
+@pytest.mark.occ
+@pytest.mark.skipif(not HAVE_OCP, reason="reading STEP needs cadquery-ocp")
+def test_shared_edges_and_point_pieces_on_the_apex_section(monkeypatch):
+    """NIST CTC-01 AP242 at its mid-plane z: 1,576 pieces before joining, hundreds of
+    them one point at a cone's apex."""
+    from geomkit.cad.step import read_step
+
+    case = read_step(DATA / "parts" / "nist_ctc_01_ap242.stp")
+    S = case.surfaces
+    B = np.array([s.bounds for s in S])
+    lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    seen = []
+    for name, plain in (("drop_shared_edges", _drop_shared_edges_plain),
+                        ("merge_point_curves", _merge_point_curves_plain)):
+        fast = getattr(plane_mod, name)
+
+        def both(curves, tol, fast=fast, plain=plain):
+            got = fast(curves, tol)
+            assert [id(c) for c in got] == [id(c) for c in plain(curves, tol)]
+            seen.append(len(curves))
+            return got
+
+        monkeypatch.setattr(plane_mod, name, both)
+    geomkit.plane_section(S, [0, 0, 1, -0.5 * (lo[2] + hi[2])], 1e-4 * size,
+                          gap=case.edge_gap or 0.0)
+    assert len(seen) == 2 and seen[0] > 1000
