@@ -424,6 +424,49 @@ def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin
 
 
 @jit
+def _halve(Pw, p, q, U, V, plane, au, av, bu, bv, d, h, box, ftol, maxdepth, out, dep, nout,
+           stack, sdepth, bin_, scr, SKL):
+    """The points of :func:`densify` on the segment ``a -> b`` at depth ``d``
+    (its halvings so far), ``a`` excluded, ``b`` included, appended to ``out`` with the
+    depth of the segment each point ends; returns (count, out, dep)."""
+    stack[0, 0] = bu
+    stack[0, 1] = bv
+    sdepth[0] = d
+    top = 1
+    while top > 0:
+        bu = stack[top - 1, 0]
+        bv = stack[top - 1, 1]
+        dd = sdepth[top - 1]
+        du = bu - au
+        dv = bv - av
+        seg = np.sqrt(du * du + dv * dv)
+        if seg > h and dd < maxdepth:
+            mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
+                                        0.5 * (av + bv), seg, box, ftol, 40, bin_, scr, SKL)
+            sdepth[top - 1] = dd + 1
+            stack[top, 0] = mu
+            stack[top, 1] = mv
+            sdepth[top] = dd + 1
+            top += 1
+            continue
+        if nout == out.shape[0]:
+            bigger = np.empty((2 * nout, 2))
+            bigger[:nout] = out
+            out = bigger
+            bdep = np.empty(2 * nout, np.int64)
+            bdep[:nout] = dep
+            dep = bdep
+        out[nout, 0] = bu
+        out[nout, 1] = bv
+        dep[nout] = dd
+        nout += 1
+        au = bu
+        av = bv
+        top -= 1
+    return nout, out, dep
+
+
+@jit
 def densify(Pw, p, q, U, V, plane, uv, h, box, ftol, maxdepth):
     """Exact curve points inserted into the polyline ``uv`` (n, 2) until consecutive
     points are at most ``h`` apart in UV; returns the (m, 2) polyline.
@@ -439,51 +482,18 @@ def densify(Pw, p, q, U, V, plane, uv, h, box, ftol, maxdepth):
     SKL = np.empty((2, 2, 3))
     n = uv.shape[0]
     out = np.empty((max(2 * n, 16), 2))
-    nout = 0
+    dep = np.empty(out.shape[0], np.int64)
     stack = np.empty((maxdepth + 2, 2))   # right ends of the pending halves
     sdepth = np.empty(maxdepth + 2, np.int64)
-    for i in range(n - 1):
-        au = uv[i, 0]
-        av = uv[i, 1]
-        stack[0, 0] = uv[i + 1, 0]
-        stack[0, 1] = uv[i + 1, 1]
-        sdepth[0] = 0
-        top = 1
-        while top > 0:
-            bu = stack[top - 1, 0]
-            bv = stack[top - 1, 1]
-            d = sdepth[top - 1]
-            du = bu - au
-            dv = bv - av
-            seg = np.sqrt(du * du + dv * dv)
-            if seg > h and d < maxdepth:
-                mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
-                                            0.5 * (av + bv), seg, box, ftol, 40, bin_, scr,
-                                            SKL)
-                sdepth[top - 1] = d + 1       # (m, b) after (a, m)
-                stack[top, 0] = mu
-                stack[top, 1] = mv
-                sdepth[top] = d + 1
-                top += 1
-                continue
-            if nout == out.shape[0]:
-                bigger = np.empty((2 * nout, 2))
-                bigger[:nout] = out
-                out = bigger
-            out[nout, 0] = au
-            out[nout, 1] = av
-            nout += 1
-            au = bu
-            av = bv
-            top -= 1
+    nout = 0
     if n > 0:
-        if nout == out.shape[0]:
-            bigger = np.empty((nout + 1, 2))
-            bigger[:nout] = out
-            out = bigger
-        out[nout, 0] = uv[n - 1, 0]
-        out[nout, 1] = uv[n - 1, 1]
-        nout += 1
+        out[0, 0] = uv[0, 0]
+        out[0, 1] = uv[0, 1]
+        nout = 1
+    for i in range(n - 1):
+        nout, out, dep = _halve(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], uv[i + 1, 0],
+                                uv[i + 1, 1], 0, h, box, ftol, maxdepth, out, dep, nout,
+                                stack, sdepth, bin_, scr, SKL)
     return out[:nout].copy()
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit
-from .section import _outside, _project_point
+from .section import _halve, _outside
 from .surface import D1, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH as TRIM_MAX_DEPTH
 
@@ -30,49 +30,6 @@ FINE_MARGIN = 2.0
 """A coarse segment ``a -> b`` stands for the fine points between its ends within its
 box grown by ``FINE_MARGIN * |b - a|`` (each fine point is the projection of a
 midpoint, moved at most the length of the segment it halves)."""
-
-
-@jit
-def _halve(Pw, p, q, U, V, plane, au, av, bu, bv, d, h, box, ftol, maxdepth, out, dep, nout,
-           stack, sdepth, bin_, scr, SKL):
-    """The points of :func:`.section.densify` on the segment ``a -> b`` at depth ``d``
-    (its halvings so far), ``a`` excluded, ``b`` included, appended to ``out`` with the
-    depth of the segment each point ends; returns (count, out, dep)."""
-    stack[0, 0] = bu
-    stack[0, 1] = bv
-    sdepth[0] = d
-    top = 1
-    while top > 0:
-        bu = stack[top - 1, 0]
-        bv = stack[top - 1, 1]
-        dd = sdepth[top - 1]
-        du = bu - au
-        dv = bv - av
-        seg = np.sqrt(du * du + dv * dv)
-        if seg > h and dd < maxdepth:
-            mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
-                                        0.5 * (av + bv), seg, box, ftol, 40, bin_, scr, SKL)
-            sdepth[top - 1] = dd + 1
-            stack[top, 0] = mu
-            stack[top, 1] = mv
-            sdepth[top] = dd + 1
-            top += 1
-            continue
-        if nout == out.shape[0]:
-            bigger = np.empty((2 * nout, 2))
-            bigger[:nout] = out
-            out = bigger
-            bdep = np.empty(2 * nout, np.int64)
-            bdep[:nout] = dep
-            dep = bdep
-        out[nout, 0] = bu
-        out[nout, 1] = bv
-        dep[nout] = dd
-        nout += 1
-        au = bu
-        av = bv
-        top -= 1
-    return nout, out, dep
 
 
 @jit
