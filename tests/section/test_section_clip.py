@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.sections import mid_plane_sections
 
 import geomkit
 from geomkit import samples
 from geomkit._kernels import section_clip as C
 from geomkit.cad.occ import HAVE_OCP
 from geomkit.section import plane as plane_mod
-from helpers.paths import DATA
 
 
 def _checked(monkeypatch, sides):
@@ -69,17 +69,7 @@ def test_chain_side_sees_each_case(monkeypatch):
 def test_chain_side_on_real_parts(monkeypatch, part):
     """Mid-planes of real parts.  FTC-07 at x: a chain along a face's edge starts on
     the domain's edge, a hair outside the trim (the trim runs 5.5e-4 inside it)."""
-    from geomkit.cad.step import read_step
-
-    case = read_step(DATA / "parts" / part)
-    S = case.surfaces
-    B = np.array([s.bounds for s in S])
-    lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
-    size = float(np.linalg.norm(hi - lo))
     sides = []
     _checked(monkeypatch, sides)
-    for ax in range(3):
-        n = np.eye(3)[ax]
-        geomkit.plane_section(S, [*n, -0.5 * (lo[ax] + hi[ax])], 1e-4 * size,
-                              gap=case.edge_gap or 0.0)
+    mid_plane_sections(part)
     assert C.MIXED in sides and C.INSIDE_ALL in sides

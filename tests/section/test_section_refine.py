@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.sections import mid_plane_sections
 
 import geomkit
 from geomkit import samples
@@ -18,7 +19,6 @@ from geomkit._kernels import section as K
 from geomkit.cad.occ import HAVE_OCP
 from geomkit.section import trace
 from geomkit.section.trace import _Eval
-from helpers.paths import DATA
 
 
 # ------------------------------------------------------------- oracle: the numpy rounds
@@ -169,17 +169,7 @@ def test_refine_kernel_out_of_rounds_reports_inf(monkeypatch):
                                   "sw2018_base_interface_ap203.step"])
 def test_refine_kernel_on_real_parts(monkeypatch, part):
     """Mid-planes of real parts (cylinders, cones, B-spline fillets, planes)."""
-    from geomkit.cad.step import read_step
-
-    case = read_step(DATA / "parts" / part)
-    S = case.surfaces
-    B = np.array([s.bounds for s in S])
-    lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
-    size = float(np.linalg.norm(hi - lo))
     calls = []
     _checked(monkeypatch, calls)
-    for ax in range(3):
-        n = np.eye(3)[ax]
-        geomkit.plane_section(S, [*n, -0.5 * (lo[ax] + hi[ax])], 1e-4 * size,
-                              gap=case.edge_gap or 0.0)
+    mid_plane_sections(part)
     assert len(calls) > 20
