@@ -463,8 +463,4 @@ def _placed_surface(s, M, name):
     NURBS), named ``name``."""
     if M is None and s.name == name:
         return s
-    P = s.control_points
-    if M is not None:
-        P = P @ M[:3, :3].T + M[:3, 3]
-    return Surface(s.degree_u, s.degree_v, s.knots_u, s.knots_v, P, s.weights,
-                   s.trim or None, name=name, approx_error=s.approx_error)
+    return s.placed(M, name)

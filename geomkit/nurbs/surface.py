@@ -208,6 +208,29 @@ class Surface:
         s.trim = s._parse_trim(trim)
         return s
 
+    def placed(self, matrix=None, name: str | None = None):
+        """The surface carried by the affine 4 x 4 ``matrix`` (exact: an affine map
+        commutes with the rational basis, so it maps the control points) and, when
+        given, renamed ``name``.  Knots, weights and trim loops (in UV, unchanged by
+        the map) are shared with this surface, not validated again."""
+        s = object.__new__(Surface)
+        for k in ("degree_u", "degree_v", "knots_u", "knots_v", "control_points",
+                  "weights", "_Pw", "trim", "approx_error"):
+            setattr(s, k, getattr(self, k))
+        s._cache = {}
+        s.name = self.name if name is None else name
+        if matrix is not None:
+            M = as_float_array(matrix, "matrix", shape=(4, 4), error=InvalidSurfaceError)
+            if not np.isfinite(M).all():
+                raise InvalidSurfaceError("must be finite", "matrix")
+            P = self.control_points @ M[:3, :3].T + M[:3, 3]
+            Pw = np.empty_like(self._Pw)
+            Pw[..., :3] = P * self._Pw[..., 3:4]
+            Pw[..., 3] = self._Pw[..., 3]
+            s.control_points = readonly(P)
+            s._Pw = readonly(Pw)
+        return s
+
     # ------------------------------------------------------------------ pickling
     def __reduce__(self):
         """Pickled as one float buffer and a list of shapes (a read cache or a Dask
