@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from geomkit.mesh.cells import triangle_coordinates
 from geomkit.mesh.trim_polylines import TrimPolylines, affine_map
 from geomkit.nurbs.surface import Surface
 
@@ -43,9 +44,8 @@ def _triangulate(polys: np.ndarray):
             except shapely.errors.GEOSException:
                 tri[j] = shapely.GeometryCollection()
                 failed[j] = True
-    parts, idx = shapely.get_parts(tri, return_index=True)
-    xy = shapely.get_coordinates(shapely.get_exterior_ring(parts))
-    return xy.reshape(-1, 4, 2)[:, :3, :], idx, failed
+    coords, idx = triangle_coordinates(tri)
+    return coords, idx, failed
 
 
 def planar_batch(surfaces, chord_tol: float) -> dict:

@@ -247,3 +247,28 @@ def test_weld_components_match_scipy():
         root = W.components(n, pairs)
         first = np.flatnonzero(root == np.arange(n))
         assert np.array_equal(np.searchsorted(first, root), label), trial
+
+
+
+def test_triangle_coordinates_match_get_parts():
+    """The triangles of GEOS's collections read in one get_coordinates call against
+    the per-triangle route (get_parts, exterior rings), empty collections included; a
+    part that is not a triangle (a square: 5 ring points) is not read as triangles."""
+    rng = np.random.default_rng(7)
+    polys = []
+    for n in (5, 9, 23, 40):
+        a = np.sort(rng.random(n)) * 2 * np.pi
+        polys.append(shapely.Polygon(np.c_[np.cos(a), np.sin(a)]
+                                     * (1 + 0.3 * rng.random(n))[:, None]))
+    polys.insert(1, shapely.Polygon())
+    polys.append(shapely.box(0, 0, 1, 1).difference(shapely.box(.4, .4, .6, .6)))
+    tri = shapely.constrained_delaunay_triangles(np.array(polys, dtype=object))
+    parts, idx = shapely.get_parts(tri, return_index=True)
+    xy = shapely.get_coordinates(shapely.get_exterior_ring(parts))
+    got = C.triangle_coordinates(tri)
+    assert np.array_equal(got[0], xy.reshape(-1, 4, 2)[:, :3, :])
+    assert np.array_equal(got[1], idx)
+    assert set(idx.tolist()) == {0, 2, 3, 4, 5}
+    square = np.array([shapely.GeometryCollection([shapely.box(0, 0, 1, 1)])], dtype=object)
+    with pytest.raises(ValueError):  # 5 ring points: neither route reads it as triangles
+        C.triangle_coordinates(square)
