@@ -226,7 +226,12 @@ def _err(x) -> str:
 
 def _setting(r) -> str:
     v = r["setting"]
-    txt = f"{v:.0e}" if isinstance(v, float) else f"{v:,}"
+    if isinstance(v, float):  # one digit when that is the value (1e-03), else three
+        txt = f"{v:.0e}"
+        if abs(float(txt) - v) > 1e-9 * abs(v):
+            txt = f"{v:.3g}"
+    else:
+        txt = f"{v:,}"
     return f"{r['setting_name']} {txt}"
 
 

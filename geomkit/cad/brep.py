@@ -486,28 +486,31 @@ def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,
     joined by a UV segment (else left to the caller)."""
     P = _edge_points(loops)
     size = float(np.ptp(P, axis=0).max()) or 1.0
-    chains = [_chain(srf, lp, size) for lp in loops]
-    outer = np.concatenate(chains[0])
-    for ch in chains[1:]:  # inner loops: same turn as the outer one
-        for c in (0, 1):
-            if srf.periodic[c]:
-                m = np.concatenate(ch)[:, c].mean()
-                k = round((outer[:, c].mean() - m) / TWO_PI)
-                for ab in ch:
-                    ab[:, c] += k * TWO_PI
-    allab = np.concatenate([np.concatenate(ch) for ch in chains])
-    lo, hi = allab.min(axis=0), allab.max(axis=0)
+    if srf.kind == "plane":  # the pieces are the edges' own NURBS mapped: the range
+        # is their control points' (a rational arc's middle control point lies beyond
+        # the arc, and trims must stay in the domain; the hull holds every sample)
+        chains = [[None] * len(lp) for lp in loops]
+        Q = np.concatenate([e.curve[2][:, :3] / e.curve[2][:, 3:] for lp in loops
+                            for e in lp])
+        q, _ = srf.local(Q)
+        lo, hi = q.min(axis=0), q.max(axis=0)
+    else:
+        chains = [_chain(srf, lp, size) for lp in loops]
+        outer = np.concatenate(chains[0])
+        for ch in chains[1:]:  # inner loops: same turn as the outer one
+            for c in (0, 1):
+                if srf.periodic[c]:
+                    m = np.concatenate(ch)[:, c].mean()
+                    k = round((outer[:, c].mean() - m) / TWO_PI)
+                    for ab in ch:
+                        ab[:, c] += k * TWO_PI
+        allab = np.concatenate([np.concatenate(ch) for ch in chains])
+        lo, hi = allab.min(axis=0), allab.max(axis=0)
     if extra is not None and len(extra):
         ab, _ = srf.local(np.asarray(extra, float).reshape(-1, 3))
         for c in (0, 1):
             if not srf.periodic[c]:
                 lo[c], hi[c] = min(lo[c], ab[:, c].min()), max(hi[c], ab[:, c].max())
-    if srf.kind == "plane":  # the pieces are the edges' own NURBS: a rational arc's
-        # middle control point lies beyond the arc, and trims must stay in the domain
-        Q = np.concatenate([e.curve[2][:, :3] / e.curve[2][:, 3:] for lp in loops
-                            for e in lp])
-        q, _ = srf.local(Q)
-        lo, hi = np.minimum(lo, q.min(axis=0)), np.maximum(hi, q.max(axis=0))
     if srf.kind == "cone":  # never across the apex; an end near it is the apex
         apex = -srf.R / math.tan(srf.alpha)
         near = 1e-6 * max(size, abs(apex))

@@ -99,6 +99,8 @@ def test_format_table_and_errors():
     lines = txt.splitlines()
     assert len(lines) == 3 and lines[2].count("|") == lines[0].count("|")
     assert "2 ms" in lines[2] and "tol 1e-03" in lines[2]
+    row.update(setting=0.12813)   # a part's tolerance: not rounded to one digit
+    assert "tol 0.128 " in suite.format_table([row])
     with pytest.raises(ValueError):
         suite.run_suite(["nope"])
 
