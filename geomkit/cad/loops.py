@@ -23,6 +23,26 @@ class Unsupported(Exception):
     """A face or entity that cannot be read exactly (the message says which and why)."""
 
 
+def join_gaps(pieces) -> np.ndarray:
+    """The UV distance from each piece's end to the next one's start (cyclic: the last
+    piece's end to the first's start), all at once."""
+    if not pieces:
+        return np.zeros(0)
+    E = np.array([c.control_points[-1] for c in pieces])
+    S = np.array([c.control_points[0] for c in pieces])
+    return np.hypot(*(E - np.roll(S, -1, axis=0)).T)
+
+
+def _inside_domain(pieces, domain) -> bool:
+    """Whether every control point of every piece lies in ``domain`` (closed)."""
+    (u0, u1), (v0, v1) = domain
+    if not pieces:
+        return True
+    P = np.concatenate([c.control_points for c in pieces])
+    return bool(((P[:, 0] >= u0) & (P[:, 0] <= u1) & (P[:, 1] >= v0)
+                 & (P[:, 1] <= v1)).all())
+
+
 def reverse(c: TrimCurve) -> TrimCurve:
     """The same trim curve traversed the other way."""
     U = np.asarray(c.knots)
@@ -100,7 +120,8 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     def joins(p):
         return [(a, p[(k + 1) % len(p)]) for k, a in enumerate(p)]
 
-    if same_point is not None and len(pieces) > 1 and any(far(a, b) for a, b in joins(pieces)):
+    g = join_gaps(pieces)
+    if same_point is not None and len(pieces) > 1 and bool((g > GAP_TOL * size).any()):
         chained = chain(pieces, size)
         if any(bad(a, b) for a, b in joins(pieces)):
             pieces = chained
@@ -111,11 +132,14 @@ def close_gaps(pieces, domain, where: str, same_point=None):
             # across a seam corner (OCC writes a closed torus face so).  A straight UV
             # bridge would map to a curve across the face, not to one point.
             pieces = chained
+        g = join_gaps(pieces)
+    if not bool((g > 1e-9 * size).any()):  # closed to rounding: nothing to bridge
+        return list(pieces), []
     out, gaps = [], []
     for k, a in enumerate(pieces):
         out.append(a)
         b = pieces[(k + 1) % len(pieces)]
-        gap = float(np.hypot(*(a.end - b.start)))
+        gap = float(g[k])
         if gap <= 1e-9 * size:
             continue
         if gap > GAP_TOL * size and not (same_point and same_point(a.end, b.start)):
@@ -270,11 +294,15 @@ def finish_loop(pieces, base, periods, ftol: float, what: str):
     (u0, u1), (v0, v1) = domain = base.domain
     size = max(u1 - u0, v1 - v0)
     probe = same_point_3d(base, ftol)  # a gap at a pole is not out of order
-    if any(np.hypot(*(a.end - b.start)) > GAP_TOL * size and not probe(a.end, b.start)
-           for a, b in zip(pieces, pieces[1:] + pieces[:1])):
+    far = np.flatnonzero(join_gaps(pieces) > GAP_TOL * size).tolist()
+    nxt = pieces[1:] + pieces[:1]
+    if any(not probe(pieces[k].end, nxt[k].start) for k in far):
         pieces = chain(pieces, size, periods, domain)
-    pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
-    pieces, moved3 = clip_in_3d(pieces, base, ftol)
+    if _inside_domain(pieces, domain):  # nothing to clip
+        moved, moved3 = [], []
+    else:
+        pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
+        pieces, moved3 = clip_in_3d(pieces, base, ftol)
     same = same_point_3d(base, ftol)
     pieces, g = close_gaps(pieces, domain, what, same)
     return pieces, moved + g, moved3 + same.errors
