@@ -30,7 +30,10 @@ import math
 import numpy as np
 
 from geomkit.tolerances import ISO_TOL
+from geomkit.errors import InvalidTrimError
 from geomkit.nurbs.surface import TrimCurve
+from geomkit.nurbs.trims import readonly
+from geomkit.validate import check_knots
 from geomkit.cad.analytic import (AngleMap, arc_curve, cross3, curve_eval, line_curve,
                                   plane_patch, revolve, unwrap)
 from geomkit.cad.iges.entities import curve3d
@@ -371,6 +374,23 @@ def _segment(q):
     return TrimCurve(1, _SEGMENT_KNOTS, q, _TWO_ONES)
 
 
+def _mapped_piece(p, U, Q, w):
+    """``TrimCurve.create(p, U, Q, w)`` of an edge's own NURBS mapped onto a plane,
+    without create's conversions when the curve is as the readers build it (finite,
+    clamped, weights > 0; its knots checked as create checks them): thousands per
+    part.  Anything else goes through create (an error naming the fault)."""
+    U = np.asarray(U, dtype=np.float64)
+    n = Q.shape[0]
+    if not (n >= p + 1 and U.shape[0] == n + p + 1 and U[0] == U[p] and U[-1] == U[-p - 1]
+            and np.isfinite(Q).all() and (w is None or bool((w > 0).all()))):
+        return TrimCurve.create(p, U, Q, w)
+    U = check_knots(U, p, n, "trim.knots", InvalidTrimError)
+    if w is None:
+        return TrimCurve(p, readonly(U), readonly(Q), readonly(np.ones(n)))
+    w = np.asarray(w, dtype=np.float64)
+    return TrimCurve(p, readonly(U), readonly(Q * w[:, None] / w[:, None]), readonly(w))
+
+
 def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
     pieces = []
     for e, ab in zip(loop, chains):
@@ -382,7 +402,7 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
             if e.reverse:
                 U = (U[0] + U[-1]) - np.asarray(U)[::-1]
                 Q, w = Q[::-1], w[::-1]
-            c = TrimCurve.create(p, U, Q, None if np.all(w == w[0]) else w)
+            c = _mapped_piece(p, U, Q, None if np.all(w == w[0]) else w)
         else:
             dev = np.abs(ab - ab[0])
             iso = [float(dev[:, k].max()) <= ISO_TOL * max(size, 1.0) for k in (0, 1)]
