@@ -166,12 +166,16 @@ class Surface:
         Pw = np.empty((nu, nv, 4))
         Pw[..., :3] = P * w[..., None]
         Pw[..., 3] = w
-        # clamp unclamped knot vectors (u: rows are curves; v: transpose)
-        flat, U = clamp_knots(Pw.reshape(nu, nv * 4), p, U)
-        Pw = flat.reshape(-1, nv, 4)
-        nu = Pw.shape[0]
-        flat, V = clamp_knots(np.ascontiguousarray(Pw.transpose(1, 0, 2)).reshape(nv, nu * 4), q, V)
-        Pw = np.ascontiguousarray(flat.reshape(-1, nu, 4).transpose(1, 0, 2))
+        # clamp unclamped knot vectors (u: rows are curves; v: transpose); the knots
+        # are non-decreasing, so equal ends p apart are clamped ends
+        if not (U[0] == U[p] and U[-1] == U[-p - 1]):
+            flat, U = clamp_knots(Pw.reshape(nu, nv * 4), p, U)
+            Pw = flat.reshape(-1, nv, 4)
+            nu = Pw.shape[0]
+        if not (V[0] == V[q] and V[-1] == V[-q - 1]):
+            flat, V = clamp_knots(np.ascontiguousarray(Pw.transpose(1, 0, 2))
+                                  .reshape(nv, nu * 4), q, V)
+            Pw = np.ascontiguousarray(flat.reshape(-1, nu, 4).transpose(1, 0, 2))
         self.degree_u = p
         self.degree_v = q
         self.knots_u = readonly(U)
