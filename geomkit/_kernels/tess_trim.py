@@ -1,21 +1,23 @@
-"""Trim polylines for tessellation: adaptive subdivision in one kernel call.
+"""Trim polylines for tessellation: adaptive subdivision in one kernel call per surface.
 
 A trim piece ``C(t)`` (a rational 2-D curve) on a surface ``S`` becomes the polyline
-through ``C(t_i)``; a segment ``[ta, tb]`` is accepted when the points
-``S(C(ta + f (tb - ta)))`` and ``S(C(ta) + f (C(tb) - C(ta)))`` for ``f`` in
-``{1/4, 1/2, 3/4}`` (the exact boundary curve, and the image of the UV chord, which
-the mesh boundary also follows where it crosses cell edges) all lie within
-``chord_tol`` of the 3-D chord ``S(C(ta))``–``S(C(tb))``; otherwise it is split into
-``k`` equal parameter parts, ``k`` predicted from the measured error (chord errors
-fall with the square of the step), each part tested again.  Curve points are clipped
-to the domain box (trim curves may stray outside it by the validation tolerance).
+through ``C(t_i)``, starting from the piece's knots; a segment ``[ta, tb]`` is accepted
+when the points ``S(C(ta + f (tb - ta)))`` and ``S(C(ta) + f (C(tb) - C(ta)))`` (the
+exact boundary curve, and the image of the UV chord, which the mesh boundary also
+follows where it crosses cell edges) all lie within ``chord_tol`` of the 3-D chord
+``S(C(ta))``--``S(C(tb))``, for ``f`` in ``{1/4, 1/2, 3/4}`` and, on a curved piece of
+few spans, at every point of the knot span's 1/16 grid inside the segment; otherwise
+it is split into ``k`` equal parameter parts, ``k`` predicted from the measured error
+(chord errors fall with the square of the step), each part tested again.  Curve
+points are clipped to the domain box (trim curves may stray outside it by the
+validation tolerance).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit
+from .numba_ext.policy import jit, jit_inline
 from .basis import basis_funs, find_span
 from .surface import surface_point
 
@@ -44,19 +46,56 @@ def _curve_at(Pc, pc, Uc, t, lo0, lo1, hi0, hi1, N, left, right):
     return min(max(x / w, lo0), hi0), min(max(y / w, lo1), hi1)
 
 
-@jit
-def trim_polyline(Pc, pc, Uc, t0, lo0, lo1, hi0, hi1, Pw, p, q, U, V, chord_tol, uv_chords,
-                  out):
-    """Polyline of one trim piece, starting from the parameters ``t0`` (sorted).
+@jit_inline
+def _chord_gap(X, Pa, d0, d1, d2, ll):
+    """Distance of the point ``X`` from the 3-D chord from ``Pa`` along ``d``
+    (``ll = |d|^2``)."""
+    e0 = X[0] - Pa[0]
+    e1 = X[1] - Pa[1]
+    e2 = X[2] - Pa[2]
+    w = 0.0
+    if ll > 0.0:
+        w = (e0 * d0 + e1 * d1 + e2 * d2) / ll
+        w = min(1.0, max(0.0, w))
+    g0 = e0 - w * d0
+    g1 = e1 - w * d1
+    g2 = e2 - w * d2
+    return np.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
 
-    ``uv_chords`` False skips the samples of the UV chord (for a surface that is an
-    affine map of its parameters they lie on the 3-D chord).  Writes ``(t, u, v)`` rows
-    into ``out`` (capacity, 3) in curve order, the last row
-    at ``t0[-1]``; returns the row count, or -1 when ``out`` is too small (call again
-    with a larger one)."""
-    Nc = np.empty(pc + 1)
-    lc = np.empty(pc + 1)
-    rc = np.empty(pc + 1)
+
+@jit_inline
+def _emit(out, n, t, u, v):
+    """Row ``n`` of ``out`` set to ``(t, u, v)``: ``n + 1``, or -1 when ``out`` is full."""
+    if n >= out.shape[0]:
+        return -1
+    out[n, 0] = t
+    out[n, 1] = u
+    out[n, 2] = v
+    return n + 1
+
+
+@jit
+def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
+                   U, V, chord_tol, uv_chords, out, counts):
+    """Polylines of many trim pieces on one surface, in one call.
+
+    Piece ``c`` has degree ``deg[c]``, control points ``CP[cp_off[c]:cp_off[c+1]]``
+    (n, 2) with weights ``W[...]`` and knots ``K[k_off[c]:k_off[c+1]]``.  Each piece
+    starts from its distinct knots (a segment never crosses a knot).  A segment
+    ``[ta, tb]`` is accepted when the curve points ``S(C(t))`` and the UV-chord
+    points (``uv_chords``; False for a surface that is an affine map of its
+    parameters, where they lie on the 3-D chord) are within ``chord_tol`` of the 3-D
+    chord at its quarter points and, for a curved piece of at most ``dense_spans``
+    spans, at every point of its knot span's 1/16 grid inside it: at least the
+    sampling of starting from 5 seeds a span and checking quarter points (the route
+    before), which put 4 times the points on gentle curves.  A failing segment is
+    split into ``k`` equal parts, ``k`` from the measured error (see the module
+    docstring).  A degree-1 non-rational piece with distinct knots keeps its control
+    points exactly as its seeds (``C(t_i) = P_i``).
+
+    Writes ``(t, u, v)`` rows into ``out`` piece after piece (each piece from its
+    first knot to its last), ``counts[c]`` rows for piece ``c``; returns the row
+    count, or -1 when ``out`` is too small (call again with a larger one)."""
     mm = max(p, q) + 1
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
@@ -66,93 +105,129 @@ def trim_polyline(Pc, pc, Uc, t0, lo0, lo1, hi0, hi1, Pw, p, q, U, V, chord_tol,
     Pa = np.empty(3)
     Pb = np.empty(3)
     X = np.empty(3)
-    # the stack holds the right ends of pending segments: (t, u, v, x, y, z, depth)
     stack = np.empty(((MAX_DEPTH + 2) * MAX_PARTS, 7))
-    cap = out.shape[0]
     n = 0
-    ta = t0[0]
-    ua, va = _curve_at(Pc, pc, Uc, ta, lo0, lo1, hi0, hi1, Nc, lc, rc)
-    surface_point(Pw, p, q, U, V, ua, va, Nu, Nv, left, right, tmp, Pa)
-    for i in range(1, t0.shape[0]):
-        tb = t0[i]
-        ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
-        surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
-        stack[0, 0] = tb
-        stack[0, 1] = ub
-        stack[0, 2] = vb
-        stack[0, 3] = Pb[0]
-        stack[0, 4] = Pb[1]
-        stack[0, 5] = Pb[2]
-        stack[0, 6] = 0
-        top = 1
-        while top > 0:
-            tb = stack[top - 1, 0]
-            ub = stack[top - 1, 1]
-            vb = stack[top - 1, 2]
-            depth = int(stack[top - 1, 6])
-            d0 = stack[top - 1, 3] - Pa[0]
-            d1 = stack[top - 1, 4] - Pa[1]
-            d2 = stack[top - 1, 5] - Pa[2]
-            ll = d0 * d0 + d1 * d1 + d2 * d2
-            worst = 0.0
-            for s in range(6 if uv_chords else 3):
-                f = 0.25 * (s % 3 + 1)
-                if s < 3:
-                    su, sv = _curve_at(Pc, pc, Uc, ta + (tb - ta) * f, lo0, lo1, hi0, hi1,
-                                       Nc, lc, rc)
-                else:
-                    su = ua + (ub - ua) * f
-                    sv = va + (vb - va) * f
-                surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
-                e0 = X[0] - Pa[0]
-                e1 = X[1] - Pa[1]
-                e2 = X[2] - Pa[2]
-                w = 0.0
-                if ll > 0.0:
-                    w = (e0 * d0 + e1 * d1 + e2 * d2) / ll
-                    w = min(1.0, max(0.0, w))
-                g0 = e0 - w * d0
-                g1 = e1 - w * d1
-                g2 = e2 - w * d2
-                worst = max(worst, np.sqrt(g0 * g0 + g1 * g1 + g2 * g2))
-            if worst > chord_tol and depth < MAX_DEPTH:
-                # split into k equal parameter parts, k from the measured excess (a
-                # chord's error falls with the square of its length; parts that
-                # still fail are split again): their inner ends go on the stack,
-                # the leftmost on top
-                k = int(np.ceil(np.sqrt(worst / (SPLIT_AIM * chord_tol))))
-                k = min(max(k, 2), MAX_PARTS)
-                stack[top - 1, 6] = depth + 1
-                for j in range(k - 1, 0, -1):
-                    tm = ta + (tb - ta) * (j / k)
-                    um, vm = _curve_at(Pc, pc, Uc, tm, lo0, lo1, hi0, hi1, Nc, lc, rc)
-                    surface_point(Pw, p, q, U, V, um, vm, Nu, Nv, left, right, tmp, X)
-                    stack[top, 0] = tm
-                    stack[top, 1] = um
-                    stack[top, 2] = vm
-                    stack[top, 3] = X[0]
-                    stack[top, 4] = X[1]
-                    stack[top, 5] = X[2]
-                    stack[top, 6] = depth + 1
-                    top += 1
+    for c in range(deg.shape[0]):
+        pc = deg[c]
+        a0 = cp_off[c]
+        ncp = cp_off[c + 1] - a0
+        Pc = np.empty((ncp, 3))
+        rational = False
+        for r in range(ncp):
+            w = W[a0 + r]
+            Pc[r, 0] = CP[a0 + r, 0] * w
+            Pc[r, 1] = CP[a0 + r, 1] * w
+            Pc[r, 2] = w
+            if w != 1.0:
+                rational = True
+        Uc = K[k_off[c]:k_off[c + 1]]
+        Nc = np.empty(pc + 1)
+        lc = np.empty(pc + 1)
+        rc = np.empty(pc + 1)
+        kend = Uc.shape[0] - pc  # the domain's knots: Uc[pc:kend]
+        spans = 0
+        for j in range(pc + 1, kend):
+            if Uc[j] > Uc[j - 1]:
+                spans += 1
+        polyline = pc == 1 and not rational
+        exact = polyline and spans == ncp - 1  # seeds are the control points
+        dense = (not polyline) and spans <= dense_spans
+        start = n
+        ta = Uc[pc]
+        if exact:
+            ua = min(max(CP[a0, 0], lo0), hi0)
+            va = min(max(CP[a0, 1], lo1), hi1)
+        else:
+            ua, va = _curve_at(Pc, pc, Uc, ta, lo0, lo1, hi0, hi1, Nc, lc, rc)
+        surface_point(Pw, p, q, U, V, ua, va, Nu, Nv, left, right, tmp, Pa)
+        seed = 0
+        for i in range(pc + 1, kend):
+            if not Uc[i] > Uc[i - 1]:
                 continue
-            # accepted: emit its start, its end becomes the next start
-            if n >= cap:
-                return -1
-            out[n, 0] = ta
-            out[n, 1] = ua
-            out[n, 2] = va
-            n += 1
-            ta = tb
-            ua = ub
-            va = vb
-            Pa[0] = stack[top - 1, 3]
-            Pa[1] = stack[top - 1, 4]
-            Pa[2] = stack[top - 1, 5]
-            top -= 1
-    if n >= cap:
-        return -1
-    out[n, 0] = ta
-    out[n, 1] = ua
-    out[n, 2] = va
-    return n + 1
+            seed += 1
+            a = ta  # the span [a, b]: segments split from it stay inside
+            tb = Uc[i]
+            h = (tb - a) / 16.0
+            if exact:
+                ub = min(max(CP[a0 + seed, 0], lo0), hi0)
+                vb = min(max(CP[a0 + seed, 1], lo1), hi1)
+            else:
+                ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
+            surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
+            stack[0, 0] = tb
+            stack[0, 1] = ub
+            stack[0, 2] = vb
+            stack[0, 3] = Pb[0]
+            stack[0, 4] = Pb[1]
+            stack[0, 5] = Pb[2]
+            stack[0, 6] = 0
+            top = 1
+            while top > 0:
+                tb = stack[top - 1, 0]
+                ub = stack[top - 1, 1]
+                vb = stack[top - 1, 2]
+                depth = int(stack[top - 1, 6])
+                d0 = stack[top - 1, 3] - Pa[0]
+                d1 = stack[top - 1, 4] - Pa[1]
+                d2 = stack[top - 1, 5] - Pa[2]
+                ll = d0 * d0 + d1 * d1 + d2 * d2
+                worst = 0.0
+                for s in range(6 if uv_chords else 3):
+                    f = 0.25 * (s % 3 + 1)
+                    if s < 3:
+                        su, sv = _curve_at(Pc, pc, Uc, ta + (tb - ta) * f, lo0, lo1, hi0,
+                                           hi1, Nc, lc, rc)
+                    else:
+                        su = ua + (ub - ua) * f
+                        sv = va + (vb - va) * f
+                    surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+                    worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+                if dense and tb - ta > h:  # the span's 1/16 grid inside the segment
+                    j = int(np.floor((ta - a) / h)) + 1
+                    while j < 16:
+                        g = a + j * h
+                        j += 1
+                        if g <= ta:
+                            continue
+                        if g >= tb:
+                            break
+                        su, sv = _curve_at(Pc, pc, Uc, g, lo0, lo1, hi0, hi1, Nc, lc, rc)
+                        surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+                        worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+                        if uv_chords:
+                            f = (g - ta) / (tb - ta)
+                            surface_point(Pw, p, q, U, V, ua + (ub - ua) * f,
+                                          va + (vb - va) * f, Nu, Nv, left, right, tmp, X)
+                            worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+                if worst > chord_tol and depth < MAX_DEPTH:
+                    k = int(np.ceil(np.sqrt(worst / (SPLIT_AIM * chord_tol))))
+                    k = min(max(k, 2), MAX_PARTS)
+                    stack[top - 1, 6] = depth + 1
+                    for j in range(k - 1, 0, -1):
+                        tm = ta + (tb - ta) * (j / k)
+                        um, vm = _curve_at(Pc, pc, Uc, tm, lo0, lo1, hi0, hi1, Nc, lc, rc)
+                        surface_point(Pw, p, q, U, V, um, vm, Nu, Nv, left, right, tmp, X)
+                        stack[top, 0] = tm
+                        stack[top, 1] = um
+                        stack[top, 2] = vm
+                        stack[top, 3] = X[0]
+                        stack[top, 4] = X[1]
+                        stack[top, 5] = X[2]
+                        stack[top, 6] = depth + 1
+                        top += 1
+                    continue
+                n = _emit(out, n, ta, ua, va)
+                if n < 0:
+                    return -1
+                ta = tb
+                ua = ub
+                va = vb
+                Pa[0] = stack[top - 1, 3]
+                Pa[1] = stack[top - 1, 4]
+                Pa[2] = stack[top - 1, 5]
+                top -= 1
+        n = _emit(out, n, ta, ua, va)
+        if n < 0:
+            return -1
+        counts[c] = n - start
+    return n
