@@ -14,6 +14,10 @@ set as ``f`` (the weights are positive), so the signs of ``h`` certify:
 
 This extends Paper 2 (quad states a-g from corner signs, uniform 10x10 subdivision),
 whose corner test cannot exclude a small loop inside a quad.
+
+Curve points by Newton and densification are in :mod:`.section_project`, the trim
+side of curve points in :mod:`.section_trims` and :mod:`.section_clip`, chord
+refinement in :mod:`.section_refine`.
 """
 
 from __future__ import annotations
@@ -22,8 +26,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
-from .surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
-from .trim import MAX_DEPTH as TRIM_MAX_DEPTH, OUTSIDE as TRIM_OUTSIDE, classify_point
+from .surface import D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
 
 PRUNE = 0
 MONO_U = 1
@@ -358,198 +361,6 @@ def edge_root(Pw, p, q, U, V, plane, au, av, bu, bv, fa, fb, ttol, Nu, Nv, left,
                 flo *= 0.5
             side = 1
     return 0.5 * (lo + hi)
-
-
-@jit
-def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f):
-    """Newton along the UV gradient of ``f`` onto ``f = 0`` from each ``uv[i]``.
-
-    ``x <- x - f g / |g|^2`` with ``g = (plane.S_u, plane.S_v)``, the total move from
-    the start limited to ``maxstep[i]`` and the iterate clamped to ``box`` (u0, u1,
-    v0, v1).  Stops when ``|f| <= ftol``.  Writes the final parameters and ``f``.
-    """
-    bin_ = _binomial_table(D1)
-    scr = derivs_scratch(p, q, D1)
-    _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
-                  bin_, scr, np.empty((2, 2, 3)))
-
-
-@jit
-def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
-                  bin_, scr, SKL):
-    """The loop of :func:`project` over borrowed views (:mod:`.numba_ext.borrow`)."""
-    Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL = borrow_all((
-        Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL))
-    for i in range(uv.shape[0]):
-        u, v, f = _project_point(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], maxstep[i], box,
-                                 ftol, maxit, bin_, scr, SKL)
-        out_uv[i, 0] = u
-        out_uv[i, 1] = v
-        out_f[i] = f
-
-
-@jit
-def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin_, scr,
-                   SKL):
-    """One start point of :func:`project`: returns (u, v, f)."""
-    u = u0
-    v = v0
-    f = 0.0
-    for it in range(maxit + 1):
-        surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
-        f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
-             + plane[3])
-        if abs(f) <= ftol or it == maxit:
-            break
-        gu = plane[0] * SKL[1, 0, 0] + plane[1] * SKL[1, 0, 1] + plane[2] * SKL[1, 0, 2]
-        gv = plane[0] * SKL[0, 1, 0] + plane[1] * SKL[0, 1, 1] + plane[2] * SKL[0, 1, 2]
-        g2 = gu * gu + gv * gv
-        if not g2 > 0.0:
-            break
-        un = u - f * gu / g2
-        vn = v - f * gv / g2
-        du = un - u0
-        dv = vn - v0
-        dist = np.sqrt(du * du + dv * dv)
-        if dist > maxstep:
-            un = u0 + du * maxstep / dist
-            vn = v0 + dv * maxstep / dist
-        un = min(max(un, box[0]), box[1])
-        vn = min(max(vn, box[2]), box[3])
-        if un == u and vn == v:
-            break
-        u = un
-        v = vn
-    return u, v, f
-
-
-@jit
-def _halve(Pw, p, q, U, V, plane, au, av, bu, bv, d, h, box, ftol, maxdepth, out, dep, nout,
-           stack, sdepth, bin_, scr, SKL):
-    """The points of :func:`densify` on the segment ``a -> b`` at depth ``d``
-    (its halvings so far), ``a`` excluded, ``b`` included, appended to ``out`` with the
-    depth of the segment each point ends; returns (count, out, dep)."""
-    stack[0, 0] = bu
-    stack[0, 1] = bv
-    sdepth[0] = d
-    top = 1
-    while top > 0:
-        bu = stack[top - 1, 0]
-        bv = stack[top - 1, 1]
-        dd = sdepth[top - 1]
-        du = bu - au
-        dv = bv - av
-        seg = np.sqrt(du * du + dv * dv)
-        if seg > h and dd < maxdepth:
-            mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
-                                        0.5 * (av + bv), seg, box, ftol, 40, bin_, scr, SKL)
-            sdepth[top - 1] = dd + 1
-            stack[top, 0] = mu
-            stack[top, 1] = mv
-            sdepth[top] = dd + 1
-            top += 1
-            continue
-        if nout == out.shape[0]:
-            bigger = np.empty((2 * nout, 2))
-            bigger[:nout] = out
-            out = bigger
-            bdep = np.empty(2 * nout, np.int64)
-            bdep[:nout] = dep
-            dep = bdep
-        out[nout, 0] = bu
-        out[nout, 1] = bv
-        dep[nout] = dd
-        nout += 1
-        au = bu
-        av = bv
-        top -= 1
-    return nout, out, dep
-
-
-@jit
-def densify(Pw, p, q, U, V, plane, uv, h, box, ftol, maxdepth):
-    """Exact curve points inserted into the polyline ``uv`` (n, 2) until consecutive
-    points are at most ``h`` apart in UV; returns the (m, 2) polyline.
-
-    A segment ``a -> b`` longer than ``h`` is halved at :func:`project` of its midpoint
-    (the move limited to its length ``|b - a|``, stopping at ``|f| <= ftol``, clamped to
-    ``box``), and both halves are examined again, down to ``maxdepth`` halvings of an
-    input segment (each segment depends on its own ends only: the points are those of
-    halving all long segments in rounds, ``maxdepth`` rounds).
-    """
-    bin_ = _binomial_table(D1)
-    scr = derivs_scratch(p, q, D1)
-    SKL = np.empty((2, 2, 3))
-    n = uv.shape[0]
-    out = np.empty((max(2 * n, 16), 2))
-    dep = np.empty(out.shape[0], np.int64)
-    stack = np.empty((maxdepth + 2, 2))   # right ends of the pending halves
-    sdepth = np.empty(maxdepth + 2, np.int64)
-    nout = 0
-    if n > 0:
-        out[0, 0] = uv[0, 0]
-        out[0, 1] = uv[0, 1]
-        nout = 1
-    for i in range(n - 1):
-        nout, out, dep = _halve(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], uv[i + 1, 0],
-                                uv[i + 1, 1], 0, h, box, ftol, maxdepth, out, dep, nout,
-                                stack, sdepth, bin_, scr, SKL)
-    return out[:nout].copy()
-
-
-@jit
-def _outside(seg, seg_deg, seg_loop, nloops, u, v, box, tol, winding, stack, depths, left,
-             right):
-    """``Surface.classify_uv((u, v), tol) == OUTSIDE``: outside the domain rectangle by
-    more than ``tol``, or outside the trim loops (:func:`.trim.classify_point`)."""
-    d = min(min(u - box[0], box[1] - u), min(v - box[2], box[3] - v))
-    if d < -tol:
-        return True
-    if nloops == 0:
-        return False
-    return classify_point(seg, seg_deg, seg_loop, nloops, u, v, tol, winding, stack,
-                          depths, left, right) == TRIM_OUTSIDE
-
-
-@jit
-def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol, seg,
-                   seg_deg, seg_loop, nloops, iters, stop):
-    """Bisection along the exact curve between inside points ``a`` (n, 2) and outside
-    points ``b`` (n, 2), in place: the curve point at the middle (:func:`project` from
-    the UV midpoint, the move limited to ``|b - a|``, to ``|f| <= ftol``) replaces
-    ``b`` when it is outside the trimmed face (:func:`_outside` with the band ``band``,
-    or ``wide_tol`` where ``wide[i]``), else ``a``; until ``|b - a| <= stop`` or
-    ``iters`` steps.  ``seg``, ``seg_deg``, ``seg_loop``, ``nloops``: the trim loops as
-    packed by ``Surface.trim_segments``."""
-    bin_ = _binomial_table(D1)
-    scr = derivs_scratch(p, q, D1)
-    SKL = np.empty((2, 2, 3))
-    p1 = seg.shape[1]
-    winding = np.empty(max(nloops, 1), dtype=np.int64)
-    cstack = np.empty((TRIM_MAX_DEPTH + 2, p1, 3))
-    depths = np.empty(TRIM_MAX_DEPTH + 2, dtype=np.int64)
-    left = np.empty((p1, 3))
-    right = np.empty((p1, 3))
-    for i in range(a.shape[0]):
-        tol = wide_tol if wide[i] else band
-        for _ in range(iters):
-            du = b[i, 0] - a[i, 0]
-            dv = b[i, 1] - a[i, 1]
-            mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (a[i, 0] + b[i, 0]),
-                                        0.5 * (a[i, 1] + b[i, 1]),
-                                        np.sqrt(du * du + dv * dv), box, ftol, 40, bin_,
-                                        scr, SKL)
-            if _outside(seg, seg_deg, seg_loop, nloops, mu, mv, box, tol, winding, cstack,
-                        depths, left, right):
-                b[i, 0] = mu
-                b[i, 1] = mv
-            else:
-                a[i, 0] = mu
-                a[i, 1] = mv
-            du = b[i, 0] - a[i, 0]
-            dv = b[i, 1] - a[i, 1]
-            if not np.sqrt(du * du + dv * dv) > stop:
-                break
 
 
 @jit

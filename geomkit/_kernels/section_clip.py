@@ -1,7 +1,7 @@
 """Trim classification of a plane-section chain without densifying all of it.
 
 Before a chain is clipped by the trims of its face, its curve is densified
-(:func:`.section.densify`: exact curve points inserted by halving until consecutive
+(:func:`.section_project.densify`: exact curve points inserted by halving until consecutive
 points are at most ``h`` apart in UV) and every point classified: a chain whose
 points are all inside is kept whole, one whose points are all outside is dropped, and
 only the others are cut.  Most chains of a part cross their face from edge to edge
@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit
-from .section import _halve, _outside
+from .section_project import _halve
+from .section_trims import outside_binned, trim_bins
 from .surface import D1, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH as TRIM_MAX_DEPTH
 
@@ -56,12 +57,12 @@ def _near_boxes(lu, hu, lv, hv, tlo, thi, idx, n, sep, out):
 @jit
 def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_deg, seg_loop,
                nloops, tlo, thi, band):
-    """The points of ``densify(uv, h)`` (:func:`.section.densify`) classified against
+    """The points of ``densify(uv, h)`` (:func:`.section_project.densify`) classified against
     the trimmed face: ``(side, points, inside)``.
 
     Parameters
     ----------
-    Pw, p, q, U, V, plane : surface and plane as for :func:`.section.densify`;
+    Pw, p, q, U, V, plane : surface and plane as for :func:`.section_project.densify`;
         ``uv`` (n, 2) the chain, ``h`` its densification step, ``box`` the domain
         (u0, u1, v0, v1), ``ftol`` and ``maxdepth`` as for densify.
     H : the coarse step (> h).
@@ -119,22 +120,25 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
 
 @jit
 def _classifier(seg, seg_deg, seg_loop, nloops, tlo, thi, band, box):
-    """The trims, their boxes and the scratch of :func:`_outside`, bundled."""
+    """The trims, their boxes, their bins over v (:func:`.section_trims.trim_bins`) and
+    the scratch of :func:`.section_trims.outside_binned`, bundled."""
     p1 = seg.shape[1]
     return (seg, seg_deg, seg_loop, nloops, tlo, thi, band, box,
             np.empty(max(nloops, 1), dtype=np.int64), np.empty((TRIM_MAX_DEPTH + 2, p1, 3)),
             np.empty(TRIM_MAX_DEPTH + 2, dtype=np.int64), np.empty((p1, 3)),
             np.empty((p1, 3)), np.empty(tlo.shape[0], np.int64),
-            np.empty(tlo.shape[0], np.int64), np.arange(tlo.shape[0]))
+            np.empty(tlo.shape[0], np.int64), np.arange(tlo.shape[0]),
+            trim_bins(seg, seg_deg, band))
 
 
 @jit
 def _out(cls, u, v):
-    """``classify_uv((u, v), band) == OUTSIDE`` (:func:`.section._outside`)."""
+    """``classify_uv((u, v), band) == OUTSIDE`` (:func:`.section_trims.outside_binned`:
+    the segments of one bin over v walked)."""
     (seg, seg_deg, seg_loop, nloops, _tlo, _thi, band, box, winding, cstack, depths, left,
-     right, _near, _fnear, _all) = cls
-    return _outside(seg, seg_deg, seg_loop, nloops, u, v, box, band, winding, cstack, depths,
-                    left, right)
+     right, _near, _fnear, _all, bins) = cls
+    return outside_binned(seg, seg_deg, seg_loop, nloops, u, v, box, band, bins, winding,
+                          cstack, depths, left, right)
 
 
 @jit

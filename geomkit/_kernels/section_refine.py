@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit
-from .section import MONO_U, MONO_V, _f_at, _project_point, edge_root
+from .section import MONO_U, MONO_V, _f_at, edge_root
+from .section_project import _project_point
 from .surface import D1, _binomial_table, derivs_scratch, surface_point
 
 TINY = 1e-13
@@ -194,7 +195,7 @@ def _midpoint(Pw, p, q, U, V, plane, leaves, leaf, au, av, bu, bv, seg, zsnap, t
     In a leaf monotone in u the curve is a graph over v: the root on the u-line
     through the middle v, bracketed by the leaf's sides (likewise for v); elsewhere (an
     unresolved leaf, no bracket) Newton along the gradient from the UV midpoint, the
-    move limited to ``seg`` = ``|b - a|`` (:func:`.section.project`)."""
+    move limited to ``seg`` = ``|b - a|`` (:func:`.section_project.project`)."""
     Nu, Nv, left, right, tmp, X = sp
     mu = 0.5 * (au + bu)
     mv = 0.5 * (av + bv)

@@ -423,14 +423,14 @@ def _densify(ev, uv, h, zsnap):
     """Insert exact curve points until consecutive UV points are at most ``h`` apart
     (so that a trim loop crossing the curve is seen by point classification): each
     segment longer than ``h`` halved at the curve point projected from its middle, up
-    to 40 times (:func:`geomkit._kernels.section.densify`)."""
+    to 40 times (:func:`geomkit._kernels.section_project.densify`)."""
     return _finite(ev.densify(uv, h, 0.25 * zsnap, 40))
 
 
 def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     """The curve points on the trim boundary between inside points ``a_in`` (n, 2) and
     outside points ``b_out`` (n, 2): bisection along the exact curve, all at once
-    (:func:`geomkit._kernels.section.trim_crossings`).
+    (:func:`geomkit._kernels.section_trims.trim_crossings`).
 
     A point is inside when ``classify_uv`` does not call it OUTSIDE within a round-off
     band (``1e-14`` of the domain): the ends land on the exact trim.  Where ``a_in`` is

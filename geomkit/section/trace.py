@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from geomkit.tolerances import EDGE_ROOT_TOL
-from geomkit._kernels import section as K
+from geomkit._kernels import section as K, section_project as KP, section_trims as KT
 from geomkit._kernels.section_refine import refine_chains
 from geomkit._kernels.surface import surface_points
 
@@ -57,22 +57,22 @@ class _Eval:
         uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
         out = np.empty_like(uv)
         f = np.empty(uv.shape[0])
-        K.project(*self.args, uv, np.ascontiguousarray(maxstep, dtype=np.float64), self.box,
+        KP.project(*self.args, uv, np.ascontiguousarray(maxstep, dtype=np.float64), self.box,
                   ftol, maxit, out, f)
         return out, f
 
     def trim_crossings(self, a, b, wide, ftol, band, wide_tol, iters, stop):
-        """:func:`geomkit._kernels.section.trim_crossings` against the surface's trims:
+        """:func:`geomkit._kernels.section_trims.trim_crossings` against the surface's trims:
         ``a``, ``b`` (n, 2) float64 C arrays, bisected in place."""
         seg, deg, lp, nloops = self.s.trim_segments()
-        K.trim_crossings(*self.args, a, b, np.ascontiguousarray(wide, dtype=np.bool_),
+        KT.trim_crossings(*self.args, a, b, np.ascontiguousarray(wide, dtype=np.bool_),
                          self.box, float(ftol), float(band), float(wide_tol), seg, deg, lp,
                          nloops, int(iters), float(stop))
 
     def densify(self, uv, h, ftol, maxdepth):
-        """:func:`geomkit._kernels.section.densify` of the polyline ``uv`` (n, 2)."""
+        """:func:`geomkit._kernels.section_project.densify` of the polyline ``uv`` (n, 2)."""
         uv = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 2)
-        return K.densify(*self.args, uv, float(h), self.box, float(ftol), int(maxdepth))
+        return KP.densify(*self.args, uv, float(h), self.box, float(ftol), int(maxdepth))
 
 
 def unique_rows(a):
