@@ -19,6 +19,7 @@ A curve is a dict with ``uv`` (k, 2), ``sid`` (k,) (surface of each point), ``X`
 from __future__ import annotations
 
 import heapq
+import math
 
 import numpy as np
 
@@ -175,19 +176,46 @@ def merge_point_curves(curves, exact):
     each other.  A plane through a cone's apex or a degenerate patch edge traces
     hundreds of such pieces at one model point (NIST CTC-01 AP242 at z = -25: 683 at
     one apex); joined, they would be that point again, or part of the curve they
-    touch."""
-    keep, spots = [], []
+    touch.
+
+    The extents are measured over all curves at once and the distances to the spots
+    over Python floats; one within a relative ``1e-9`` of ``exact`` is measured again
+    as ``float(np.linalg.norm(d))`` of the one vector ``d``, so the decisions are those
+    of that measure (:func:`_merge_point_curves_loop`, the loop this replaces)."""
     n = np.array([len(c["X"]) for c in curves], dtype=np.int64)
-    cand = np.ones(len(curves), bool)
-    if len(curves) and n.all():   # the extents of all curves at once: a filter
-        X = np.concatenate([c["X"] for c in curves])
-        starts = np.cumsum(n) - n
-        ext = np.linalg.norm(np.maximum.reduceat(X, starts) - np.minimum.reduceat(X, starts),
-                             axis=1)
-        cand = ext <= exact * (1 + 1e-9)
-    for c, maybe in zip(curves, cand.tolist()):
+    if not len(curves) or not n.all():
+        return _merge_point_curves_loop(curves, exact)
+    X = np.concatenate([c["X"] for c in curves])
+    starts = np.cumsum(n) - n
+    ext = np.linalg.norm(np.maximum.reduceat(X, starts) - np.minimum.reduceat(X, starts),
+                         axis=1)
+    pt = ext <= exact
+    for i in np.flatnonzero(np.abs(ext - exact) <= 1e-9 * exact).tolist():
+        Y = curves[i]["X"]
+        pt[i] = float(np.linalg.norm(Y.max(axis=0) - Y.min(axis=0))) <= exact
+    pt &= ~np.array([bool(c["closed"]) for c in curves])
+    idx = np.flatnonzero(pt)
+    P = X[starts[idx]]
+    sure, reach = exact * (1 - 1e-9), exact * (1 + 1e-9)
+    spots = []     # (x, y, z, row of P)
+    drop = np.zeros(len(curves), bool)
+    for k, (x, y, z) in enumerate(P.tolist()):
+        for a, b, c, j in spots:
+            d = math.sqrt((x - a) ** 2 + (y - b) ** 2 + (z - c) ** 2)
+            if d <= reach and (d <= sure or float(np.linalg.norm(P[k] - P[j])) <= exact):
+                drop[idx[k]] = True
+                break
+        else:
+            spots.append((x, y, z, k))
+    return [c for c, d in zip(curves, drop.tolist()) if not d]
+
+
+def _merge_point_curves_loop(curves, exact):
+    """:func:`merge_point_curves` curve by curve."""
+    keep, spots = [], []
+    for c in curves:
         X = c["X"]
-        if maybe and not c["closed"] and len(X) and \
+        if not c["closed"] and len(X) and \
                 float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))) <= exact:
             if any(float(np.linalg.norm(X[0] - q)) <= exact for q in spots):
                 continue

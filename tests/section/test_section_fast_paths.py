@@ -283,7 +283,7 @@ def test_unique_rows_as_numpy_unique():
              np.array([[0.0, 1.0], [-0.0, 1.0], [0.0, -0.0], [1.0, 0.0]]),
              rng.normal(size=(1, 2))]
     s = _plate()
-    ev, _chains_, zsnap = _chains(s, [1, 0.3, 0, -60])
+    ev, _, zsnap = _chains(s, [1, 0.3, 0, -60])
     bp = s.bezier_patches()
     leaves, _ = K.subdivide(bp.homogeneous, bp.u_breaks, bp.v_breaks, ev.plane, zsnap,
                             1e-7, 80)
@@ -367,6 +367,27 @@ def test_shared_edges_and_point_pieces_as_the_loops_over_curves(seed):
     got = joins.merge_point_curves(curves, tol)
     want = _merge_point_curves_plain(curves, tol)
     assert [id(c) for c in got] == [id(c) for c in want]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_point_pieces_at_the_tolerance(seed):
+    """Point pieces whose starts (and extents) are ``tol`` apart within a few ulps, in
+    chains and clusters."""
+    rng = np.random.default_rng(seed)
+    tol = 10.0 ** rng.uniform(-6, 0)
+    curves = []
+    base = rng.normal(size=3) * 10 ** rng.uniform(0, 3)
+    for k in range(300):
+        d = rng.normal(size=3)
+        d *= tol / np.linalg.norm(d) * (1 + rng.choice([-2, -1, 0, 1, 2]) * 2.0 ** -52)
+        p = base + d if k % 3 else base + rng.uniform(-2, 2, 3) * tol
+        ext = np.array([p, p + d * rng.choice([0.0, 1.0, 0.5])])
+        curves.append({"X": ext[: 1 + k % 2], "closed": bool(k % 17 == 0)})
+        if k % 5 == 0:
+            base = p
+    want = [id(c) for c in _merge_point_curves_plain(curves, tol)]
+    assert [id(c) for c in joins.merge_point_curves(curves, tol)] == want
+    assert len(want) < len(curves)
 
 
 @pytest.mark.occ
