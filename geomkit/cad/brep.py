@@ -73,13 +73,14 @@ class Analytic:
         self.X = _unit(X)
         self.Y = cross3(self.A, self.X)
         self.R, self.r, self.alpha = R, r, alpha
+        self.frame = np.concatenate([self.O, self.X, self.Y, self.A])
         self.periodic = {"plane": (False, False), "cylinder": (False, True),
                          "cone": (False, True), "sphere": (False, True),
                          "torus": (True, True)}[kind]
 
     def local(self, P):
         """Closed-form inverse: model points (n, 3) to local ``(a, b)`` (n, 2) and the
-        distance of each point from the axis (0 for planes)."""
+        distance of each point from the axis (1 for planes)."""
         d = np.asarray(P, float) - self.O
         x, y, z = d @ self.X, d @ self.Y, d @ self.A
         if self.kind == "plane":
@@ -204,6 +205,24 @@ def analytic(rd, de: int) -> Analytic:
     return s
 
 
+_AR: dict = {}
+
+
+def _linspace(a: float, b: float, n: int) -> np.ndarray:
+    """``np.linspace(a, b, n)`` (n >= 2, a != b), the same values without its generic
+    argument handling: a reader samples thousands of edges."""
+    ar = _AR.get(n)
+    if ar is None:
+        ar = _AR[n] = np.arange(n, dtype=np.float64)
+    y = ar * ((b - a) / (n - 1)) + a
+    y[-1] = b
+    return y
+
+
+_S_NS = np.linspace(0.0, 1.0, _NS)
+_S_NS.setflags(write=False)
+
+
 # --------------------------------------------------------------------- edges
 class _Edge:
     """One oriented model-space edge: its NURBS curve and parameter direction."""
@@ -222,7 +241,7 @@ class _Edge:
         k = (id(self.curve), n)
         X = self._cache.get(k)
         if X is None:
-            X = self._cache[k] = curve_eval(self.curve, np.linspace(self.t0, self.t1, n))
+            X = self._cache[k] = curve_eval(self.curve, _linspace(self.t0, self.t1, n))
         return X[::-1] if self.reverse else X
 
     def local(self, srf, n: int):
@@ -327,7 +346,7 @@ def curve_loop_141(rd, de: int):
 
 def _chain(srf, loop, size):
     """Local coordinates of every edge's samples, unwrapped and chained."""
-    s = np.linspace(0.0, 1.0, _NS)
+    s = _S_NS
     out, first, prev, prev_pole = [], {}, None, False
     for e in loop:
         ab, rho = e.local(srf, _NS)
@@ -464,7 +483,7 @@ def _fit(srf, e, ab, fu, fv, tol):
     diag = TrimCurve.polyline(np.column_stack([sk, sk]))
     code = KIND_CODE.get(srf.kind)
     if code is not None and all(f is None or isinstance(f, AngleMap) for f in (fu, fv)):
-        frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
+        frame = srf.frame
         maps = [None if f is None else (f.theta0, f.theta1) for f in (fu, fv)]
         c, _ = map_edge(e.curve, e.reverse, code, frame,
                         (srf.R, srf.r, math.tan(srf.alpha)), srf.periodic, ab, maps, diag,
