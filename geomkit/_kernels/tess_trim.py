@@ -231,3 +231,51 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
             return -1
         counts[c] = n - start
     return n
+
+
+@jit
+def domain_rectangle_gap(CP, deg, cp_off, loop_first, u0, u1, v0, v1, hi):
+    """How far the trim loops' control polygons are from the domain rectangle's edges
+    (see :func:`geomkit.mesh.trim_polylines.domain_rectangle_only`): the largest of,
+    over the loops (pieces ``loop_first[i]:loop_first[i+1]``, control points
+    ``CP[cp_off[c]:cp_off[c+1]]``), a degree-1 segment's distance from its nearest
+    edge line (both ends), a curved piece's largest distance from its nearest edge
+    line (all its control points), and the loop's shoelace area's shortfall from the
+    rectangle's, divided by ``u1 - u0 + v1 - v0``.  ``inf`` as soon as a piece starts
+    more than ``hi`` from every edge line or a loop's value exceeds ``hi``."""
+    for c in range(deg.shape[0]):
+        x = CP[cp_off[c], 0]
+        y = CP[cp_off[c], 1]
+        if min(abs(x - u0), abs(x - u1), abs(y - v0), abs(y - v1)) > hi:
+            return np.inf
+    full = (u1 - u0) * (v1 - v0)
+    worst = 0.0
+    for i in range(loop_first.shape[0] - 1):
+        a = cp_off[loop_first[i]]
+        b = cp_off[loop_first[i + 1]]
+        for c in range(loop_first[i], loop_first[i + 1]):
+            if deg[c] > 1:  # all its control points near one edge line
+                m0 = 0.0
+                m1 = 0.0
+                m2 = 0.0
+                m3 = 0.0
+                for r in range(cp_off[c], cp_off[c + 1]):
+                    m0 = max(m0, abs(CP[r, 0] - u0))
+                    m1 = max(m1, abs(CP[r, 0] - u1))
+                    m2 = max(m2, abs(CP[r, 1] - v0))
+                    m3 = max(m3, abs(CP[r, 1] - v1))
+                worst = max(worst, min(min(m0, m1), min(m2, m3)))
+            else:  # each segment within the piece on one edge line (both ends)
+                for r in range(cp_off[c], cp_off[c + 1] - 1):
+                    s0 = max(abs(CP[r, 0] - u0), abs(CP[r + 1, 0] - u0))
+                    s1 = max(abs(CP[r, 0] - u1), abs(CP[r + 1, 0] - u1))
+                    s2 = max(abs(CP[r, 1] - v0), abs(CP[r + 1, 1] - v0))
+                    s3 = max(abs(CP[r, 1] - v1), abs(CP[r + 1, 1] - v1))
+                    worst = max(worst, min(min(s0, s1), min(s2, s3)))
+        area = CP[b - 1, 0] * CP[a, 1] - CP[a, 0] * CP[b - 1, 1]
+        for r in range(a, b - 1):
+            area += CP[r, 0] * CP[r + 1, 1] - CP[r + 1, 0] * CP[r, 1]
+        worst = max(worst, abs(0.5 * abs(area) - full) / (u1 - u0 + v1 - v0))
+        if worst > hi:
+            return np.inf
+    return worst

@@ -16,10 +16,12 @@
 
 from __future__ import annotations
 
+from itertools import accumulate
+
 import numpy as np
 
 from geomkit.tolerances import AFFINE_REL
-from geomkit._kernels.tess_trim import trim_polylines
+from geomkit._kernels.tess_trim import domain_rectangle_gap, trim_polylines
 from geomkit.nurbs.surface import Surface
 
 
@@ -127,17 +129,9 @@ class TrimPolylines:
         from its knots, split until every 3-D chord is within ``chord_tol``)."""
         s = self.surface
         (u0, u1), (v0, v1) = s.domain
-        loops = s.trim
-        pieces = [c for loop in loops for c in loop.pieces]
-        CP = np.concatenate([c.control_points for c in pieces])
-        W = np.concatenate([c.weights for c in pieces])
-        K = np.concatenate([c.knots for c in pieces])
-        deg = np.array([c.degree for c in pieces], dtype=np.int64)
-        cp_off = np.zeros(len(pieces) + 1, dtype=np.int64)
-        np.cumsum([len(c.weights) for c in pieces], out=cp_off[1:])
-        k_off = np.zeros(len(pieces) + 1, dtype=np.int64)
-        np.cumsum([len(c.knots) for c in pieces], out=k_off[1:])
-        counts = np.empty(len(pieces), dtype=np.int64)
+        CP, W, K, deg, cp_off, k_off, loop_first = packed_trims(s)
+        m = len(deg)
+        counts = np.empty(m, dtype=np.int64)
         buf = np.empty((8 * len(K) + 64, 3))
         while True:
             n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
@@ -149,17 +143,20 @@ class TrimPolylines:
         # a loop's pieces join end to start: each piece after a loop's first drops its
         # first row
         uv = buf[:n, 1:]
-        first = np.zeros(len(pieces) + 1, dtype=np.int64)
+        if m == 1:
+            pts = uv.copy()
+            pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
+            return [pts]
+        first = np.zeros(m + 1, dtype=np.int64)
         np.cumsum(counts, out=first[1:])
+        later = np.ones(m, dtype=bool)
+        later[loop_first[:-1]] = False
         keep = np.ones(n, dtype=bool)
-        loop_first = np.cumsum([0] + [len(loop.pieces) for loop in loops[:-1]])
-        later = np.ones(len(pieces), dtype=bool)
-        later[loop_first] = False
         keep[first[:-1][later]] = False
-        ends = np.cumsum(np.add.reduceat(counts - later, loop_first))
+        ends = np.cumsum(np.add.reduceat(counts - later, loop_first[:-1])).tolist()
         uv = uv[keep]
         out = []
-        for a, b in zip(np.concatenate([[0], ends[:-1]]).tolist(), ends.tolist()):
+        for a, b in zip([0] + ends[:-1], ends):
             pts = uv[a:b].copy()
             pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
             out.append(pts)
@@ -196,49 +193,41 @@ def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
     each of its segments on one edge line; a curved piece: all its control points on
     one edge line, so the curve, inside their convex hull, is on it too) and the
     loop's control points enclose the rectangle's area (along a line the shoelace sum
-    depends only on the ends).  False when unsure: :class:`TrimPolylines` decides."""
+    depends only on the ends).  False when unsure: :class:`TrimPolylines` decides.
+    The measuring is one kernel call (:func:`geomkit._kernels.tess_trim.
+    domain_rectangle_gap`)."""
     if not surface.trim:
         return False
     (u0, u1), (v0, v1) = surface.domain
     size_uv = max(u1 - u0, v1 - v0)
     lo, hi = 1e-12 * size_uv, 1e-6 * size_uv  # TrimPolylines' eps lies in [lo, hi]
-    for loop in surface.trim:  # a quick look at the pieces' starts: holes end here
-        for c in loop.pieces:
-            x, y = c.control_points[0].tolist()
-            if min(abs(x - u0), abs(x - u1), abs(y - v0), abs(y - v1)) > hi:
-                return False
-    edges = np.array([u0, u1, v0, v1])
-    full = (u1 - u0) * (v1 - v0)
-    worst = 0.0
-    for loop in surface.trim:
-        pieces = loop.pieces
-        P = np.concatenate([c.control_points for c in pieces]) if len(pieces) > 1 \
-            else pieces[0].control_points
-        d = np.abs(P[:, [0, 0, 1, 1]] - edges)  # (n, 4) to the u0, u1, v0, v1 lines
-        sizes = [len(c.control_points) for c in pieces]
-        starts = np.cumsum([0] + sizes[:-1])
-        # degree 1: each segment within a piece on one edge line (both ends near it)
-        seg = np.maximum(d[:-1], d[1:]).min(axis=1)
-        inner = np.ones(len(seg), dtype=bool)
-        inner[starts[1:] - 1] = False  # the steps from one piece to the next
-        curved = np.array([c.degree > 1 for c in pieces])
-        if curved.any():
-            inner &= ~np.repeat(curved, sizes)[:-1]
-            # a curved piece: all its control points near one edge line
-            off = np.maximum.reduceat(d, starts, axis=0)[curved].min(axis=1).max()
-            worst = max(worst, float(off))
-        if inner.any():
-            worst = max(worst, float(seg[inner].max()))
-        x, y = P[:, 0], P[:, 1]
-        area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1])
-                         + x[-1] * y[0] - x[0] * y[-1])
-        worst = max(worst, abs(area - full) / (u1 - u0 + v1 - v0))
-        if worst > hi:
-            return False
+    CP, _, _, deg, cp_off, _, loop_first = packed_trims(surface)
+    worst = domain_rectangle_gap(CP, deg, cp_off, loop_first, u0, u1, v0, v1, hi)
+    if worst > hi:
+        return False
     if worst <= lo:
         return True
     eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
     return worst <= max(eps, lo)
+
+
+def packed_trims(surface: Surface):
+    """The trim pieces of ``surface``, every loop's in order, as flat arrays for the
+    kernels: ``(CP (n, 2), W (n,), K (k,), deg (m,), cp_off (m+1,), k_off (m+1,),
+    loop_first (loops+1,))``, piece ``c``'s control points ``CP[cp_off[c]:cp_off[c+1]]``
+    (weights ``W``), its knots ``K[k_off[c]:k_off[c+1]]``, loop ``i``'s pieces
+    ``loop_first[i]:loop_first[i+1]``."""
+    pieces = [c for loop in surface.trim for c in loop.pieces]
+    n = [len(c.weights) for c in pieces]
+    nk = [len(c.knots) for c in pieces]
+    npl = [len(loop.pieces) for loop in surface.trim]
+    return (np.concatenate([c.control_points for c in pieces]),
+            np.concatenate([c.weights for c in pieces]),
+            np.concatenate([c.knots for c in pieces]),
+            np.array([c.degree for c in pieces], dtype=np.int64),
+            np.array([0, *accumulate(n)], dtype=np.int64),
+            np.array([0, *accumulate(nk)], dtype=np.int64),
+            np.array([0, *accumulate(npl)], dtype=np.int64))
 
 
 def speed_bound(s: Surface) -> float:

@@ -138,3 +138,99 @@ def test_a_wiggle_between_the_quarter_points_is_caught():
     rows = _kernel(s, [wiggle, back], chord_tol, uv_chords=False)
     assert len(rows[0]) > 10
     _check_piece(s, wiggle, rows[0], chord_tol, uv_chords=False)
+
+
+def _domain_rectangle_only_numpy(surface, chord_tol):
+    """The numpy version :func:`domain_rectangle_only` had before its kernel (the
+    oracle)."""
+    from geomkit.mesh.trim_polylines import speed_bound
+
+    (u0, u1), (v0, v1) = surface.domain
+    size_uv = max(u1 - u0, v1 - v0)
+    lo, hi = 1e-12 * size_uv, 1e-6 * size_uv
+    for loop in surface.trim:
+        for c in loop.pieces:
+            x, y = c.control_points[0].tolist()
+            if min(abs(x - u0), abs(x - u1), abs(y - v0), abs(y - v1)) > hi:
+                return False
+    edges = np.array([u0, u1, v0, v1])
+    full = (u1 - u0) * (v1 - v0)
+    worst = 0.0
+    for loop in surface.trim:
+        pieces = loop.pieces
+        P = np.concatenate([c.control_points for c in pieces])
+        d = np.abs(P[:, [0, 0, 1, 1]] - edges)
+        sizes = [len(c.control_points) for c in pieces]
+        starts = np.cumsum([0] + sizes[:-1])
+        seg = np.maximum(d[:-1], d[1:]).min(axis=1)
+        inner = np.ones(len(seg), dtype=bool)
+        inner[starts[1:] - 1] = False
+        curved = np.array([c.degree > 1 for c in pieces])
+        if curved.any():
+            inner &= ~np.repeat(curved, sizes)[:-1]
+            off = np.maximum.reduceat(d, starts, axis=0)[curved].min(axis=1).max()
+            worst = max(worst, float(off))
+        if inner.any():
+            worst = max(worst, float(seg[inner].max()))
+        x, y = P[:, 0], P[:, 1]
+        area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1])
+                         + x[-1] * y[0] - x[0] * y[-1])
+        worst = max(worst, abs(area - full) / (u1 - u0 + v1 - v0))
+        if worst > hi:
+            return False
+    if worst <= lo:
+        return True
+    eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+    return worst <= max(eps, lo)
+
+
+def test_domain_rectangle_only_matches_its_numpy_version():
+    """The kernel's decision against the numpy code it replaces, on every trimmed face
+    of four real parts (many are cylinders bounded by their own edges) and on domain
+    rectangles moved by 1e-14 .. 1e-4 of the domain (the thresholds lie between)."""
+    from geomkit.mesh.trim_polylines import domain_rectangle_only
+    from geomkit.nurbs.trims import TrimCurve
+
+    n_true = n = 0
+    for part in ("nist_ftc_07_ap242.stp", "nist_ctc_05_ap203.stp", "proe_as1_ap203.stp",
+                 "catia_v5_ventilator_swept_faces.stp"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            S = read_step(DATA / "parts" / part).surfaces
+        for s in S:
+            if s.trim:
+                for ct in (1e-2, 1e-5):
+                    want = _domain_rectangle_only_numpy(s, ct)
+                    assert domain_rectangle_only(s, ct) == want
+                    n_true += want
+                    n += 1
+    assert 0 < n_true < n
+    rng = np.random.default_rng(2)
+    arc = np.array([[2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    net = np.array([[[a[0], a[1], z] for a in arc] for z in (0.0, 3.0)])
+    w = np.array([[1.0, np.sqrt(0.5), 1.0]] * 2)
+    seen = set()
+    for trial in range(300):
+        jitter = 10.0 ** rng.uniform(-14, -4)
+        corners = np.array([[0, 0], [3, 0], [3, 1], [0, 1], [0, 0]], dtype=float)
+        k = int(rng.integers(0, 4))
+        corners[k] += jitter * rng.standard_normal(2)
+        if k == 0:
+            corners[-1] = corners[0]
+        if trial % 2:  # four pieces, the top one a quadratic along v = 1
+            top = [corners[2], [1.3, 1.0 + jitter * rng.standard_normal()], corners[3]]
+            loop = [TrimCurve.create(1, [0, 0, 1, 1], corners[0:2]),
+                    TrimCurve.create(1, [0, 0, 1, 1], corners[1:3]),
+                    TrimCurve.create(2, [0, 0, 0, 1, 1, 1], top, [1, 0.7, 1]),
+                    TrimCurve.create(1, [0, 0, 1, 1], corners[3:5])]
+        else:
+            loop = corners
+        try:
+            s = Surface(1, 2, [0, 0, 3, 3], [0, 0, 0, 1, 1, 1], net, w, trim=[loop])
+        except Exception:  # noqa: BLE001 - a jitter the validation refuses
+            continue
+        for ct in (1e-1, 1e-3, 1e-6):
+            want = _domain_rectangle_only_numpy(s, ct)
+            assert domain_rectangle_only(s, ct) == want, (trial, jitter, ct)
+            seen.add(want)
+    assert seen == {True, False}
