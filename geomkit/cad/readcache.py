@@ -3,7 +3,8 @@
 
 Entries live in ``$GEOMKIT_CACHE_DIR`` or, by default, ``$XDG_CACHE_HOME/geomkit/cad``
 (``~/.cache/geomkit/cad``), one file per read named by the SHA-256 of the file's
-bytes, its path (the messages name it), the reader options and geomkit's version; the warnings the first read gave are
+bytes, its path (the messages name it), the reader options, geomkit's version and
+its code (:func:`code_stamp`); the warnings the first read gave are
 stored with it and given again on every hit.  An entry is written atomically (a
 temporary file renamed); a cache folder that cannot be written, or an entry that
 cannot be read (truncated, from another Python), only costs a fresh read.  The process
@@ -28,7 +29,8 @@ from pathlib import Path
 
 from geomkit.version import __version__
 
-__all__ = ["cached_read", "cache_dir", "gc_paused", "MEMORY_ENTRIES", "FORMAT"]
+__all__ = ["cached_read", "cache_dir", "code_stamp", "gc_paused", "MEMORY_ENTRIES",
+           "FORMAT"]
 
 FORMAT = 1
 """Bumped when the layout of a cached entry changes."""
@@ -62,10 +64,30 @@ def gc_paused():
             gc.enable()
 
 
+_CODE: bytes | None = None
+
+
+def code_stamp() -> bytes:
+    """SHA-256 of every source file of the installed geomkit package (names and
+    contents), computed once per process (~7 ms): an entry is valid only for the code
+    that wrote it, so an edited or updated install (same version, other code) reads
+    afresh instead of returning what older code made."""
+    global _CODE
+    if _CODE is None:
+        root = Path(__file__).resolve().parents[1]
+        h = hashlib.sha256()
+        for f in sorted(root.rglob("*.py")):
+            h.update(f.relative_to(root).as_posix().encode() + b"\0")
+            h.update(f.read_bytes())
+        _CODE = h.digest()
+    return _CODE
+
+
 def _key(data: bytes, options: tuple) -> str:
     h = hashlib.sha256()
     h.update(data)
     h.update(repr((FORMAT, __version__, options)).encode())
+    h.update(code_stamp())
     return h.hexdigest()
 
 

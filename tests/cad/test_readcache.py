@@ -84,6 +84,23 @@ def test_changed_bytes_and_corrupt_entries(cache, monkeypatch, tmp_path):
     assert len(calls) == 4
 
 
+def test_other_code_reads_afresh(cache, monkeypatch):
+    """An entry belongs to the code that wrote it: the same version with other code
+    (an edited or updated install) does not return it."""
+    calls = _count_reads(monkeypatch)
+    geomkit.read_step(PART)
+    stamp = readcache.code_stamp()
+    assert len(stamp) == 32 and readcache.code_stamp() is stamp     # once per process
+    readcache._memory.clear()
+    monkeypatch.setattr(readcache, "_CODE", bytes(32))              # other code
+    geomkit.read_step(PART)
+    assert len(calls) == 2 and len(list(cache.glob("*.pkl"))) == 2
+    monkeypatch.setattr(readcache, "_CODE", stamp)                  # this code again
+    readcache._memory.clear()
+    geomkit.read_step(PART)
+    assert len(calls) == 2
+
+
 def test_warnings_are_given_again(cache, monkeypatch):
     def warn_then_read(*a, **k):
         warnings.warn("a planted warning", UserWarning)
