@@ -28,9 +28,16 @@ MIXED = 2
 NOT_FINITE = 3
 
 FINE_MARGIN = 2.0
-"""A coarse segment ``a -> b`` stands for the fine points between its ends within its
-box grown by ``FINE_MARGIN * |b - a|`` (each fine point is the projection of a
-midpoint, moved at most the length of the segment it halves)."""
+"""A coarse segment ``a -> b`` stands for the fine points between its ends, and they
+lie in its box grown by ``FINE_MARGIN * |b - a|``: its fine halvings run with their
+Newton iterates clamped to that box (met by the domain), as the domain alone clamps
+them in :func:`.section_project.densify`.  The clamp is what bounds them: a fine point
+is the projection of a midpoint moved at most the length of the segment it halves,
+and those lengths need not shrink (a first halving stays within ``|b - a|`` of the
+middle of ``a -> b``, a second within ``2 |b - a|`` of the segment, a third may
+not).  Where no iterate reaches the box's edge (every chain of the 13 bench parts'
+39 mid-planes) the fine points are densify's bit for bit; where one would, they stay
+near their coarse segment instead of following Newton farther."""
 
 
 @jit
@@ -78,7 +85,8 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
     points : (m, 2) the points of ``densify(uv, h)`` and ``inside`` (m,) bool,
         ``classify_uv(points, band) != OUTSIDE``, when ``MIXED`` (else empty).
 
-    A coarse segment whose box grown by :data:`FINE_MARGIN` times its length lies
+    A coarse segment whose box grown by :data:`FINE_MARGIN` times its length (which
+    holds its fine points, see :data:`FINE_MARGIN`) lies
     more than ``2 * band`` from every trim box and inside the domain grown by ``band``
     has one class for all the fine points it stands for (the parity of the loops
     around them, :func:`geomkit.classify_uv`): the class of one point, shared by
@@ -110,11 +118,15 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
         if not (np.isfinite(cp[j, 0]) and np.isfinite(cp[j, 1])):
             return NOT_FINITE, np.empty((0, 2)), np.empty(0, np.bool_)
     cls = _classifier(seg, seg_deg, seg_loop, nloops, tlo, thi, band, box)
-    side, pts, ins = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls,
-                           False, stack, sdepth, bin_, scr, SKL)
+    # the fine points the first walk computes, kept for the second (same bits: each
+    # coarse segment's fine points depend on its ends, depth and box only)
+    memo = (np.empty((max(64, 4 * nc), 2)), np.full(max(nc, 1), -1, np.int64),
+            np.zeros(max(nc, 1), np.int64))
+    side, pts, ins, memo = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth,
+                                 cls, False, memo, stack, sdepth, bin_, scr, SKL)
     if side == MIXED:
-        side, pts, ins = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth,
-                               cls, True, stack, sdepth, bin_, scr, SKL)
+        side, pts, ins, memo = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol,
+                                     maxdepth, cls, True, memo, stack, sdepth, bin_, scr, SKL)
     return side, pts, ins
 
 
@@ -142,11 +154,15 @@ def _out(cls, u, v):
 
 
 @jit
-def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, record, stack,
-          sdepth, bin_, scr, SKL):
+def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, record, memo,
+          stack, sdepth, bin_, scr, SKL):
     """The classes along the coarse points ``cp[:nc]`` (see :func:`chain_side`):
     without ``record``, stops at the first point of the other class and returns only
-    the side; with it, returns every fine point and its class."""
+    the side; with it, returns every fine point and its class.  ``memo`` = (points,
+    start per coarse segment or -1, count): without ``record`` the fine points
+    computed are kept there, with it they are taken from there; returned (grown)."""
+    mpts, moff, mcnt = memo
+    nmemo = 0
     tlo = cls[4]
     thi = cls[5]
     band = cls[6]
@@ -157,6 +173,7 @@ def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, reco
     sep = 2.0 * band
     fine = np.empty((64, 2))
     fdep = np.empty(64, np.int64)
+    fbox = np.empty(4)
     pts = np.empty((max(16, 16 * nc) if record else 0, 2))
     ins = np.empty(pts.shape[0], np.bool_)
     npts = 0
@@ -201,11 +218,38 @@ def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, reco
             continue
         if not far:
             known = False
-        # the fine points of this segment, its start excluded
+        # the fine points of this segment, its start excluded, their Newton iterates
+        # clamped to its grown box met by the domain (FINE_MARGIN)
+        fbox[0] = max(box[0], lu)
+        fbox[1] = min(box[1], hu)
+        fbox[2] = max(box[2], lv)
+        fbox[3] = min(box[3], hv)
         fine[0, 0] = au
         fine[0, 1] = av
-        nf, fine, fdep = _halve(Pw, p, q, U, V, plane, au, av, bu, bv, cdep[j + 1], h, box,
-                                ftol, maxdepth, fine, fdep, 1, stack, sdepth, bin_, scr, SKL)
+        if record and moff[j] >= 0:
+            nf = mcnt[j] + 1
+            if nf > fine.shape[0]:
+                fine = np.empty((2 * nf, 2))
+                fine[0, 0] = au
+                fine[0, 1] = av
+            for k in range(1, nf):
+                fine[k, 0] = mpts[moff[j] + k - 1, 0]
+                fine[k, 1] = mpts[moff[j] + k - 1, 1]
+        else:
+            nf, fine, fdep = _halve(Pw, p, q, U, V, plane, au, av, bu, bv, cdep[j + 1], h,
+                                    fbox, ftol, maxdepth, fine, fdep, 1, stack, sdepth, bin_,
+                                    scr, SKL)
+            if not record:
+                if nmemo + nf > mpts.shape[0]:
+                    bigger = np.empty((2 * (nmemo + nf), 2))
+                    bigger[:nmemo] = mpts[:nmemo]
+                    mpts = bigger
+                moff[j] = nmemo
+                mcnt[j] = nf - 1
+                for k in range(1, nf):
+                    mpts[nmemo, 0] = fine[k, 0]
+                    mpts[nmemo, 1] = fine[k, 1]
+                    nmemo += 1
         if record and npts + nf > pts.shape[0]:
             pts, ins = _grow(pts, ins, npts, 2 * (npts + nf))
         if far:       # every fine point in the stretch's class
@@ -228,7 +272,7 @@ def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, reco
             gu = fine[k + 1, 0]
             gv = fine[k + 1, 1]
             if not (np.isfinite(gu) and np.isfinite(gv)):
-                return NOT_FINITE, pts[:0].copy(), ins[:0].copy()
+                return NOT_FINITE, pts[:0].copy(), ins[:0].copy(), (mpts, moff, mcnt)
             flu = min(fu, gu)
             fhu = max(fu, gu)
             flv = min(fv, gv)
@@ -269,12 +313,13 @@ def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, reco
                 ins[npts] = not gout
                 npts += 1
             elif n_in > 0 and n_out > 0:
-                return MIXED, pts, ins
+                return MIXED, pts, ins, (mpts, moff, mcnt)
         if not record and n_in > 0 and n_out > 0:
-            return MIXED, pts, ins
+            return MIXED, pts, ins, (mpts, moff, mcnt)
     if n_in > 0 and n_out > 0:
-        return MIXED, pts[:npts].copy(), ins[:npts].copy()
-    return (OUTSIDE_ALL if n_out > 0 else INSIDE_ALL), pts[:0].copy(), ins[:0].copy()
+        return MIXED, pts[:npts].copy(), ins[:npts].copy(), (mpts, moff, mcnt)
+    return ((OUTSIDE_ALL if n_out > 0 else INSIDE_ALL), pts[:0].copy(), ins[:0].copy(),
+            (mpts, moff, mcnt))
 
 
 @jit

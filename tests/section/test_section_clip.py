@@ -73,3 +73,32 @@ def test_chain_side_on_real_parts(monkeypatch, part):
     _checked(monkeypatch, sides)
     mid_plane_sections(part)
     assert C.MIXED in sides and C.INSIDE_ALL in sides
+
+
+@pytest.mark.parametrize("shift", [0.0, 0.02, 0.2])
+def test_fine_points_stay_by_their_coarse_segment(shift):
+    """A chain given only by two points off the section curve (each projection moves
+    up to its segment's length): the cut chain's points lie in the boxes of the coarse
+    segments grown by FINE_MARGIN times their length, and their classes are
+    classify_uv's, point by point."""
+    from geomkit.nurbs.trimming import OUTSIDE
+    from geomkit.section.trace import _Eval
+
+    s = samples.load("plate_with_hole")[0]
+    plane = plane_mod.as_plane([0, 1, 0, -50])
+    ev = _Eval(s, plane)
+    (u0, u1), (v0, v1) = s.domain
+    h = plane_mod.TRIM_STEP * max(u1 - u0, v1 - v0)
+    zsnap = 64 * np.finfo(float).eps * (abs(plane[3]) + np.abs(s.control_points).max())
+    for uv in (np.array([[u0, 0.5 * (v0 + v1) + shift], [u1, 0.5 * (v0 + v1) - shift]]),
+               np.array([[0.5 * (u0 + u1) - shift, v0], [0.5 * (u0 + u1) + shift, v1]])):
+        side, pts, ins = plane_mod._chain_side(s, ev, uv, h, zsnap)
+        if side != C.MIXED:
+            continue
+        coarse = ev.densify(uv, plane_mod.COARSE * h, 0.25 * zsnap, 40)
+        a, b = coarse[:-1], coarse[1:]
+        m = C.FINE_MARGIN * np.linalg.norm(b - a, axis=1)[:, None]
+        lo, hi = np.minimum(a, b) - m, np.maximum(a, b) + m
+        held = ((pts[:, None] >= lo[None]) & (pts[:, None] <= hi[None])).all(axis=2).any(axis=1)
+        assert held.all()
+        assert np.array_equal(ins, s.classify_uv(pts) != OUTSIDE)
