@@ -248,3 +248,27 @@ def _cell_triangles_loop(hkeys, vkeys, key, cells, diag, starts, out, kind, buf,
                 w += 1
                 px = qx
                 py = qy
+
+
+@jit
+def split_counts(e, eu, ev, target, max_parts, nu, nv):
+    """:func:`geomkit.mesh.quadtree.split_counts` elementwise (its numpy formulas, the
+    same operations in the same order): children ``nu[i] x nv[i]`` of cell i for the
+    estimates ``e`` (the better split's), ``eu``, ``ev`` and ``target``."""
+    T = target
+    for i in range(e.shape[0]):
+        a = eu[i]
+        b = ev[i]
+        twist = max(a, b) < 0.25 * e[i]
+        fu = np.sqrt(2.0 * a / T)
+        fv = np.sqrt(2.0 * b / T)
+        if fv < 1.0:
+            fu = np.sqrt(a / max(T - b, 0.5 * T))
+        if fu < 1.0:
+            fv = np.sqrt(b / max(T - a, 0.5 * T))
+        if twist:
+            ft = np.sqrt(e[i] / T)
+            fu = max(fu, ft)
+            fv = max(fv, ft)
+        nu[i] = int(min(max(np.ceil(fu), 1.0), max_parts))
+        nv[i] = int(min(max(np.ceil(fv), 1.0), max_parts))

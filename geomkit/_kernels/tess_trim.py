@@ -279,3 +279,53 @@ def domain_rectangle_gap(CP, deg, cp_off, loop_first, u0, u1, v0, v1, hi):
         if worst > hi:
             return np.inf
     return worst
+
+
+@jit
+def loop_rectangle_gap(pts, u0, u1, v0, v1):
+    """``(gap, area_gap)`` of a closed UV polyline ``pts`` (k, 2): the largest distance
+    of a point from its nearest domain edge line, and ``|area - (u1 - u0)(v1 - v0)|``
+    (shoelace area): the loop is the domain rectangle within ``eps`` when ``gap <=
+    eps`` and ``area_gap <= eps (u1 - u0 + v1 - v0)``."""
+    gap = 0.0
+    area = 0.0
+    for i in range(pts.shape[0]):
+        x = pts[i, 0]
+        y = pts[i, 1]
+        gap = max(gap, min(min(abs(x - u0), abs(x - u1)), min(abs(y - v0), abs(y - v1))))
+        if i + 1 < pts.shape[0]:
+            area += x * pts[i + 1, 1] - pts[i + 1, 0] * y
+    return gap, abs(0.5 * abs(area) - (u1 - u0) * (v1 - v0))
+
+
+@jit
+def speed_bound_of(P, Pw, p, q, U, V):
+    """:func:`geomkit.mesh.trim_polylines.speed_bound` of the surface with control
+    points ``P`` (nu, nv, 3), homogeneous net ``Pw`` (its weights ``Pw[..., 3]``) and
+    knots ``U``, ``V``: ``sum over u, v of 4 deg (w_max / w_min) D / h`` (``D`` the net's
+    box diagonal, ``h`` the shortest non-empty knot span)."""
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    wmin = np.inf
+    wmax = -np.inf
+    for i in range(P.shape[0]):
+        for j in range(P.shape[1]):
+            for k in range(3):
+                lo[k] = min(lo[k], P[i, j, k])
+                hi[k] = max(hi[k], P[i, j, k])
+            wmin = min(wmin, Pw[i, j, 3])
+            wmax = max(wmax, Pw[i, j, 3])
+    d0 = hi[0] - lo[0]
+    d1 = hi[1] - lo[1]
+    d2 = hi[2] - lo[2]
+    D = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    ratio = wmax / wmin
+    total = 0.0
+    for deg, K in ((p, U), (q, V)):
+        h = np.inf
+        for i in range(K.shape[0] - 1):
+            d = K[i + 1] - K[i]
+            if d > 0.0:
+                h = min(h, d)
+        total += 4.0 * deg * ratio * D / h
+    return total

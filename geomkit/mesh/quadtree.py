@@ -14,6 +14,7 @@ import numpy as np
 
 from geomkit._kernels.tess import cell_deviation, cell_errors
 from geomkit._kernels.tess_lattice import edge_counts, fill_rings
+from geomkit._kernels.tess_lattice import split_counts as split_counts_kernel
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -103,18 +104,11 @@ def split_counts(e, eu, ev, target, max_parts=8):
     when both directions matter); pure twist (neither direction's chords explain the
     error) splits both ways.
     """
-    T = target
-    twist = np.maximum(eu, ev) < 0.25 * e
-    fu = np.sqrt(2.0 * eu / T)
-    fv = np.sqrt(2.0 * ev / T)
-    fu = np.where(fv < 1.0, np.sqrt(eu / np.maximum(T - ev, 0.5 * T)), fu)
-    fv = np.where(fu < 1.0, np.sqrt(ev / np.maximum(T - eu, 0.5 * T)), fv)
-    ft = np.sqrt(e / T)
-    fu = np.where(twist, np.maximum(fu, ft), fu)
-    fv = np.where(twist, np.maximum(fv, ft), fv)
-    # np.clip(np.ceil(f), 1, max_parts), without clip's per-call overhead
-    nu = np.minimum(np.maximum(np.ceil(fu), 1), max_parts).astype(np.int64)
-    nv = np.minimum(np.maximum(np.ceil(fv), 1), max_parts).astype(np.int64)
+    n = len(e)
+    nu = np.empty(n, dtype=np.int64)
+    nv = np.empty(n, dtype=np.int64)
+    if n:  # one kernel call (the numpy formulas cost ~20 calls on a few cells)
+        split_counts_kernel(e, eu, ev, float(target), int(max_parts), nu, nv)
     return nu, nv
 
 

@@ -21,7 +21,8 @@ from itertools import accumulate
 import numpy as np
 
 from geomkit.tolerances import AFFINE_REL
-from geomkit._kernels.tess_trim import domain_rectangle_gap, trim_polylines
+from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
+                                       speed_bound_of, trim_polylines)
 from geomkit.nurbs.surface import Surface
 
 
@@ -48,14 +49,16 @@ class TrimPolylines:
         size_uv = max(u1 - u0, v1 - v0)
         hi = 1e-6 * size_uv  # eps is at most this: a loop failing it fails eps too
         eps = None
+        perimeter = u1 - u0 + v1 - v0
         for pts in self._loop_polylines(chord_tol):
-            if not self._is_domain_rectangle(pts, u0, u1, v0, v1, hi):
+            gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
+            if not (gap <= hi and area_gap <= hi * perimeter):
                 self.loops.append(pts)
                 continue
             if eps is None:  # the bound of the surface's speed, only when needed
                 eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
                 eps = max(eps, 1e-12 * size_uv)
-            if self._is_domain_rectangle(pts, u0, u1, v0, v1, eps):
+            if gap <= eps and area_gap <= eps * perimeter:
                 self.domain_loop = True
                 continue
             self.loops.append(pts)
@@ -108,20 +111,6 @@ class TrimPolylines:
             self.segments = np.concatenate(segs) if segs else np.empty(0, dtype=object)
             self._tree = shapely.STRtree(self.segments)
         return self._tree
-
-    @staticmethod
-    def _is_domain_rectangle(pts, u0, u1, v0, v1, eps) -> bool:
-        q = pts[:: max(1, len(pts) // 8)]  # a few points first: most loops fail there
-        if not ((np.abs(q[:, 0] - u0) <= eps) | (np.abs(q[:, 0] - u1) <= eps)
-                | (np.abs(q[:, 1] - v0) <= eps) | (np.abs(q[:, 1] - v1) <= eps)).all():
-            return False
-        on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
-              | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
-        if not on.all():
-            return False
-        x, y = pts[:, 0], pts[:, 1]
-        area = 0.5 * abs(np.sum(x[:-1] * y[1:] - x[1:] * y[:-1]))
-        return bool(abs(area - (u1 - u0) * (v1 - v0)) <= eps * (u1 - u0 + v1 - v0))
 
     def _loop_polylines(self, chord_tol: float) -> list[np.ndarray]:
         """The closed (k, 2) UV polylines of the surface's loops, every piece of every
@@ -241,15 +230,8 @@ def speed_bound(s: Surface) -> float:
     ``sum |R_i'| <= sum |N_i'| w_max / W + |W'| / W <= 4 p (w_max / w_min) / h``,
     since ``sum |N_i'| <= 2 p / h`` (``h`` the shortest non-empty knot span).  So
     ``|S_u| <= 4 p (w_max / w_min) D / h_u``; the same in ``v``."""
-    P = s.control_points.reshape(-1, 3)
-    D = float(np.linalg.norm(np.ptp(P, axis=0)))
-    ratio = 1.0 if s.weights is None else float(np.max(s.weights) / np.min(s.weights))
-    total = 0.0
-    for p, U in ((s.degree_u, s.knots_u), (s.degree_v, s.knots_v)):
-        d = np.diff(np.asarray(U, dtype=np.float64))
-        h = float(d[d > 0].min())
-        total += 4.0 * p * ratio * D / h
-    return total
+    return float(speed_bound_of(s.control_points, s.homogeneous, s.degree_u, s.degree_v,
+                                s.knots_u, s.knots_v))
 
 
 SEED_SPANS = 16

@@ -269,3 +269,34 @@ def test_triangle_coordinates_match_get_parts():
     square = np.array([shapely.GeometryCollection([shapely.box(0, 0, 1, 1)])], dtype=object)
     with pytest.raises(ValueError):  # 5 ring points: neither route reads it as triangles
         C.triangle_coordinates(square)
+
+
+def _split_counts_numpy(e, eu, ev, target, max_parts=8):
+    """quadtree.split_counts' numpy formulas before its kernel (the oracle)."""
+    T = target
+    twist = np.maximum(eu, ev) < 0.25 * e
+    fu = np.sqrt(2.0 * eu / T)
+    fv = np.sqrt(2.0 * ev / T)
+    fu = np.where(fv < 1.0, np.sqrt(eu / np.maximum(T - ev, 0.5 * T)), fu)
+    fv = np.where(fu < 1.0, np.sqrt(ev / np.maximum(T - eu, 0.5 * T)), fv)
+    ft = np.sqrt(e / T)
+    fu = np.where(twist, np.maximum(fu, ft), fu)
+    fv = np.where(twist, np.maximum(fv, ft), fv)
+    return (np.minimum(np.maximum(np.ceil(fu), 1), max_parts).astype(np.int64),
+            np.minimum(np.maximum(np.ceil(fv), 1), max_parts).astype(np.int64))
+
+
+def test_split_counts_kernel_matches_the_numpy_formulas():
+    rng = np.random.default_rng(12)
+    for trial in range(200):
+        n = int(rng.integers(0, 50))
+        E = 10.0 ** rng.uniform(-6, 3, (n, 3)) * (rng.random((n, 3)) > 0.1)
+        if trial % 4 == 0:  # values exactly at the branch points
+            E[: n // 2, 1] = 0.5
+            E[: n // 3, 2] = 0.5
+        target = 10.0 ** rng.uniform(-2, 1)
+        for mp in (8, 4096):
+            # strided columns as the callers pass them
+            got = qt.split_counts(E[:, 0], E[:, 1], E[:, 2], target, max_parts=mp)
+            want = _split_counts_numpy(E[:, 0], E[:, 1], E[:, 2], target, mp)
+            assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])

@@ -234,3 +234,66 @@ def test_domain_rectangle_only_matches_its_numpy_version():
             assert domain_rectangle_only(s, ct) == want, (trial, jitter, ct)
             seen.add(want)
     assert seen == {True, False}
+
+
+def _is_domain_rectangle_numpy(pts, u0, u1, v0, v1, eps):
+    """The numpy test :class:`TrimPolylines` made before ``loop_rectangle_gap``."""
+    on = ((np.abs(pts[:, 0] - u0) <= eps) | (np.abs(pts[:, 0] - u1) <= eps)
+          | (np.abs(pts[:, 1] - v0) <= eps) | (np.abs(pts[:, 1] - v1) <= eps))
+    if not on.all():
+        return False
+    x, y = pts[:, 0], pts[:, 1]
+    area = 0.5 * abs(np.sum(x[:-1] * y[1:] - x[1:] * y[:-1]))
+    return bool(abs(area - (u1 - u0) * (v1 - v0)) <= eps * (u1 - u0 + v1 - v0))
+
+
+def test_loop_rectangle_gap_decides_as_the_numpy_test():
+    from geomkit._kernels.tess_trim import loop_rectangle_gap
+
+    rng = np.random.default_rng(9)
+    u0, u1, v0, v1 = -2.0, 5.0, 1.0, 1.5
+    per = u1 - u0 + v1 - v0
+    seen = set()
+    for trial in range(400):
+        # the rectangle walked with extra points on its edges, one point moved
+        k = int(rng.integers(1, 6))
+        t = np.sort(rng.random(k))
+        pts = np.concatenate([np.c_[u0 + (u1 - u0) * t, np.full(k, v0)], [[u1, v0]],
+                              np.c_[np.full(k, u1), v0 + (v1 - v0) * t], [[u1, v1]],
+                              np.c_[u1 - (u1 - u0) * t, np.full(k, v1)], [[u0, v1]],
+                              np.c_[np.full(k, u0), v1 - (v1 - v0) * t], [[u0, v0]]])
+        pts = np.concatenate([[[u0, v0]], pts])
+        i = int(rng.integers(0, len(pts)))
+        pts[i] += 10.0 ** rng.uniform(-15, -3) * rng.standard_normal(2)
+        if trial % 5 == 0:  # a loop well inside: not the rectangle
+            pts = 0.5 * pts + [1.0, 0.6]
+        gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
+        for eps in (1e-12 * 7, 1e-9, 1e-6 * 7):
+            want = _is_domain_rectangle_numpy(pts, u0, u1, v0, v1, eps)
+            assert (gap <= eps and area_gap <= eps * per) == want, (trial, eps)
+            seen.add(want)
+    assert seen == {True, False}
+
+
+def test_speed_bound_kernel_matches_its_numpy_formula():
+    from geomkit.mesh.trim_polylines import speed_bound
+
+    rng = np.random.default_rng(4)
+    for trial in range(50):
+        p, q = int(rng.integers(1, 4)), int(rng.integers(1, 4))
+        nu, nv = p + 1 + int(rng.integers(0, 4)), q + 1 + int(rng.integers(0, 4))
+        ku = np.r_[np.zeros(p), np.sort(rng.random(nu - p + 1)), np.ones(p)]
+        kv = np.r_[np.zeros(q), np.sort(rng.random(nv - q + 1)), np.ones(q)]
+        ku[p], ku[-p - 1], kv[q], kv[-q - 1] = 0.0, 1.0, 0.0, 1.0
+        if trial % 3 == 0 and p > 1 and nu - p > 2:  # a double inner knot (a zero span)
+            ku[p + 1] = ku[p + 2]
+        P = rng.normal(size=(nu, nv, 3)) * 10.0 ** rng.uniform(-3, 3)
+        W = np.exp(rng.uniform(-1, 1, (nu, nv))) if trial % 2 else None
+        s = Surface(p, q, ku, kv, P, W)
+        D = float(np.linalg.norm(np.ptp(P.reshape(-1, 3), axis=0)))
+        ratio = 1.0 if W is None else float(W.max() / W.min())
+        want = 0.0
+        for deg, U in ((p, s.knots_u), (q, s.knots_v)):
+            d = np.diff(U)
+            want += 4.0 * deg * ratio * D / float(d[d > 0].min())
+        assert abs(speed_bound(s) - want) <= 1e-14 * want
