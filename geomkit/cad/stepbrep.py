@@ -334,7 +334,10 @@ def _face(F, geom, face, name, unc):
     else:
         base = _bspline_base(srf, name)
     (u0, u1), (v0, v1) = base.domain
-    closed = closed_directions(base, base.size)
+    # a plane patch is never closed (it spans more than 1e-9 of its range both ways:
+    # analytic_pieces)
+    plane = kind == "analytic" and srf.kind == "plane"
+    closed = (False, False) if plane else closed_directions(base, base.size)
     periods = ((u1 - u0) * closed[0], (v1 - v0) * closed[1])
     ftol = max(unc or 0.0, EDGE_TOL * base.size)
     if kind != "analytic":
