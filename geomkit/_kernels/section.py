@@ -430,3 +430,38 @@ def _critical_points_loop(Pw, p, q, U, V, plane, boxes, maxit, out_uv, out_f, bi
         out_uv[i, 0] = best_u
         out_uv[i, 1] = best_v
         out_f[i] = best if np.isfinite(best) else np.nan
+
+
+@jit
+def has_close_pair(uv, order, r):
+    """Whether two of the points ``uv`` (n, 2) are within ``r`` of each other along
+    both u and v (a superset of the pairs within Euclidean distance ``r``); ``order``
+    sorts them by u, then v (``np.lexsort((uv[:, 1], uv[:, 0]))``).
+
+    For each point the points after it in ``order`` with u at most ``r`` more are
+    scanned; among those with its own u (sorted by v) the scan skips past the ones
+    more than ``r`` above its v."""
+    n = order.shape[0]
+    # end of each run of equal u in the sorted order
+    run_end = np.empty(n, np.int64)
+    e = n
+    for k in range(n - 1, -1, -1):
+        if k < n - 1 and uv[order[k], 0] != uv[order[k + 1], 0]:
+            e = k + 1
+        run_end[k] = e
+    for k in range(n):
+        i = order[k]
+        ui = uv[i, 0]
+        vi = uv[i, 1]
+        m = k + 1
+        while m < n:
+            j = order[m]
+            if uv[j, 0] - ui > r:
+                break
+            if abs(uv[j, 1] - vi) <= r:
+                return True
+            if uv[j, 0] == ui and uv[j, 1] - vi > r:
+                m = run_end[m]      # the rest of this u run is higher still
+                continue
+            m += 1
+    return False

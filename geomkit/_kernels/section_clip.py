@@ -9,7 +9,8 @@ and lie far from the trim curves but near their ends.  :func:`chain_side` decide
 two whole cases from a coarse densification (step ``H``; its points are points of the
 fine one, the first levels of the same halving) and the fine points of only the coarse
 segments that come near a trim curve or the domain's edge; for the others it gives
-the fine points with their classes.
+the fine points with their classes.  Points are classified by
+:func:`.section_trims.outside_binned` (the trim segments of one bin over v).
 """
 
 from __future__ import annotations
@@ -82,16 +83,16 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
     -------
     side : ``INSIDE_ALL`` or ``OUTSIDE_ALL`` when every point is inside (outside),
         ``MIXED`` otherwise, ``NOT_FINITE`` when a point is not finite.
-    points : (m, 2) the points of ``densify(uv, h)`` and ``inside`` (m,) bool,
+    points : (m, 2) the points of ``densify(uv, h)`` (their Newton iterates clamped
+        near their coarse segment, see :data:`FINE_MARGIN`) and ``inside`` (m,) bool,
         ``classify_uv(points, band) != OUTSIDE``, when ``MIXED`` (else empty).
 
     A coarse segment whose box grown by :data:`FINE_MARGIN` times its length (which
-    holds its fine points, see :data:`FINE_MARGIN`) lies
-    more than ``2 * band`` from every trim box and inside the domain grown by ``band``
-    has one class for all the fine points it stands for (the parity of the loops
-    around them, :func:`geomkit.classify_uv`): the class of one point, shared by
-    consecutive such segments (their boxes overlap at the common end, no trim curve
-    between).  The fine points of the other coarse segments are computed, and those
+    holds its fine points) lies more than ``2 * band`` from every trim box and inside
+    the domain grown by ``band`` has one class for all the fine points it stands for
+    (the parity of the loops around them, :func:`geomkit.classify_uv`): the class of
+    one point, shared by consecutive such segments (their boxes overlap at the common
+    end, no trim curve between).  The fine points of the other coarse segments are computed, and those
     of a fine segment whose own box is that far have the class of their stretch; the
     rest are classified one by one.
     """

@@ -91,10 +91,15 @@ def unique_rows(a):
 
 
 def _merge_nodes(uv, radius):
-    """Union nodes closer than ``radius`` in UV; returns (representative index per node)."""
+    """Union nodes closer than ``radius`` in UV; returns (representative index per node).
+
+    Nodes are first checked for any pair within ``radius`` (times 1 + 1e-9) along both
+    u and v (:func:`geomkit._kernels.section.has_close_pair`, a superset of the pairs
+    the tree finds); without one, every node is its own (most surfaces)."""
     n = uv.shape[0]
     parent = np.arange(n)
-    if n > 1:
+    if n > 1 and K.has_close_pair(uv, np.lexsort((uv[:, 1], uv[:, 0])),
+                                  float(radius) * (1 + 1e-9)):
         pairs = cKDTree(uv).query_pairs(radius, output_type="ndarray")
 
         def find(i):

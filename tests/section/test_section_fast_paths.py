@@ -296,6 +296,48 @@ def test_unique_rows_as_numpy_unique():
         assert np.array_equal(u[inv], a)
 
 
+def test_merge_nodes_as_the_tree():
+    """trace._merge_nodes (a close-pair check before the tree) gives the tree's union on
+    grids of leaf corners (many equal u and v), with pairs a hair inside and outside
+    the radius, and on random points."""
+    from scipy.spatial import cKDTree
+
+    from geomkit._kernels import section as K
+    from geomkit.section.trace import _merge_nodes
+
+    def tree(uv, r):
+        parent = np.arange(len(uv))
+        for i, j in cKDTree(uv).query_pairs(r, output_type="ndarray"):
+            a, b = parent[i], parent[j]
+            while parent[a] != a:
+                a = parent[a]
+            while parent[b] != b:
+                b = parent[b]
+            parent[max(a, b)] = min(a, b)
+        for i in range(len(uv)):
+            while parent[parent[i]] != parent[i]:
+                parent[i] = parent[parent[i]]
+        return parent
+
+    rng = np.random.default_rng(7)
+    r = 1e-11
+    g = np.linspace(0, 1, 9)
+    grid = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
+    for k in range(40):
+        uv = grid.copy()
+        extra = grid[rng.choice(len(grid), 5)]
+        off = rng.normal(size=(5, 2))
+        off *= r * rng.choice([0.5, 0.999999, 1.000001, 2, 1e3], size=(5, 1)) / np.linalg.norm(
+            off, axis=1, keepdims=True)
+        uv = np.concatenate([uv, extra + off if k % 2 else rng.random((5, 2))])
+        uv = uv[rng.permutation(len(uv))]
+        brute = (np.abs(uv[:, None] - uv[None]) <= r * (1 + 1e-9)).all(axis=2)
+        np.fill_diagonal(brute, False)
+        assert K.has_close_pair(uv, np.lexsort((uv[:, 1], uv[:, 0])), r * (1 + 1e-9)) \
+            == brute.any()
+        assert np.array_equal(_merge_nodes(uv, r), tree(uv, r))
+
+
 # ------------------------------------------------------------- joins over all curves at once
 def _drop_shared_edges_plain(curves, tol):
     def poly(c):
