@@ -247,20 +247,26 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
     Raises :class:`InvalidTrimError` naming ``field``."""
     (u0, u1), (v0, v1) = domain
     pcs = loop.pieces
-    for i, c in enumerate(pcs):
-        nxt = pcs[(i + 1) % len(pcs)]
-        gap = float(np.hypot(*(c.end - nxt.start)))
-        if gap > close:
-            if len(pcs) == 1:
-                what = (f"loop is open: it ends at {c.end.tolist()}, {gap:.3g} away "
-                        f"from its start {nxt.start.tolist()}")
-            else:
-                j = (i + 1) % len(pcs)
-                what = (f"pieces do not join: piece {i} ends at {c.end.tolist()} but "
-                        f"piece {j} starts at {nxt.start.tolist()}, {gap:.3g} away")
-            raise InvalidTrimError(f"{what} (closure tolerance {close:.3g})", field)
+    if not pcs:
+        raise InvalidTrimError("a loop of no pieces", field)
+    E = np.array([c.control_points[-1] for c in pcs])
+    S = np.array([c.control_points[0] for c in pcs])
+    gaps = np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T)  # piece i's end to i+1's start
+    for i in np.flatnonzero(gaps > close)[:1].tolist():   # the first gap too wide
+        c, nxt, gap = pcs[i], pcs[(i + 1) % len(pcs)], float(gaps[i])
+        if len(pcs) == 1:
+            what = (f"loop is open: it ends at {c.end.tolist()}, {gap:.3g} away "
+                    f"from its start {nxt.start.tolist()}")
+        else:
+            j = (i + 1) % len(pcs)
+            what = (f"pieces do not join: piece {i} ends at {c.end.tolist()} but "
+                    f"piece {j} starts at {nxt.start.tolist()}, {gap:.3g} away")
+        raise InvalidTrimError(f"{what} (closure tolerance {close:.3g})", field)
     box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
-    for c in pcs:
+    P = np.concatenate([c.control_points for c in pcs])
+    inside = ((P[:, 0] >= box[0]) & (P[:, 0] <= box[1]) & (P[:, 1] >= box[2])
+              & (P[:, 1] <= box[3])).all()  # then every curve is (convex hulls)
+    for c in () if inside else pcs:
         bad = first_point_outside(c, box, close)
         if bad is not None:
             raise InvalidTrimError(
@@ -268,7 +274,8 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
                 f"({bad[0]:.6g}, {bad[1]:.6g})", field)
     pts = loop_samples(loop)
     x, y = pts[:, 0], pts[:, 1]
-    area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    xn, yn = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
+    area = 0.5 * float(np.sum(x * yn - xn * y))
     if abs(area) <= (close * close) or not _three_distinct(np.round(pts / close)):
         raise InvalidTrimError(f"degenerate loop: enclosed area {area:.3g} in UV", field)
 

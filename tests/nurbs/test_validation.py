@@ -180,6 +180,7 @@ TRIM_CASES = {
                              "degenerate loop"),
     "single_repeated_point": ([[[.3, .3], [.3, .3], [.3, .3]]], "trim[0]", "degenerate"),
     "single_point": ([[[.3, .3]]], "trim[0]", "at least 2 points"),
+    "loop_of_no_pieces": ([TrimLoop(())], "trim[0]", "no pieces"),
     "degenerate_nurbs_loop": ([{"degree": 2, "knots": [0, 0, 0, 1, 1, 1],
                                 "control_points": [[.5, .2], [.5, .8], [.5, .2]]}],
                               "trim[0]", "degenerate loop"),
