@@ -247,8 +247,7 @@ def plane_section(surfaces, plane, tol: float = 1e-6, gap: float = 0.0) -> Secti
         for q in cuv:
             contacts.append((k, q))
     ev = {k: _Eval(s, abcd) for k, s in enumerate(surfs)}
-    for c in curves:
-        c["X"] = _points(ev, c["uv"], c["sid"])
+    _curve_points(ev, curves)
     bridged = [0.0]
     curves = split_at_poles(curves, surfs)
     curves = drop_shared_edges(curves, gap + 2 * tol)
@@ -291,11 +290,31 @@ def _net(s):
 
 
 def _points(ev, uv, sid):
+    """``S_sid(uv)`` (n, 3): the points of the surfaces ``sid`` (n,) at ``uv`` (n, 2),
+    one kernel call per surface (each point evaluated alone: the same bits however
+    they are grouped)."""
     X = np.empty((len(uv), 3))
-    for k in np.unique(sid):
-        m = sid == k
-        X[m] = ev[int(k)].points(uv[m])
+    if not len(uv):
+        return X
+    order = np.argsort(sid, kind="stable")
+    s = sid[order]
+    cut = np.flatnonzero(s[1:] != s[:-1]) + 1
+    for a, b in zip(np.r_[0, cut].tolist(), np.r_[cut, len(s)].tolist()):
+        rows = order[a:b]
+        X[rows] = ev[int(s[a])].points(uv[rows])
     return X
+
+
+def _curve_points(ev, curves):
+    """``c["X"]``, the points of each curve's ``uv`` on its surfaces ``sid``, for all
+    the curves at once (:func:`_points`)."""
+    if not curves:
+        return
+    n = [len(c["uv"]) for c in curves]
+    X = _points(ev, np.concatenate([c["uv"] for c in curves]),
+                np.concatenate([c["sid"] for c in curves]))
+    for c, a, b in zip(curves, np.cumsum([0] + n[:-1]).tolist(), np.cumsum(n).tolist()):
+        c["X"] = X[a:b].copy()
 
 
 def _clip_trims(s, plane, chains, zsnap, reach=0.0):
@@ -535,8 +554,14 @@ def _finite(uv):
     return as_float_array(uv, "uv")
 
 
+CONTACT_BLOCK = 64
+""":func:`_contact_points` measures a candidate's distance to the curve points of the
+blocks of this many (consecutive) whose box grown by ``tol`` holds it."""
+
+
 def _contact_points(ev, contacts, curves, plane, tol):
-    """Cluster contact candidates within ``tol``; drop those on a curve."""
+    """Cluster contact candidates within ``tol``; drop those on a curve (within ``tol``
+    of one of its points, see :data:`CONTACT_BLOCK`)."""
     if not contacts:
         return np.empty((0, 3)), np.empty((0, 2)), np.empty(0, np.int64)
     sid = np.array([k for k, _ in contacts])
@@ -544,13 +569,25 @@ def _contact_points(ev, contacts, curves, plane, tol):
     X = _points(ev, uv, sid)
     f = np.abs(X @ plane[:3] + plane[3])
     order = np.argsort(f, kind="stable")
-    curveX = np.concatenate([c["X"] for c in curves]) if curves else np.empty((0, 3))
+    # the curve points in blocks of CONTACT_BLOCK, each block's box grown by tol (and a
+    # hair): a candidate outside it is farther than tol from every point of the block
+    allX = np.concatenate([c["X"] for c in curves]) if curves else np.empty((0, 3))
+    if len(allX):
+        starts = np.arange(0, len(allX), CONTACT_BLOCK)
+        grow = tol * (1 + 1e-9)
+        lo = np.minimum.reduceat(allX, starts) - grow
+        hi = np.maximum.reduceat(allX, starts) + grow
     keep = []
     for i in order:
         if any(np.linalg.norm(X[i] - X[j]) <= tol for j in keep):
             continue
-        if len(curveX) and np.min(np.linalg.norm(curveX - X[i], axis=1)) <= tol:
-            continue
+        if len(allX):
+            blocks = np.flatnonzero((lo <= X[i]).all(axis=1) & (X[i] <= hi).all(axis=1))
+            if len(blocks):
+                rows = (starts[blocks][:, None] + np.arange(CONTACT_BLOCK)).ravel()
+                rows = rows[rows < len(allX)]
+                if np.min(np.linalg.norm(allX[rows] - X[i], axis=1)) <= tol:
+                    continue
         keep.append(i)
     keep = np.array(keep, dtype=np.int64)
     return X[keep], uv[keep], sid[keep]

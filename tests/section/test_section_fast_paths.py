@@ -338,6 +338,62 @@ def test_merge_nodes_as_the_tree():
         assert np.array_equal(_merge_nodes(uv, r), tree(uv, r))
 
 
+def _contact_points_plain(ev, contacts, curves, plane, tol):
+    sid = np.array([k for k, _ in contacts])
+    uv = np.array([q for _, q in contacts])
+    X = np.empty((len(uv), 3))
+    for k in np.unique(sid):
+        m = sid == k
+        X[m] = ev[int(k)].points(uv[m])
+    f = np.abs(X @ plane[:3] + plane[3])
+    order = np.argsort(f, kind="stable")
+    curveX = np.concatenate([c["X"] for c in curves]) if curves else np.empty((0, 3))
+    keep = []
+    for i in order:
+        if any(np.linalg.norm(X[i] - X[j]) <= tol for j in keep):
+            continue
+        if len(curveX) and np.min(np.linalg.norm(curveX - X[i], axis=1)) <= tol:
+            continue
+        keep.append(i)
+    keep = np.array(keep, dtype=np.int64)
+    return X[keep], uv[keep], sid[keep]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_contact_points_as_the_loop(seed):
+    """plane._contact_points (curve points in blocks with grown boxes) keeps the
+    candidates the loop over every curve point keeps: candidates on, a hair off and
+    about tol from long and short curves, and clustered."""
+    class Lift:
+        def __init__(self, z):
+            self.z = z
+
+        def points(self, uv):
+            return np.column_stack([uv, np.full(len(uv), self.z)])
+
+    rng = np.random.default_rng(seed)
+    tol = 10.0 ** rng.uniform(-5, -2)
+    ev = {0: Lift(0.0), 1: Lift(0.5 * tol), 2: Lift(3 * tol)}
+    curves = []
+    for k in range(rng.integers(1, 6)):
+        t = np.linspace(0, 1, rng.integers(1, 400))[:, None]
+        X = np.column_stack([np.cos(3 * t + k), np.sin(2 * t), 0 * t])
+        curves.append({"X": X})
+    P = np.concatenate([c["X"] for c in curves])
+    contacts = []
+    for _ in range(60):
+        p = P[rng.integers(len(P))]
+        d = rng.normal(size=2)
+        d *= tol * rng.choice([0.0, 0.5, 0.999999, 1.000001, 2.0, 50.0]) / np.linalg.norm(d)
+        contacts.append((int(rng.integers(3)), p[:2] + d))
+    plane = np.array([0.0, 0.0, 1.0, 0.0])
+    got = plane_mod._contact_points(ev, contacts, curves, plane, tol)
+    want = _contact_points_plain(ev, contacts, curves, plane, tol)
+    for g, w in zip(got, want):
+        assert np.array_equal(g, w)
+    assert 0 < len(want[0]) < len(contacts)
+
+
 # ------------------------------------------------------------- joins over all curves at once
 def _drop_shared_edges_plain(curves, tol):
     def poly(c):
