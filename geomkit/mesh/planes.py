@@ -48,7 +48,7 @@ def _triangulate(polys: np.ndarray):
     return coords, idx, failed
 
 
-def planar_batch(surfaces, chord_tol: float) -> dict:
+def planar_batch(surfaces, chord_tol: float, sizes=None) -> dict:
     """``{index: (uv (n, 2), faces (m, 3), seconds)}`` for the trimmed surfaces of
     ``surfaces`` that are affine maps of their parameters, their regions triangulated
     together (see the module docstring): faces counter-clockwise in UV, every
@@ -56,7 +56,8 @@ def planar_batch(surfaces, chord_tol: float) -> dict:
     point added, vertices sorted by u then v; ``{index: False}`` for a trimmed surface
     that is not such a map.  A surface not listed (untrimmed, an empty region, a
     polygon GEOS refuses, trim polylines that raise) is left to the face-by-face path.
-    ``seconds``: its share of the batch's time."""
+    ``seconds``: its share of the batch's time; ``sizes``: each surface's ``size``, if
+    known."""
     import shapely
 
     t0 = time.perf_counter()
@@ -65,7 +66,7 @@ def planar_batch(surfaces, chord_tol: float) -> dict:
     for i, s in enumerate(surfaces):
         if not s.trim:
             continue
-        if affine_map(s, s.size) is None:
+        if affine_map(s, s.size if sizes is None else sizes[i]) is None:
             out[i] = False  # not a plane: the face-by-face path need not ask again
             continue
         try:

@@ -74,7 +74,7 @@ from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import points, weld, weld_grid
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
-                                         planar_trimmed)
+                                         packed_trims, planar_trimmed)
 from geomkit.validate import as_int
 from geomkit.errors import FaceFailedWarning, InvalidInputError, MeshingError
 from geomkit.mesh.mesh import Mesh
@@ -170,19 +170,19 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET, fallback: str | None = None,
-                    planar=None):
+                    planar=None, size: float | None = None):
     """One face's part of the mesh, ``(V, F, UV, dev, tri_uv, stats)``: the fast paths
     (planes, grids), then the adaptive cells.  With ``fallback`` (why this route failed
     for the face) the fallback route instead (:func:`geomkit.mesh.fallback.fallback_face`);
     with ``planar``, the face's triangles from :func:`geomkit.mesh.planes.planar_batch`
-    (False: it found the surface is not a plane)."""
+    (False: it found the surface is not a plane); ``size``: ``s.size`` if known."""
     if fallback is not None:
         return fallback_face(s, tol, max_angle, max_edge, k, trim_target, fallback)
     if planar:
         uv, F, seconds = planar
         return points(s, uv), F, uv, np.zeros(len(F)), uv[F], _planar_stats(seconds)
     t0 = time.perf_counter()
-    size = s.size
+    size = s.size if size is None else size
     if not s.trim and max_angle is None and max_edge is None:
         flat = _affine_plane(s, size)
         if flat is not None:
@@ -197,8 +197,9 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     # trims that are only the domain rectangle (a STEP face bounded by its surface's
     # own edges: most cylinders and cones of real parts) leave the whole domain; the
     # cell path drops that loop too, so the untrimmed paths give the same guarantee
-    whole = not s.trim or domain_rectangle_only(s, trim_target * tol)
-    trim = None if whole else TrimPolylines(s, trim_target * tol)
+    packed = packed_trims(s) if s.trim else None
+    whole = not s.trim or domain_rectangle_only(s, trim_target * tol, packed)
+    trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed)
     if trim is not None and not trim.loops:
         whole, trim = True, None
     if whole:
@@ -272,12 +273,12 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
                                   TRIM_TARGET)
 
 
-def _mesh_face(i: int, s: Surface, args: tuple, planar=None):
+def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None):
     """Face ``i``'s part of the mesh by the primary route, else by the fallback route
     (a :class:`~geomkit.errors.FaceFailedWarning` says which face and why): ``(part,
     None)``, or ``(None, why)`` when both routes fail."""
     try:
-        return _tessellate_one(s, *args, planar=planar), None
+        return _tessellate_one(s, *args, planar=planar, size=size), None
     except Exception as exc:  # noqa: BLE001 - GEOS and numeric failures: the fallback
         why = f"{type(exc).__name__}: {exc}"
     name = f"surface {i}" + (f" ({s.name})" if s.name else "")
@@ -329,11 +330,12 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
                     np.zeros(len(F), dtype=np.int32), dev, tol, {"surfaces": [st]},
                     np.ascontiguousarray(tuv))
     # the trimmed planes together: one constrained triangulation
-    planes = planar_batch(surfaces, trim_target * tol) if max_edge is None else {}
+    sizes = [s.size for s in surfaces]  # once a face (the batch and the face path)
+    planes = planar_batch(surfaces, trim_target * tol, sizes) if max_edge is None else {}
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        part, why = _mesh_face(i, s, args, planes.get(i))
+        part, why = _mesh_face(i, s, args, planes.get(i), sizes[i])
         if part is None:  # one face never sinks the model: named in the stats
             name = f"surface {i}" + (f" ({s.name})" if s.name else "")
             warnings.warn(f"{name} left out of the mesh: {why}", FaceFailedWarning,

@@ -30,13 +30,15 @@ from geomkit.nurbs.surface import Surface
 class TrimPolylines:
     """Trim loops as UV polylines whose 3-D chords are within ``chord_tol``.
 
+    ``packed``: :func:`packed_trims` of the surface, if the caller made it.
     ``loops``: the closed (k, 2) polylines, the domain rectangle left out when a loop
     is just that rectangle (``domain_loop``).  ``region`` (the trimmed region, a
     prepared shapely geometry inside the domain) and ``tree`` (r-tree of the polyline
     segments) are built on first use.
     """
 
-    def __init__(self, surface: Surface, chord_tol: float, affine: bool = False):
+    def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
+                 packed=None):
         self.surface = surface
         self.affine = affine  # S maps UV chords to 3-D chords: sample the curve only
         (u0, u1), (v0, v1) = surface.domain
@@ -50,7 +52,7 @@ class TrimPolylines:
         hi = 1e-6 * size_uv  # eps is at most this: a loop failing it fails eps too
         eps = None
         perimeter = u1 - u0 + v1 - v0
-        for pts in self._loop_polylines(chord_tol):
+        for pts in self._loop_polylines(chord_tol, packed):
             gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
             if not (gap <= hi and area_gap <= hi * perimeter):
                 self.loops.append(pts)
@@ -112,13 +114,13 @@ class TrimPolylines:
             self._tree = shapely.STRtree(self.segments)
         return self._tree
 
-    def _loop_polylines(self, chord_tol: float) -> list[np.ndarray]:
+    def _loop_polylines(self, chord_tol: float, packed=None) -> list[np.ndarray]:
         """The closed (k, 2) UV polylines of the surface's loops, every piece of every
         loop in one :func:`geomkit._kernels.tess_trim.trim_polylines` call (each piece
         from its knots, split until every 3-D chord is within ``chord_tol``)."""
         s = self.surface
         (u0, u1), (v0, v1) = s.domain
-        CP, W, K, deg, cp_off, k_off, loop_first = packed_trims(s)
+        CP, W, K, deg, cp_off, k_off, loop_first = packed or packed_trims(s)
         m = len(deg)
         counts = np.empty(m, dtype=np.int64)
         buf = np.empty((8 * len(K) + 64, 3))
@@ -174,7 +176,7 @@ class TrimPolylines:
         return state
 
 
-def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
+def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bool:
     """Whether every trim loop of ``surface`` is the domain rectangle as
     :class:`TrimPolylines` judges it (within its ``eps`` of the domain's edges, the
     rectangle's area), decided from the control points without sampling: True only
@@ -184,13 +186,13 @@ def domain_rectangle_only(surface: Surface, chord_tol: float) -> bool:
     loop's control points enclose the rectangle's area (along a line the shoelace sum
     depends only on the ends).  False when unsure: :class:`TrimPolylines` decides.
     The measuring is one kernel call (:func:`geomkit._kernels.tess_trim.
-    domain_rectangle_gap`)."""
+    domain_rectangle_gap`); ``packed``: :func:`packed_trims` of the surface, if made."""
     if not surface.trim:
         return False
     (u0, u1), (v0, v1) = surface.domain
     size_uv = max(u1 - u0, v1 - v0)
     lo, hi = 1e-12 * size_uv, 1e-6 * size_uv  # TrimPolylines' eps lies in [lo, hi]
-    CP, _, _, deg, cp_off, _, loop_first = packed_trims(surface)
+    CP, _, _, deg, cp_off, _, loop_first = packed or packed_trims(surface)
     worst = domain_rectangle_gap(CP, deg, cp_off, loop_first, u0, u1, v0, v1, hi)
     if worst > hi:
         return False
@@ -206,16 +208,18 @@ def packed_trims(surface: Surface):
     loop_first (loops+1,))``, piece ``c``'s control points ``CP[cp_off[c]:cp_off[c+1]]``
     (weights ``W``), its knots ``K[k_off[c]:k_off[c+1]]``, loop ``i``'s pieces
     ``loop_first[i]:loop_first[i+1]``."""
-    pieces = [c for loop in surface.trim for c in loop.pieces]
-    n = [len(c.weights) for c in pieces]
-    nk = [len(c.knots) for c in pieces]
-    npl = [len(loop.pieces) for loop in surface.trim]
-    return (np.concatenate([c.control_points for c in pieces]),
-            np.concatenate([c.weights for c in pieces]),
-            np.concatenate([c.knots for c in pieces]),
-            np.array([c.degree for c in pieces], dtype=np.int64),
-            np.array([0, *accumulate(n)], dtype=np.int64),
-            np.array([0, *accumulate(nk)], dtype=np.int64),
+    cps, ws, ks, deg, npl = [], [], [], [], []
+    for loop in surface.trim:
+        npl.append(len(loop.pieces))
+        for c in loop.pieces:
+            cps.append(c.control_points)
+            ws.append(c.weights)
+            ks.append(c.knots)
+            deg.append(c.degree)
+    return (np.concatenate(cps), np.concatenate(ws), np.concatenate(ks),
+            np.array(deg, dtype=np.int64),
+            np.array([0, *accumulate(map(len, ws))], dtype=np.int64),
+            np.array([0, *accumulate(map(len, ks))], dtype=np.int64),
             np.array([0, *accumulate(npl)], dtype=np.int64))
 
 
