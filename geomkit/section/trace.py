@@ -132,17 +132,18 @@ def trace_surface(surface, plane, tol, zsnap, min_diam, max_depth=80):
     bp = surface.bezier_patches()
     leaves, visited = K.subdivide(bp.homogeneous, bp.u_breaks, bp.v_breaks, plane, zsnap,
                                   min_diam, max_depth)
+    unres = np.flatnonzero(leaves[:, 4] == K.UNRESOLVED)
     stats = {"subpatches": int(visited), "leaves": int(len(leaves)),
-             "unresolved": int(np.sum(leaves[:, 4] == K.UNRESOLVED)) if len(leaves) else 0}
+             "unresolved": len(unres)}
     if len(leaves) == 0:
         return [], np.empty((0, 2)), stats
     dom = max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
     # ---- corners: one evaluation per distinct UV corner
     L = len(leaves)
-    cu = np.stack([leaves[:, 0], leaves[:, 1], leaves[:, 1], leaves[:, 0]], axis=1)
-    cv = np.stack([leaves[:, 2], leaves[:, 2], leaves[:, 3], leaves[:, 3]], axis=1)
-    corners = np.stack([cu.ravel(), cv.ravel()], axis=1)
-    cuniq, cidx = unique_rows(corners)
+    corners = np.empty((L, 4, 2))       # u0 v0, u1 v0, u1 v1, u0 v1 of each leaf
+    corners[:, :, 0] = leaves[:, [0, 1, 1, 0]]
+    corners[:, :, 1] = leaves[:, [2, 2, 3, 3]]
+    cuniq, cidx = unique_rows(corners.reshape(-1, 2))
     cidx = cidx.reshape(L, 4)
     fc = ev.f(cuniq)
     fc[np.abs(fc) <= zsnap] = 0.0
@@ -152,7 +153,7 @@ def trace_surface(surface, plane, tol, zsnap, min_diam, max_depth=80):
     eb = cidx[:, [1, 2, 2, 3]]
     fa, fb = fc[ea], fc[eb]
     strict = (fa * fb) < 0
-    key = np.stack([ea[strict], eb[strict]], axis=1)
+    key = np.column_stack((ea[strict], eb[strict]))
     ukey, kinv = unique_rows(key) if len(key) else (
         np.empty((0, 2), int), np.empty(0, int))
     roots = ev.roots(cuniq[ukey[:, 0]], cuniq[ukey[:, 1]], fc[ukey[:, 0]], fc[ukey[:, 1]]) \
@@ -219,8 +220,7 @@ def trace_surface(surface, plane, tol, zsnap, min_diam, max_depth=80):
     # ---- contact candidates: zero corners on no segment; unresolved leaves without any
     zero_c = np.nonzero((fc == 0) & ~used[rep[:nc]])[0]
     contacts = [cuniq[zero_c]]
-    lonely = [li for li in range(L) if leaves[li, 4] == K.UNRESOLVED
-              and not np.any(used[rep[cidx[li]]])]
+    lonely = [li for li in unres.tolist() if not np.any(used[rep[cidx[li]]])]
     if lonely:
         boxes = np.ascontiguousarray(leaves[lonely, :4])
         cuv = np.empty((len(lonely), 2))
