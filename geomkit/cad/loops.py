@@ -30,7 +30,7 @@ def join_gaps(pieces) -> np.ndarray:
         return np.zeros(0)
     E = np.array([c.control_points[-1] for c in pieces])
     S = np.array([c.control_points[0] for c in pieces])
-    return np.hypot(*(E - np.roll(S, -1, axis=0)).T)
+    return np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T)
 
 
 def _inside_domain(pieces, domain) -> bool:
