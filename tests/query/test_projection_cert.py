@@ -182,8 +182,10 @@ def test_trim_boundary_boxes_hold_the_arcs():
 def test_trim_boundary_boxes_hold_the_arcs_impeller(impeller_projector):
     """pyiges' impeller (trim curves of degree 1-3 on 277 faces): the arcs lie in
     their boxes, the boxes do grow past the triangles where the arc bulges out (the
-    sliver the certificate must cover), and most boundary triangles get a box."""
-    checked, grown = _boundary_arcs_hold(impeller_projector[1], 0.25)
+    sliver the certificate must cover), and most boundary triangles get a box.  (With
+    trim polylines started at the pieces' knots the impeller has 10,923 boundary
+    triangles, 2,813 refused (0.26); 19,939 and 2,945 (0.15) from 5 seeds a span.)"""
+    checked, grown = _boundary_arcs_hold(impeller_projector[1], 0.3)
     assert checked > 500 and grown > 50
 
 

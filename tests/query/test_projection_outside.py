@@ -91,16 +91,18 @@ def _same_answers(pr, P):
 
 
 def test_outside_rule_impeller_box_points(impeller_surfaces):
-    """Box points of the impeller: the same answers as without the rule, less than
-    half the Newton runs (the rule settles the trimmed faces' candidates whose piece
-    has its nearest point on the trim curve)."""
+    """Box points of the impeller: the same answers as without the rule, under 0.7x
+    the Newton runs (the rule settles the trimmed faces' candidates whose piece has
+    its nearest point on the trim curve).  Measured: 2,726 against 4,312 with trim
+    polylines started at the pieces' knots; 2,971 against 7,555 from 5 seeds a span
+    (the coarser boundary leaves fewer candidates for the rule to settle)."""
     rng = np.random.default_rng(5)
     lo = np.min([s.bounds[0] for s in impeller_surfaces], axis=0)
     hi = np.max([s.bounds[1] for s in impeller_surfaces], axis=0)
     P = rng.uniform(lo, hi, (400, 3))
     pr = geomkit.Projector(impeller_surfaces)
     old, new = _same_answers(pr, P)
-    assert new.stats["newton_runs"] < 0.5 * old.stats["newton_runs"]
+    assert new.stats["newton_runs"] < 0.7 * old.stats["newton_runs"]
     assert new.stats["certified_skips"] > old.stats["certified_skips"] + 2 * len(P)
 
 
