@@ -32,7 +32,7 @@ import numpy as np
 from geomkit.tolerances import ISO_TOL
 from geomkit.errors import InvalidTrimError
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.nurbs.trims import readonly
+from geomkit.nurbs.trims import is_clamped, readonly
 from geomkit.validate import check_knots
 from geomkit.cad.analytic import (AngleMap, arc_curve, cross3, curve_eval, line_curve,
                                   plane_patch, revolve, unwrap)
@@ -400,10 +400,12 @@ def _mapped_piece(p, U, Q, w):
     part.  Anything else goes through create (an error naming the fault)."""
     U = np.asarray(U, dtype=np.float64)
     n = Q.shape[0]
-    if not (n >= p + 1 and U.shape[0] == n + p + 1 and U[0] == U[p] and U[-1] == U[-p - 1]
-            and np.isfinite(Q).all() and (w is None or bool((w > 0).all()))):
+    if not (n >= p + 1 and U.shape[0] == n + p + 1 and np.isfinite(Q).all()
+            and (w is None or bool((w > 0).all()))):
         return TrimCurve.create(p, U, Q, w)
     U = check_knots(U, p, n, "trim.knots", InvalidTrimError)
+    if not is_clamped(U, p):
+        return TrimCurve.create(p, U, Q, w)
     if w is None:
         return TrimCurve(p, readonly(U), readonly(Q), readonly(np.ones(n)))
     w = np.asarray(w, dtype=np.float64)

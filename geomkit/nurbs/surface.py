@@ -22,8 +22,8 @@ from geomkit._kernels.trim import BOUNDARY, INSIDE, OUTSIDE, classify_points
 from geomkit.validate import as_float_array, as_int, as_points, check_knots
 from geomkit.errors import InvalidInputError, InvalidSurfaceError, InvalidTrimError
 from geomkit.nurbs import serial
-from geomkit.nurbs.trims import (TrimCurve, TrimLoop, check_loop, clamp_knots, pack_segments,
-                                 parse_loop, readonly)
+from geomkit.nurbs.trims import (TrimCurve, TrimLoop, check_loop, clamp_knots, is_clamped,
+                                 pack_segments, parse_loop, readonly)
 
 __all__ = ["Surface", "TrimCurve", "TrimLoop", "BezierPatches", "check_uv", "check_surface",
            "as_surfaces",
@@ -166,13 +166,12 @@ class Surface:
         Pw = np.empty((nu, nv, 4))
         Pw[..., :3] = P * w[..., None]
         Pw[..., 3] = w
-        # clamp unclamped knot vectors (u: rows are curves; v: transpose); the knots
-        # are non-decreasing, so equal ends p apart are clamped ends
-        if not (U[0] == U[p] and U[-1] == U[-p - 1]):
+        # clamp unclamped knot vectors (u: rows are curves; v: transpose)
+        if not is_clamped(U, p):
             flat, U = clamp_knots(Pw.reshape(nu, nv * 4), p, U)
             Pw = flat.reshape(-1, nv, 4)
             nu = Pw.shape[0]
-        if not (V[0] == V[q] and V[-1] == V[-q - 1]):
+        if not is_clamped(V, q):
             flat, V = clamp_knots(np.ascontiguousarray(Pw.transpose(1, 0, 2))
                                   .reshape(nv, nu * 4), q, V)
             Pw = np.ascontiguousarray(flat.reshape(-1, nu, 4).transpose(1, 0, 2))

@@ -17,13 +17,19 @@ from geomkit.validate import as_float_array, as_int, check_knots
 from geomkit.errors import InvalidInputError, InvalidTrimError
 
 __all__ = ["TrimCurve", "TrimLoop", "parse_loop", "check_loop", "pack_segments", "concat_segments",
-           "evaluate_trim_curve", "readonly", "clamp_knots"]
+           "evaluate_trim_curve", "readonly", "clamp_knots", "is_clamped"]
 
 
 def readonly(a: np.ndarray) -> np.ndarray:
     a = np.ascontiguousarray(a, dtype=np.float64)
     a.setflags(write=False)
     return a
+
+
+def is_clamped(U: np.ndarray, p: int) -> bool:
+    """Whether the non-decreasing knot vector ``U`` of degree ``p`` is clamped: its
+    first and last ``p + 1`` knots equal (so its ends ``p`` apart are equal)."""
+    return bool(U[0] == U[p] and U[-1] == U[-p - 1])
 
 
 def clamp_knots(Pw: np.ndarray, p: int, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -34,7 +40,7 @@ def clamp_knots(Pw: np.ndarray, p: int, U: np.ndarray) -> tuple[np.ndarray, np.n
     """
     n = Pw.shape[0]
     a, b = U[p], U[n]
-    if np.all(U[: p + 1] == a) and np.all(U[n:] == b):
+    if is_clamped(U, p):
         return Pw, U
     for end in (a, b):
         s = int(np.count_nonzero(U == end))
