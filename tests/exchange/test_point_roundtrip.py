@@ -30,8 +30,13 @@ def _chunks(path, chunk):
     return P, N
 
 
+# One folder for the module, removed when the test process ends; each example gets its
+# own subfolder in it (Hypothesis runs many examples per test).
+_ROOT = tempfile.TemporaryDirectory(prefix="geomkit-rt-")
+
+
 def _tmp():
-    return Path(tempfile.mkdtemp(prefix="geomkit-rt-"))
+    return Path(tempfile.mkdtemp(dir=_ROOT.name))
 
 
 @settings(**SETTINGS)
