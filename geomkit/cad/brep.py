@@ -348,6 +348,7 @@ def _chain(srf, loop, size):
     """Local coordinates of every edge's samples, unwrapped and chained."""
     s = _S_NS
     out, first, prev, prev_pole = [], {}, None, False
+    apex = None  # the last edge that starts at a pole from another edge's end
     for e in loop:
         ab, rho = e.local(srf, _NS)
         pole = rho <= 1e-9 * size
@@ -369,10 +370,22 @@ def _chain(srf, loop, size):
                 shift[c] = cand[0] - ab[0, c]
             else:
                 shift[c] = TWO_PI * round((prev[c] - ab[0, c]) / TWO_PI)
+                if c == 1 and prev_pole:
+                    apex = len(out)
         ab = ab + shift
         first.setdefault(e.key, ab)
         out.append(ab)
         prev, prev_pole = ab[-1], bool(pole[-1])
+    if apex is not None and srf.periodic[1]:
+        # at a pole the angle jumps by any amount (a sector of a cone from its apex
+        # jumps by its opening, a half cone by exactly pi, either way round): the
+        # edges after the pole take the turn that closes the loop, which therefore
+        # does not go around the axis (as :func:`~geomkit.cad.stepseam.cut_at_seam`
+        # counts a loop through the axis)
+        k = round((out[-1][-1, 1] - out[0][0, 1]) / TWO_PI)
+        if k:
+            for j in range(apex, len(out)):
+                out[j] = out[j] - np.array([0.0, TWO_PI * k])
     return out
 
 

@@ -272,3 +272,49 @@ def test_a_file_open_cascade_reads_by_skipping_syntax_errors_says_so(tmp_path, c
     assert len(res.surfaces) == 23
     out, _ = capfd.readouterr()
     assert "StepFile" not in out and "Incorrect Syntax" not in out
+
+
+def _cone_sector(opening: float) -> str:
+    """A STEP surface model of one face: the sector of opening ``opening`` of a cone
+    (radius 10 at z = 0, half-angle 45 degrees, apex at z = -10) between the rim arc
+    and two generator lines that meet at the apex."""
+    c, s, h = math.cos(opening), math.sin(opening), math.sqrt(0.5)
+    return _file(";\n".join([
+        "#1=CARTESIAN_POINT('',(0.,0.,0.))", "#2=DIRECTION('',(0.,0.,1.))",
+        "#3=DIRECTION('',(1.,0.,0.))", "#4=AXIS2_PLACEMENT_3D('',#1,#2,#3)",
+        f"#5=CONICAL_SURFACE('',#4,10.,{math.pi / 4!r})", "#6=CIRCLE('',#4,10.)",
+        "#10=CARTESIAN_POINT('',(10.,0.,0.))",
+        f"#11=CARTESIAN_POINT('',({10 * c!r},{10 * s!r},0.))",
+        "#12=CARTESIAN_POINT('',(0.,0.,-10.))", "#13=VERTEX_POINT('',#10)",
+        "#14=VERTEX_POINT('',#11)", "#15=VERTEX_POINT('',#12)",
+        f"#20=DIRECTION('',({-c * h!r},{-s * h!r},{-h!r}))", "#21=VECTOR('',#20,1.)",
+        "#22=LINE('',#11,#21)", f"#23=DIRECTION('',({h!r},0.,{h!r}))",
+        "#24=VECTOR('',#23,1.)", "#25=LINE('',#12,#24)",
+        "#30=EDGE_CURVE('',#13,#14,#6,.T.)", "#31=EDGE_CURVE('',#14,#15,#22,.T.)",
+        "#32=EDGE_CURVE('',#15,#13,#25,.T.)", "#40=ORIENTED_EDGE('',*,*,#30,.T.)",
+        "#41=ORIENTED_EDGE('',*,*,#31,.T.)", "#42=ORIENTED_EDGE('',*,*,#32,.T.)",
+        "#50=EDGE_LOOP('',(#40,#41,#42))", "#51=FACE_OUTER_BOUND('',#50,.T.)",
+        "#52=ADVANCED_FACE('',(#51),#5,.T.)", "#53=OPEN_SHELL('',(#52))",
+        "#54=SHELL_BASED_SURFACE_MODEL('',(#53))",
+        "#55=SHAPE_REPRESENTATION('',(#54),$)"]) + ";")
+
+
+@pytest.mark.parametrize("degrees", [60, 120, 180, 180.1, 240, 359])
+def test_cone_sector_from_its_apex(degrees, tmp_path):
+    """A cone sector bounded by two generators that meet at the apex: the angle jumps
+    there by the opening, either way round (exactly pi for a half cone, where the
+    sign of a zero decides). The patch spans the sector's opening, not the whole turn
+    (NIST FTC-07 faces 110-121 are half cones), and the face is the sector (area
+    opening / 2 * r * slant)."""
+    opening = math.radians(degrees)
+    path = tmp_path / "sector.stp"
+    path.write_text(_cone_sector(opening))
+    s = read_native(path).surfaces[0]
+    (u0, u1), (v0, v1) = s.domain
+    assert v1 - v0 == pytest.approx(opening, abs=1e-9)
+    m = geomkit.tessellate(s, 1e-4 * s.size)
+    z = m.vertices[:, 2]
+    r = np.hypot(m.vertices[:, 0], m.vertices[:, 1])
+    assert np.abs(r - (z + 10.0)).max() <= 1e-9 * s.size     # on the cone
+    assert float(z.min()) == pytest.approx(-10.0, abs=1e-9)   # to the apex
+    assert _area(s) == pytest.approx(opening / 2 * 10.0 * 10.0 * math.sqrt(2), rel=2e-4)
