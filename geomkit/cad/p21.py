@@ -255,8 +255,65 @@ def _items_fast(s: str):
     return cur, deep
 
 
+def _flat(s: str):
+    """``(NAME, params)`` of a body with no nested list and at most a leading string
+    (``EDGE_CURVE('',#13,#14,#6,.T.)``: half a part's records), read by splitting at
+    its commas, or None for anything else (then :func:`_items_fast` reads it)."""
+    k = s.find("(")
+    if k <= 0 or s[-1] != ")":
+        return None
+    inner = s[k + 1:-1]
+    if "(" in inner or ")" in inner:
+        return None
+    name = s[:k].strip()
+    if _WORD.fullmatch(name) is None:
+        return None
+    out: list = []
+    if "'" in inner:  # one string, first: a label
+        inner = inner.lstrip()
+        if inner[0] != "'" or inner.count("'") != 2:
+            return None
+        j = inner.index("'", 1)
+        out.append(inner[1:j])
+        rest = inner[j + 1:].lstrip()
+        if not rest:
+            return name.upper(), out
+        if rest[0] != ",":
+            return None
+        tokens = rest[1:].split(",")
+    elif not inner.strip():
+        return name.upper(), out
+    else:
+        tokens = inner.split(",")
+    for t in tokens:
+        t = t.strip()
+        if not t:
+            return None
+        c = t[0]
+        if c == "#":
+            d = t[1:]
+            if not (d.isascii() and d.isdigit()):
+                return None
+            out.append(Ref(d))
+        elif c == ".":
+            if _ENUM.fullmatch(t) is None:
+                return None
+            e = t[1:-1].upper()
+            out.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        elif (c == "$" or c == "*") and len(t) == 1:
+            out.append(None if c == "$" else DERIVED)
+        elif _NUMBER.fullmatch(t) is not None:
+            out.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
+        else:
+            return None
+    return name.upper(), out
+
+
 def _parse(s: str, where: str):
     """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
+    flat = _flat(s)
+    if flat is not None:
+        return flat
     fast = _items_fast(s)
     cur, deep = (_items(s, where), 2) if fast is None else fast
     if len(cur) != 1:

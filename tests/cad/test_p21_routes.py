@@ -1,0 +1,92 @@
+"""The Part 21 parser's three routes read a record alike: the flat route (no nested
+list, at most a leading string: split at commas), the fast route (cut at strings and
+punctuation) and the exact token-by-token route, which alone names a fault.  Checked
+on every record of the real parts and on records mutated at random: a route that
+accepts a record reads it as the exact route does, and accepts nothing the exact
+route refuses."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from geomkit.cad import p21
+from geomkit.cad.p21 import read_p21
+from geomkit.errors import FileFormatError
+from helpers.paths import DATA
+
+PARTS = sorted((DATA / "parts").glob("*.st*p"))
+
+
+def _exact(body):
+    """The record read by the token-by-token route alone (or its error)."""
+    saved = p21._flat, p21._items_fast
+    p21._flat = p21._items_fast = lambda s: None
+    try:
+        return p21._parse(body, "x")
+    except FileFormatError as exc:
+        return exc
+    finally:
+        p21._flat, p21._items_fast = saved
+
+
+def _shape(v):
+    """A parsed value with its types spelled out (Ref and int, Enum and str, True and
+    1 compare equal)."""
+    if isinstance(v, (list, tuple)):
+        return type(v).__name__, [_shape(x) for x in v]
+    if isinstance(v, dict):
+        return {k: _shape(x) for k, x in v.items()}
+    if isinstance(v, p21.Typed):
+        return "Typed", v.name, _shape(v.value)
+    return type(v).__name__, repr(v)
+
+
+def _bodies():
+    out = []
+    for path in PARTS:
+        out += list(read_p21(path)._raw.values())
+    return out
+
+
+def test_every_record_of_the_parts_reads_alike_by_every_route():
+    bodies = _bodies()
+    flat = 0
+    for b in bodies:
+        got = p21._parse(b, "x")
+        assert _shape(got) == _shape(_exact(b)), b
+        flat += p21._flat(b) is not None
+    assert len(bodies) > 50_000 and flat > 20_000   # the flat route is taken
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_mutated_records_read_alike_or_are_refused_alike(seed):
+    """Characters inserted, deleted or replaced (quotes, parentheses, commas, dots,
+    signs, letters, spaces) in flat records and others."""
+    rng = random.Random(seed)
+    bodies = rng.sample(_bodies(), 2500)
+    alphabet = "'(),.#$*+-eE0123456789 AZ_/"
+    for b in bodies:
+        s = list(b)
+        for _ in range(rng.randint(1, 3)):
+            k = rng.randrange(len(s) + 1)
+            op = rng.randrange(3)
+            if op == 0:
+                s.insert(k, rng.choice(alphabet))
+            elif s and k < len(s):
+                if op == 1:
+                    del s[k]
+                else:
+                    s[k] = rng.choice(alphabet)
+        m = "".join(s)
+        ref = _exact(m)
+        f = p21._flat(m)
+        if isinstance(ref, FileFormatError):
+            assert f is None, m
+            with pytest.raises(FileFormatError):
+                p21._parse(m, "x")
+        else:
+            if f is not None:
+                assert _shape(f) == _shape(ref), m
+            assert _shape(p21._parse(m, "x")) == _shape(ref), m
