@@ -26,6 +26,7 @@ import math
 import numpy as np
 
 from geomkit._kernels.bezier import curve_points
+from geomkit._kernels.pcurve_map import unwrap_angles
 
 __all__ = ["cross3", "unwrap", "arc_curve", "line_curve", "revolve", "extrude", "ruled", "plane_patch",
            "angle_to_param", "param_to_angle", "turn_into", "arc_knots", "transform_curve"]
@@ -76,6 +77,8 @@ def unwrap(x, period: float = 2 * math.pi) -> np.ndarray:
     """``np.unwrap(x, period=period)`` of a 1-D array (same values, without its
     generic argument handling: the readers unwrap thousands of short edges)."""
     x = np.asarray(x, float)
+    if x.ndim == 1 and x.size >= 2:
+        return unwrap_angles(np.ascontiguousarray(x), float(period))
     out = x.copy()
     if x.size < 2:
         return out
