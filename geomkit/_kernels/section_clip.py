@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .section_project import _halve
 from .section_trims import outside_binned, trim_bins
@@ -101,6 +102,19 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
     SKL = np.empty((2, 2, 3))
     stack = np.empty((maxdepth + 2, 2))
     sdepth = np.empty(maxdepth + 2, np.int64)
+    cls = _classifier(seg, seg_deg, seg_loop, nloops, tlo, thi, band, box)
+    return _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls,
+                       (stack, sdepth, bin_, scr, SKL))
+
+
+@jit
+def _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls, scratch):
+    """:func:`chain_side` over borrowed views of its arrays, the classifier ``cls``
+    and the scratch (held by the caller: no atomic reference counting,
+    :mod:`.numba_ext.borrow`)."""
+    Pw, U, V, plane, uv, box, cls, scratch = borrow_all((Pw, U, V, plane, uv, box, cls,
+                                                          scratch))
+    stack, sdepth, bin_, scr, SKL = scratch
     n = uv.shape[0]
     # the coarse points, each with the depth of the segment it ends
     cp = np.empty((max(2 * n, 16), 2))
@@ -118,7 +132,6 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
     for j in range(nc):
         if not (np.isfinite(cp[j, 0]) and np.isfinite(cp[j, 1])):
             return NOT_FINITE, np.empty((0, 2)), np.empty(0, np.bool_)
-    cls = _classifier(seg, seg_deg, seg_loop, nloops, tlo, thi, band, box)
     # the fine points the first walk computes, kept for the second (same bits: each
     # coarse segment's fine points depend on its ends, depth and box only)
     memo = (np.empty((max(64, 4 * nc), 2)), np.full(max(nc, 1), -1, np.int64),

@@ -14,6 +14,9 @@ from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .surface import D1, _binomial_table, derivs_scratch, surface_derivs
 
+D0 = np.int64(0)
+"""Derivative order of the point alone (non-literal, as :data:`.surface.D1`)."""
+
 @jit
 def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f):
     """Newton along the UV gradient of ``f`` onto ``f = 0`` from each ``uv[i]``.
@@ -45,10 +48,19 @@ def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, 
 @jit
 def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin_, scr,
                    SKL):
-    """One start point of :func:`project`: returns (u, v, f)."""
+    """One start point of :func:`project`: returns (u, v, f).
+
+    The start is evaluated alone first (``surface_derivs`` of order :data:`D0`: its
+    ``S`` has the bits of the order-1 call's, the basis functions' row 0 and the same
+    sums): a start already within ``ftol`` (midpoints of straight chains on planes and
+    cylinders) costs no derivatives; the others are evaluated again with them."""
     u = u0
     v = v0
-    f = 0.0
+    surface_derivs(Pw, p, q, U, V, u, v, D0, bin_, scr, SKL)
+    f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
+         + plane[3])
+    if abs(f) <= ftol or maxit == 0:
+        return u, v, f
     for it in range(maxit + 1):
         surface_derivs(Pw, p, q, U, V, u, v, D1, bin_, scr, SKL)
         f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .section import MONO_U, MONO_V, _f_at, edge_root
 from .section_project import _project_point
@@ -63,6 +64,23 @@ def refine_chains(Pw, p, q, U, V, plane, leaves, uv, segleaf, starts, tol, zsnap
     chord = np.zeros(nch)
     stack = np.empty((max_rounds + 2, 5))   # right ends: u, v, x, y, z
     sdepth = np.empty(max_rounds + 2, np.int64)
+    out, nout = _refine_loop(Pw, p, q, U, V, plane, leaves, uv, segleaf, starts, tol, zsnap,
+                             ttol, box, max_rounds, out, out_starts, chord,
+                             (stack, sdepth, sp, nd))
+    return out[:nout].copy(), out_starts, chord
+
+
+@jit
+def _refine_loop(Pw, p, q, U, V, plane, leaves, uv, segleaf, starts, tol, zsnap, ttol, box,
+                 max_rounds, out, out_starts, chord, scratch):
+    """The chains of :func:`refine_chains` over borrowed views of its inputs and the
+    caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`; ``out``,
+    grown here, stays counted); returns (out, count)."""
+    Pw, U, V, plane, leaves, uv, segleaf, starts, box, out_starts, chord, scratch = \
+        borrow_all((Pw, U, V, plane, leaves, uv, segleaf, starts, box, out_starts, chord,
+                    scratch))
+    stack, sdepth, sp, nd = scratch
+    nch = starts.shape[0] - 1
     nout = 0
     for c in range(nch):
         i0 = starts[c]
@@ -72,7 +90,7 @@ def refine_chains(Pw, p, q, U, V, plane, leaves, uv, segleaf, starts, tol, zsnap
                                             i1, tol, zsnap, ttol, box, max_rounds, out,
                                             nout, stack, sdepth, sp, nd)
     out_starts[nch] = nout
-    return out[:nout].copy(), out_starts, chord
+    return out, nout
 
 
 @jit

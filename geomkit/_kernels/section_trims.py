@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .section_project import _project_point
 from .surface import D1, _binomial_table, derivs_scratch
@@ -163,6 +164,19 @@ def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol,
     left = np.empty((p1, 3))
     right = np.empty((p1, 3))
     bins = trim_bins(seg, seg_deg, max(band, wide_tol))
+    _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
+                         seg_loop, nloops, iters, stop, band, wide_tol,
+                         (bin_, scr, SKL, winding, cstack, depths, left, right, bins))
+
+
+@jit
+def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
+                         seg_loop, nloops, iters, stop, band, wide_tol, scratch):
+    """The loop of :func:`trim_crossings` over borrowed views of its arrays and the
+    caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
+    Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch = borrow_all((
+        Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch))
+    bin_, scr, SKL, winding, cstack, depths, left, right, bins = scratch
     for i in range(a.shape[0]):
         tol = wide_tol if wide[i] else band
         for _ in range(iters):
