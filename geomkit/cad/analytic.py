@@ -73,6 +73,12 @@ def cross3(a, b) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
+def norm3(v) -> float:
+    """``np.linalg.norm`` of a 1-D float vector (its value: ``sqrt(v.dot(v))``, as
+    numpy computes it) without its generic argument handling (~1 instead of ~5 us)."""
+    return math.sqrt(v.dot(v))
+
+
 def unwrap(x, period: float = 2 * math.pi) -> np.ndarray:
     """``np.unwrap(x, period=period)`` of a 1-D array (same values, without its
     generic argument handling: the readers unwrap thousands of short edges)."""
@@ -194,7 +200,7 @@ def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
     p, U, Pw = curve
     S = np.asarray(axis_point, float)
     T = np.asarray(axis_dir, float)
-    T = T / np.linalg.norm(T)
+    T = T / norm3(T)
     a, b, wa, V = _arc_coeffs(theta0, theta1)
     wc = Pw[:, 3]
     P = Pw[:, :3] / wc[:, None]
@@ -203,7 +209,7 @@ def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
     for j in range(n):
         O = S + np.dot(P[j] - S, T) * T
         X = P[j] - O
-        r = float(np.linalg.norm(X))
+        r = norm3(X)
         if r <= 1e-15 * max(1.0, float(np.abs(P[j]).max())):
             out[j] = O
             continue

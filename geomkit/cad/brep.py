@@ -432,7 +432,9 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
             p, U, Pw = e.curve
             w = Pw[:, 3]
             d = Pw[:, :3] / w[:, None] - srf.O
-            Q = np.column_stack([d @ srf.X, d @ srf.Y])
+            Q = np.empty((d.shape[0], 2))
+            Q[:, 0] = d @ srf.X
+            Q[:, 1] = d @ srf.Y
             if e.reverse:
                 U = (U[0] + U[-1]) - np.asarray(U)[::-1]
                 Q, w = Q[::-1], w[::-1]

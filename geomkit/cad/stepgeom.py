@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from geomkit.cad.analytic import arc_curve, cross3, curve_derivs, line_curve
+from geomkit.cad.analytic import arc_curve, cross3, curve_derivs, line_curve, norm3
 from geomkit.cad.brep import Analytic
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
@@ -176,14 +176,14 @@ class StepGeometry:
         x = self.p.numbers(i, "DIRECTION")
         if x is not None and len(x) == 3:
             v = np.array(x)
-            n = float(np.linalg.norm(v))
+            n = norm3(v)
             if n > 0 and math.isfinite(n):
                 return v / n
         _, a = self.rec(i, "DIRECTION")
         x = self.numbers(i, a[1] if len(a) > 1 and isinstance(a[1], list) else [])
         if x.size == 2:
             x = np.append(x, 0.0)
-        n = float(np.linalg.norm(x)) if x.size == 3 else 0.0
+        n = norm3(x) if x.size == 3 else 0.0
         if not n > 0:
             raise self._bad(i, "a zero or malformed DIRECTION")
         return x / n
@@ -207,7 +207,7 @@ class StepGeometry:
         if X is None or abs(float(X @ Z)) > 1 - 1e-12:
             X = np.array([1.0, 0, 0]) if abs(Z[0]) < 0.9 else np.array([0.0, 1, 0])
         X = X - (X @ Z) * Z
-        return O, Z, X / np.linalg.norm(X)
+        return O, Z, X / norm3(X)
 
     # ---------------------------------------------------------------- curves
     def curve(self, i) -> Curve:
