@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geomkit._kernels.bezier import curve_points, de_casteljau_split, decompose, insert_knot
+from geomkit._kernels.bezier import (curve_points, de_casteljau_split, decompose, insert_knot,
+                                     loop_points)
 from geomkit.validate import as_float_array, as_int, check_knots
 from geomkit.errors import InvalidInputError, InvalidTrimError
 
@@ -223,20 +224,16 @@ def first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
 
 
 def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
-    """Points along a loop (for validation only: area, domain containment)."""
-    out = []
-    for c in loop.pieces:
-        if c.is_polyline:
-            out.append(c.control_points)
-            continue
-        a, b = c.knots[c.degree:-c.degree - 1], c.knots[c.degree + 1:-c.degree]
-        a, b = a[b > a], b[b > a]  # the spans, increasing: the samples need no sort
-        r = np.arange(per_segment) / per_segment
-        t = np.concatenate([(a[:, None] + (b - a)[:, None] * r).ravel(), c.knots[-1:]])
-        res = np.empty((t.shape[0], 1, 2))
-        curve_points(c.homogeneous, c.degree, c.knots, t, 0, res)
-        out.append(res[:, 0, :])
-    return np.concatenate(out)
+    """Points along a loop (for validation only: area, domain containment): a
+    polyline piece's points, a curved piece at ``per_segment`` parameters a span and
+    its end; every piece in one compiled call."""
+    pcs = loop.pieces
+    n = np.cumsum([0] + [c.control_points.shape[0] for c in pcs])
+    u = np.cumsum([0] + [c.knots.shape[0] for c in pcs])
+    return loop_points(np.concatenate([c.control_points for c in pcs]),
+                       np.concatenate([c.weights for c in pcs]), n,
+                       np.array([c.degree for c in pcs], dtype=np.int64),
+                       np.concatenate([c.knots for c in pcs]), u, int(per_segment))
 
 
 def _three_distinct(q: np.ndarray) -> bool:
