@@ -13,7 +13,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_plain as jit, prun
 
-from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
+from .basis import ders_basis_funs, ders_scratch, find_span
 
 CURVE_CHUNK = 1024
 """Curve parameters per parallel task: a curve point costs ~0.1-0.2 us, so a smaller
@@ -202,83 +202,6 @@ def _curve_points_range(i0, i1, Pw, p, U, t, d, out):
 def curve_points(Pw, p, U, t, d, out):
     """Batch curve points and derivatives: ``out`` (m, d+1, k), parallel over ``t``."""
     prun(_curve_points_range, t.shape[0], CURVE_CHUNK, Pw, p, U, t, d, out)
-
-
-@jit
-def _piece_is_polyline(W, r0, r1, p):
-    if p != 1:
-        return False
-    for r in range(r0, r1):
-        if W[r] != 1.0:
-            return False
-    return True
-
-
-@jit
-def _rational_point(Q, W, r0, n, p, U, u0, nu, t, N, left, right, out, k):
-    """``out[k]`` = the piece (rows ``r0:r0+n`` of ``Q``, ``W``; knots
-    ``U[u0:u0+nu]``) at ``t`` (A2.1, A2.2 and the weighted sum)."""
-    Uk = U[u0:u0 + nu]
-    span = find_span(n - 1, p, t, Uk)
-    basis_funs(span, t, p, Uk, N, left, right)
-    x = y = w = 0.0
-    for r in range(p + 1):
-        row = r0 + span - p + r
-        c = N[r] * W[row]
-        x += c * Q[row, 0]
-        y += c * Q[row, 1]
-        w += c
-    out[k, 0] = x / w
-    out[k, 1] = y / w
-
-
-@jit
-def loop_points(Q, W, off, deg, U, uoff, per):
-    """Points along a trim loop's pieces in one call (2-D control points ``Q`` and
-    weights ``W`` of piece i in rows ``off[i]:off[i+1]``, its knots
-    ``U[uoff[i]:uoff[i+1]]``, its degree ``deg[i]``): a polyline piece's own points
-    (degree 1, weights 1), a curved piece at ``per`` evenly spaced parameters a
-    non-empty span and at its end (what :func:`geomkit.nurbs.trims.loop_samples`
-    returns)."""
-    m = deg.shape[0]
-    total = 0
-    pmax = 1
-    for i in range(m):
-        p = deg[i]
-        pmax = max(pmax, p)
-        if _piece_is_polyline(W, off[i], off[i + 1], p):
-            total += off[i + 1] - off[i]
-            continue
-        spans = 0
-        for j in range(uoff[i] + p, uoff[i + 1] - p - 1):
-            if U[j + 1] > U[j]:
-                spans += 1
-        total += spans * per + 1
-    out = np.empty((total, 2))
-    N = np.empty(pmax + 1)
-    left = np.empty(pmax + 1)
-    right = np.empty(pmax + 1)
-    k = 0
-    for i in range(m):
-        p, r0, n = deg[i], off[i], off[i + 1] - off[i]
-        u0, nu = uoff[i], uoff[i + 1] - uoff[i]
-        if _piece_is_polyline(W, r0, r0 + n, p):
-            for r in range(r0, r0 + n):
-                out[k, 0] = Q[r, 0]
-                out[k, 1] = Q[r, 1]
-                k += 1
-            continue
-        for j in range(u0 + p, u0 + nu - p - 1):
-            a, b = U[j], U[j + 1]
-            if not b > a:
-                continue
-            for q in range(per):
-                _rational_point(Q, W, r0, n, p, U, u0, nu, a + (b - a) * (q / per), N,
-                                left, right, out, k)
-                k += 1
-        _rational_point(Q, W, r0, n, p, U, u0, nu, U[u0 + nu - 1], N, left, right, out, k)
-        k += 1
-    return out
 
 
 @jit

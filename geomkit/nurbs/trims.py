@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geomkit._kernels.bezier import (curve_points, de_casteljau_split, decompose, insert_knot,
-                                     loop_points)
+from geomkit._kernels.bezier import curve_points, de_casteljau_split, decompose, insert_knot
+from geomkit._kernels.trim_loops import loop_area_spread, loop_points
 from geomkit.validate import as_float_array, as_int, check_knots
 from geomkit.errors import InvalidInputError, InvalidTrimError
 
@@ -236,14 +236,6 @@ def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
                        np.concatenate([c.knots for c in pcs]), u, int(per_segment))
 
 
-def _three_distinct(q: np.ndarray) -> bool:
-    """Whether the rows of ``q`` hold at least three distinct values (O(n))."""
-    d0 = (q != q[0]).any(axis=1)
-    if not d0.any():
-        return False
-    return bool((d0 & (q != q[int(np.argmax(d0))]).any(axis=1)).any())
-
-
 def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
     """Validate a loop against the domain ``((u0, u1), (v0, v1))``: the pieces join
     within ``close``, the loop stays in the domain (to ``close``) and encloses area.
@@ -275,11 +267,8 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
             raise InvalidTrimError(
                 f"loop leaves the parameter domain [{u0}, {u1}] x [{v0}, {v1}] at "
                 f"({bad[0]:.6g}, {bad[1]:.6g})", field)
-    pts = loop_samples(loop)
-    x, y = pts[:, 0], pts[:, 1]
-    xn, yn = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
-    area = 0.5 * float(np.sum(x * yn - xn * y))
-    if abs(area) <= (close * close) or not _three_distinct(np.round(pts / close)):
+    area, spread = loop_area_spread(loop_samples(loop), float(close))
+    if abs(area) <= (close * close) or not spread:
         raise InvalidTrimError(f"degenerate loop: enclosed area {area:.3g} in UV", field)
 
 

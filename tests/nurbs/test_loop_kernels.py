@@ -1,7 +1,9 @@
-"""Trim loop samples for validation (:func:`geomkit.nurbs.trims.loop_samples`, one
+"""Trim loop validation kernels (:mod:`geomkit._kernels.trim_loops`) against numpy
+references: the loop's samples (:func:`geomkit.nurbs.trims.loop_samples`, one
 compiled call a loop) against each piece evaluated on its own with the curve kernel
-at the same parameters: polyline pieces' own points, curved pieces (rational,
-repeated knots, degrees 1-5) at ``per`` parameters a non-empty span and their end."""
+at the same parameters (polyline pieces' own points, curved pieces, rational, with
+repeated knots, degrees 1-5, at ``per`` parameters a non-empty span and their end);
+the loop's area and its three-distinct-grid-points test."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import numpy as np
 import pytest
 
 from geomkit._kernels.bezier import curve_points
+from geomkit._kernels.trim_loops import loop_area_spread
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import TrimLoop, loop_samples
 
@@ -57,3 +60,39 @@ def test_loop_samples_are_the_pieces_evaluated_one_by_one(seed):
             assert a.shape == b.shape
             # the same formulas; the compiled one may fuse a multiply and an add
             np.testing.assert_allclose(a, b, rtol=0, atol=4e-15 * max(1.0, np.abs(b).max()))
+
+
+def _area_reference(P):
+    x, y = P[:, 0], P[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    return 0.5 * float(np.sum(x * yn - xn * y))
+
+
+def _spread_reference(P, close):
+    q = np.round(P / close)
+    return len(np.unique(q, axis=0)) >= 3
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_loop_area_and_spread(seed):
+    """The shoelace area (sequential sum: within rounding of numpy's pairwise one) and
+    the three-distinct-grid-points test, exactly, on loops spread out, on slivers and
+    on loops collapsed into one or two grid cells (points at half steps included)."""
+    rng = np.random.default_rng(seed)
+    for k in range(3000):
+        m = int(rng.integers(1, 60))
+        close = 10.0 ** rng.uniform(-6, -1)
+        kind = k % 4
+        if kind == 0:
+            P = rng.uniform(-1, 1, (m, 2))
+        elif kind == 1:   # within two grid cells
+            cells = rng.integers(-3, 3, (2, 2)).astype(float)
+            P = (cells[rng.integers(0, 2, m)] + rng.uniform(-0.49, 0.49, (m, 2))) * close
+        elif kind == 2:   # on half steps: rounding to even decides
+            P = (rng.integers(-4, 4, (m, 2)) + 0.5) * close
+        else:             # a sliver along a line
+            t = rng.uniform(0, 1, m)
+            P = np.column_stack([t, 2 * t + rng.normal(0, close / 10, m)])
+        area, spread = loop_area_spread(P, close)
+        assert area == pytest.approx(_area_reference(P), rel=1e-12, abs=1e-15)
+        assert spread == _spread_reference(P, close)

@@ -1,0 +1,119 @@
+"""Trim loop validation kernels: a loop's points (every piece in one call) and its
+enclosed area with a test that it is more than two points (a degenerate loop).
+
+:func:`geomkit.nurbs.trims.check_loop` validates every loop of every surface built
+(a STEP part: thousands), where numpy's per-call costs were most of the work.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .numba_ext.policy import jit_plain as jit
+from .basis import basis_funs, find_span
+
+
+@jit
+def _piece_is_polyline(W, r0, r1, p):
+    if p != 1:
+        return False
+    for r in range(r0, r1):
+        if W[r] != 1.0:
+            return False
+    return True
+
+
+@jit
+def _rational_point(Q, W, r0, n, p, U, u0, nu, t, N, left, right, out, k):
+    """``out[k]`` = the piece (rows ``r0:r0+n`` of ``Q``, ``W``; knots
+    ``U[u0:u0+nu]``) at ``t`` (A2.1, A2.2 and the weighted sum)."""
+    Uk = U[u0:u0 + nu]
+    span = find_span(n - 1, p, t, Uk)
+    basis_funs(span, t, p, Uk, N, left, right)
+    x = y = w = 0.0
+    for r in range(p + 1):
+        row = r0 + span - p + r
+        c = N[r] * W[row]
+        x += c * Q[row, 0]
+        y += c * Q[row, 1]
+        w += c
+    out[k, 0] = x / w
+    out[k, 1] = y / w
+
+
+@jit
+def loop_points(Q, W, off, deg, U, uoff, per):
+    """Points along a trim loop's pieces in one call (2-D control points ``Q`` and
+    weights ``W`` of piece i in rows ``off[i]:off[i+1]``, its knots
+    ``U[uoff[i]:uoff[i+1]]``, its degree ``deg[i]``): a polyline piece's own points
+    (degree 1, weights 1), a curved piece at ``per`` evenly spaced parameters a
+    non-empty span and at its end (what :func:`geomkit.nurbs.trims.loop_samples`
+    returns)."""
+    m = deg.shape[0]
+    total = 0
+    pmax = 1
+    for i in range(m):
+        p = deg[i]
+        pmax = max(pmax, p)
+        if _piece_is_polyline(W, off[i], off[i + 1], p):
+            total += off[i + 1] - off[i]
+            continue
+        spans = 0
+        for j in range(uoff[i] + p, uoff[i + 1] - p - 1):
+            if U[j + 1] > U[j]:
+                spans += 1
+        total += spans * per + 1
+    out = np.empty((total, 2))
+    N = np.empty(pmax + 1)
+    left = np.empty(pmax + 1)
+    right = np.empty(pmax + 1)
+    k = 0
+    for i in range(m):
+        p, r0, n = deg[i], off[i], off[i + 1] - off[i]
+        u0, nu = uoff[i], uoff[i + 1] - uoff[i]
+        if _piece_is_polyline(W, r0, r0 + n, p):
+            for r in range(r0, r0 + n):
+                out[k, 0] = Q[r, 0]
+                out[k, 1] = Q[r, 1]
+                k += 1
+            continue
+        for j in range(u0 + p, u0 + nu - p - 1):
+            a, b = U[j], U[j + 1]
+            if not b > a:
+                continue
+            for q in range(per):
+                _rational_point(Q, W, r0, n, p, U, u0, nu, a + (b - a) * (q / per), N,
+                                left, right, out, k)
+                k += 1
+        _rational_point(Q, W, r0, n, p, U, u0, nu, U[u0 + nu - 1], N, left, right, out, k)
+        k += 1
+    return out
+
+
+@jit
+def loop_area_spread(P, close):
+    """``(area, spread)`` of the closed polygon ``P`` (m, 2): its signed area
+    (shoelace, the closing edge included) and whether its points rounded to the grid
+    of step ``close`` hold at least three distinct values (not all of the loop within
+    two grid cells)."""
+    m = P.shape[0]
+    s = 0.0
+    for i in range(m):
+        j = i + 1 if i + 1 < m else 0
+        s += P[i, 0] * P[j, 1] - P[j, 0] * P[i, 1]
+    a0 = np.rint(P[0, 0] / close)
+    b0 = np.rint(P[0, 1] / close)
+    second = False
+    a1 = b1 = 0.0
+    spread = False
+    for i in range(1, m):
+        a = np.rint(P[i, 0] / close)
+        b = np.rint(P[i, 1] / close)
+        if a == a0 and b == b0:
+            continue
+        if not second:
+            a1, b1, second = a, b, True
+        elif not (a == a1 and b == b1):
+            spread = True
+            break
+    return 0.5 * s, spread
