@@ -19,7 +19,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
-from .section_project import _halve
+from .section_project import _halve, point_scratch
 from .section_trims import outside_binned, trim_bins
 from .surface import D1, _binomial_table, derivs_scratch
 from .trim import MAX_DEPTH as TRIM_MAX_DEPTH
@@ -104,7 +104,7 @@ def chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, seg, seg_de
     sdepth = np.empty(maxdepth + 2, np.int64)
     cls = _classifier(seg, seg_deg, seg_loop, nloops, tlo, thi, band, box)
     return _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls,
-                       (stack, sdepth, bin_, scr, SKL))
+                       (stack, sdepth, bin_, scr, SKL, point_scratch(p, q)))
 
 
 @jit
@@ -114,7 +114,7 @@ def _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls, scrat
     :mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, uv, box, cls, scratch = borrow_all((Pw, U, V, plane, uv, box, cls,
                                                           scratch))
-    stack, sdepth, bin_, scr, SKL = scratch
+    stack, sdepth, bin_, scr, SKL, sp = scratch
     n = uv.shape[0]
     # the coarse points, each with the depth of the segment it ends
     cp = np.empty((max(2 * n, 16), 2))
@@ -128,7 +128,7 @@ def _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls, scrat
     for i in range(n - 1):
         nc, cp, cdep = _halve(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], uv[i + 1, 0],
                               uv[i + 1, 1], 0, H, box, ftol, maxdepth, cp, cdep, nc, stack,
-                              sdepth, bin_, scr, SKL)
+                              sdepth, bin_, scr, SKL, sp)
     for j in range(nc):
         if not (np.isfinite(cp[j, 0]) and np.isfinite(cp[j, 1])):
             return NOT_FINITE, np.empty((0, 2)), np.empty(0, np.bool_)
@@ -137,10 +137,11 @@ def _chain_side(Pw, p, q, U, V, plane, uv, h, H, box, ftol, maxdepth, cls, scrat
     memo = (np.empty((max(64, 4 * nc), 2)), np.full(max(nc, 1), -1, np.int64),
             np.zeros(max(nc, 1), np.int64))
     side, pts, ins, memo = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth,
-                                 cls, False, memo, stack, sdepth, bin_, scr, SKL)
+                                 cls, False, memo, stack, sdepth, bin_, scr, SKL, sp)
     if side == MIXED:
         side, pts, ins, memo = _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol,
-                                     maxdepth, cls, True, memo, stack, sdepth, bin_, scr, SKL)
+                                     maxdepth, cls, True, memo, stack, sdepth, bin_, scr, SKL,
+                                     sp)
     return side, pts, ins
 
 
@@ -169,7 +170,7 @@ def _out(cls, u, v):
 
 @jit
 def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, record, memo,
-          stack, sdepth, bin_, scr, SKL):
+          stack, sdepth, bin_, scr, SKL, sp):
     """The classes along the coarse points ``cp[:nc]`` (see :func:`chain_side`):
     without ``record``, stops at the first point of the other class and returns only
     the side; with it, returns every fine point and its class.  ``memo`` = (points,
@@ -252,7 +253,7 @@ def _walk(Pw, p, q, U, V, plane, cp, cdep, nc, h, box, ftol, maxdepth, cls, reco
         else:
             nf, fine, fdep = _halve(Pw, p, q, U, V, plane, au, av, bu, bv, cdep[j + 1], h,
                                     fbox, ftol, maxdepth, fine, fdep, 1, stack, sdepth, bin_,
-                                    scr, SKL)
+                                    scr, SKL, sp)
             if not record:
                 if nmemo + nf > mpts.shape[0]:
                     bigger = np.empty((2 * (nmemo + nf), 2))

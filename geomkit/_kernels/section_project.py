@@ -12,10 +12,18 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
-from .surface import D1, _binomial_table, derivs_scratch, surface_derivs
+from .surface import D1, _binomial_table, derivs_scratch, surface_derivs, surface_point
 
-D0 = np.int64(0)
-"""Derivative order of the point alone (non-literal, as :data:`.surface.D1`)."""
+
+
+@jit
+def point_scratch(p, q):
+    """Scratch of :func:`.surface.surface_point` for degrees ``p``, ``q``: (Nu, Nv,
+    left, right, tmp, X)."""
+    m = max(p, q) + 1
+    return (np.empty(p + 1), np.empty(q + 1), np.empty(m), np.empty(m), np.empty(4),
+            np.empty(3))
+
 
 @jit
 def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f):
@@ -28,18 +36,18 @@ def project(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f)
     bin_ = _binomial_table(D1)
     scr = derivs_scratch(p, q, D1)
     _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
-                  bin_, scr, np.empty((2, 2, 3)))
+                  bin_, scr, np.empty((2, 2, 3)), point_scratch(p, q))
 
 
 @jit
 def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, out_f,
-                  bin_, scr, SKL):
+                  bin_, scr, SKL, sp):
     """The loop of :func:`project` over borrowed views (:mod:`.numba_ext.borrow`)."""
-    Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL = borrow_all((
-        Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL))
+    Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL, sp = borrow_all((
+        Pw, U, V, plane, uv, maxstep, box, out_uv, out_f, bin_, scr, SKL, sp))
     for i in range(uv.shape[0]):
         u, v, f = _project_point(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], maxstep[i], box,
-                                 ftol, maxit, bin_, scr, SKL)
+                                 ftol, maxit, bin_, scr, SKL, sp)
         out_uv[i, 0] = u
         out_uv[i, 1] = v
         out_f[i] = f
@@ -47,18 +55,21 @@ def _project_loop(Pw, p, q, U, V, plane, uv, maxstep, box, ftol, maxit, out_uv, 
 
 @jit
 def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin_, scr,
-                   SKL):
+                   SKL, sp):
     """One start point of :func:`project`: returns (u, v, f).
 
-    The start is evaluated alone first (``surface_derivs`` of order :data:`D0`: its
-    ``S`` has the bits of the order-1 call's, the basis functions' row 0 and the same
-    sums): a start already within ``ftol`` (midpoints of straight chains on planes and
-    cylinders) costs no derivatives; the others are evaluated again with them."""
+    The start is evaluated alone first (:func:`.surface.surface_point` with the
+    scratch ``sp`` of :func:`point_scratch`): a start already within ``ftol``
+    (midpoints of straight chains on planes and cylinders) costs no derivatives.  Its
+    ``f`` is the one the derivatives' evaluation gives (``surface_derivs`` sums the
+    same products in the same order, its basis functions' row 0 computed as
+    ``basis_funs`` does; it skips the zero basis values, which changes at most the
+    sign of a zero), so the result is that of Newton from the derivatives alone."""
     u = u0
     v = v0
-    surface_derivs(Pw, p, q, U, V, u, v, D0, bin_, scr, SKL)
-    f = (plane[0] * SKL[0, 0, 0] + plane[1] * SKL[0, 0, 1] + plane[2] * SKL[0, 0, 2]
-         + plane[3])
+    Nu, Nv, left, right, tmp, X = sp
+    surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, X)
+    f = plane[0] * X[0] + plane[1] * X[1] + plane[2] * X[2] + plane[3]
     if abs(f) <= ftol or maxit == 0:
         return u, v, f
     for it in range(maxit + 1):
@@ -91,7 +102,7 @@ def _project_point(Pw, p, q, U, V, plane, u0, v0, maxstep, box, ftol, maxit, bin
 
 @jit
 def _halve(Pw, p, q, U, V, plane, au, av, bu, bv, d, h, box, ftol, maxdepth, out, dep, nout,
-           stack, sdepth, bin_, scr, SKL):
+           stack, sdepth, bin_, scr, SKL, sp):
     """The points of :func:`densify` on the segment ``a -> b`` at depth ``d``
     (its halvings so far), ``a`` excluded, ``b`` included, appended to ``out`` with the
     depth of the segment each point ends; returns (count, out, dep)."""
@@ -108,7 +119,8 @@ def _halve(Pw, p, q, U, V, plane, au, av, bu, bv, d, h, box, ftol, maxdepth, out
         seg = np.sqrt(du * du + dv * dv)
         if seg > h and dd < maxdepth:
             mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (au + bu),
-                                        0.5 * (av + bv), seg, box, ftol, 40, bin_, scr, SKL)
+                                        0.5 * (av + bv), seg, box, ftol, 40, bin_, scr, SKL,
+                                        sp)
             sdepth[top - 1] = dd + 1
             stack[top, 0] = mu
             stack[top, 1] = mv
@@ -159,5 +171,5 @@ def densify(Pw, p, q, U, V, plane, uv, h, box, ftol, maxdepth):
     for i in range(n - 1):
         nout, out, dep = _halve(Pw, p, q, U, V, plane, uv[i, 0], uv[i, 1], uv[i + 1, 0],
                                 uv[i + 1, 1], 0, h, box, ftol, maxdepth, out, dep, nout,
-                                stack, sdepth, bin_, scr, SKL)
+                                stack, sdepth, bin_, scr, SKL, point_scratch(p, q))
     return out[:nout].copy()

@@ -241,5 +241,5 @@ def _midpoint(Pw, p, q, U, V, plane, leaves, leaf, au, av, bu, bv, seg, zsnap, t
             return lu + t * (hu - lu), lv + t * (hv - lv)
     bin_, scr, SKL = nd
     u, v, _f = _project_point(Pw, p, q, U, V, plane, mu, mv, seg, box, 0.25 * zsnap, 40,
-                              bin_, scr, SKL)
+                              bin_, scr, SKL, sp)
     return u, v

@@ -15,7 +15,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
-from .section_project import _project_point
+from .section_project import _project_point, point_scratch
 from .surface import D1, _binomial_table, derivs_scratch
 from .trim import (MAX_DEPTH as TRIM_MAX_DEPTH, OUTSIDE as TRIM_OUTSIDE, _segment_winding,
                    classify_point)
@@ -166,7 +166,8 @@ def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol,
     bins = trim_bins(seg, seg_deg, max(band, wide_tol))
     _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
                          seg_loop, nloops, iters, stop, band, wide_tol,
-                         (bin_, scr, SKL, winding, cstack, depths, left, right, bins))
+                         (bin_, scr, SKL, winding, cstack, depths, left, right, bins,
+                          point_scratch(p, q)))
 
 
 @jit
@@ -176,7 +177,7 @@ def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_
     caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch = borrow_all((
         Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch))
-    bin_, scr, SKL, winding, cstack, depths, left, right, bins = scratch
+    bin_, scr, SKL, winding, cstack, depths, left, right, bins, sp = scratch
     for i in range(a.shape[0]):
         tol = wide_tol if wide[i] else band
         for _ in range(iters):
@@ -185,7 +186,7 @@ def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_
             mu, mv, _f = _project_point(Pw, p, q, U, V, plane, 0.5 * (a[i, 0] + b[i, 0]),
                                         0.5 * (a[i, 1] + b[i, 1]),
                                         np.sqrt(du * du + dv * dv), box, ftol, 40, bin_,
-                                        scr, SKL)
+                                        scr, SKL, sp)
             if outside_binned(seg, seg_deg, seg_loop, nloops, mu, mv, box, tol, bins, winding,
                               cstack, depths, left, right):
                 b[i, 0] = mu

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 __all__ = ["split_at_poles", "drop_shared_edges", "join_ends", "merge_point_curves",
-           "join_across_edges", "boundary_distance", "EDGE_REACH"]
+           "join_across_edges", "boundary_distance", "near_boundary", "EDGE_REACH"]
 
 
 def _collapsed_sides(s) -> np.ndarray:
@@ -436,11 +436,20 @@ def _to_boundary(s, p, per_piece=256):
     return float(boundary_distance(s, np.reshape(p, (1, 3)), per_piece=per_piece)[0])
 
 
-def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8):
+def near_boundary(s, P, reach):
+    """(n,) bool: ``boundary_distance(s, P, reach) <= reach``, a point settled as soon
+    as a distance to some of the polyline's segments is within ``reach`` (the exact
+    distance is at most that)."""
+    return boundary_distance(s, P, reach, settle=True) <= reach
+
+
+def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8, settle=False):
     """(n,) distances of the points ``P`` (n, 3) to the boundary of face ``s``: its trim
     loops' 3-D polylines at ``per_piece`` samples per piece (within their sagitta of
     it; built once per face and kept).  Distances above ``upto`` may be reported as
-    any value above it (a cheaper upper bound).
+    any value above it (a cheaper upper bound); with ``settle``, distances within
+    ``upto`` may be reported as any value from the exact one up to ``upto`` (an upper
+    bound from the nearest segments, not refined).
 
     Exact for the polyline: the ``k`` segments with the nearest midpoints give an upper
     bound ``d``; any other segment is at least ``r_k - h`` away (``r_k`` the k-th
@@ -466,7 +475,10 @@ def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8):
     r, j = tree.query(P, k)
     r, j = np.reshape(r, (len(P), k)), np.reshape(j, (len(P), k))
     out = _segment_distances(P[:, None, :], A[j], B[j]).min(axis=1)
-    far = np.flatnonzero((out > r[:, -1] - h) & (r[:, 0] - h <= upto)) if k < len(A) else []
+    far = (out > r[:, -1] - h) & (r[:, 0] - h <= upto)
+    if settle:
+        far &= out > upto
+    far = np.flatnonzero(far) if k < len(A) else []
     # the uncertain points against 8 times more nearest segments, until certified
     # (the same minimum as against all of them) or nearly all are needed
     while len(far) and 8 * k < len(A) // 2:
@@ -474,7 +486,7 @@ def boundary_distance(s, P, upto=np.inf, per_piece=256, k=8):
         r, j = tree.query(P[far], k)
         d = _segment_distances(P[far, None, :], A[j], B[j]).min(axis=1)
         out[far] = d
-        far = far[d > r[:, -1] - h]
+        far = far[(d > r[:, -1] - h) & ((d > upto) if settle else True)]
     step = max(1, (1 << 20) // len(A))   # points per block: ~1e6 pairs
     for i in range(0, len(far), step):
         f = far[i:i + step]

@@ -18,16 +18,16 @@ import geomkit
 from geomkit import samples
 from geomkit._kernels import section_clip as C
 from geomkit.cad.occ import HAVE_OCP
-from geomkit.section import plane as plane_mod
+from geomkit.section import clip as clip_mod, plane as plane_mod
 
 
 def _checked(monkeypatch, sides):
-    kernel = plane_mod._chain_side
+    kernel = clip_mod._chain_side
 
     def both(s, ev, uv, h, zsnap):
         side, dense, inside = kernel(s, ev, uv, h, zsnap)
-        ref = plane_mod._densify(ev, uv, h, zsnap)
-        ref_in = plane_mod._not_outside(s, ref)
+        ref = clip_mod._densify(ev, uv, h, zsnap)
+        ref_in = clip_mod._not_outside(s, ref)
         want = C.INSIDE_ALL if ref_in.all() else C.OUTSIDE_ALL if not ref_in.any() else C.MIXED
         assert side == want
         if side == C.MIXED:
@@ -37,7 +37,7 @@ def _checked(monkeypatch, sides):
         sides.append(side)
         return side, dense, inside
 
-    monkeypatch.setattr(plane_mod, "_chain_side", both)
+    monkeypatch.setattr(clip_mod, "_chain_side", both)
 
 
 @pytest.mark.parametrize("plane", [[0, 1, 0, -50], [1, -1, 0, 0], [1, 0.3, 0, -60],
@@ -88,14 +88,14 @@ def test_fine_points_stay_by_their_coarse_segment(shift):
     plane = plane_mod.as_plane([0, 1, 0, -50])
     ev = _Eval(s, plane)
     (u0, u1), (v0, v1) = s.domain
-    h = plane_mod.TRIM_STEP * max(u1 - u0, v1 - v0)
+    h = clip_mod.TRIM_STEP * max(u1 - u0, v1 - v0)
     zsnap = 64 * np.finfo(float).eps * (abs(plane[3]) + np.abs(s.control_points).max())
     for uv in (np.array([[u0, 0.5 * (v0 + v1) + shift], [u1, 0.5 * (v0 + v1) - shift]]),
                np.array([[0.5 * (u0 + u1) - shift, v0], [0.5 * (u0 + u1) + shift, v1]])):
-        side, pts, ins = plane_mod._chain_side(s, ev, uv, h, zsnap)
+        side, pts, ins = clip_mod._chain_side(s, ev, uv, h, zsnap)
         if side != C.MIXED:
             continue
-        coarse = ev.densify(uv, plane_mod.COARSE * h, 0.25 * zsnap, 40)
+        coarse = ev.densify(uv, clip_mod.COARSE * h, 0.25 * zsnap, 40)
         a, b = coarse[:-1], coarse[1:]
         m = C.FINE_MARGIN * np.linalg.norm(b - a, axis=1)[:, None]
         lo, hi = np.minimum(a, b) - m, np.maximum(a, b) + m

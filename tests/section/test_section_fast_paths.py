@@ -14,7 +14,7 @@ import pytest
 import geomkit
 from geomkit import samples
 from geomkit.nurbs.trimming import OUTSIDE
-from geomkit.section import joins, plane as plane_mod
+from geomkit.section import clip as clip_mod, joins, plane as plane_mod
 from geomkit.section.trace import _Eval, trace_surface
 from geomkit.cad.occ import HAVE_OCP
 from helpers.paths import DATA
@@ -115,9 +115,9 @@ def test_densify_and_trim_bisection_kernels_give_the_loops_points(plane):
     for c in chains:
         for h in (1e-3, 1.0 / 64, 0.3):
             h = h * _dom(ev)
-            fast = plane_mod._densify(ev, c["uv"], h, zsnap)
+            fast = clip_mod._densify(ev, c["uv"], h, zsnap)
             assert np.array_equal(fast, _densify_rounds(ev, c["uv"], h, zsnap))
-        uv = plane_mod._densify(ev, c["uv"], plane_mod.TRIM_STEP * _dom(ev), zsnap)
+        uv = clip_mod._densify(ev, c["uv"], clip_mod.TRIM_STEP * _dom(ev), zsnap)
         out = s.classify_uv(uv) == OUTSIDE
         i = np.flatnonzero(out[1:] != out[:-1])
         assert len(i), "the chain crosses the hole"
@@ -129,15 +129,15 @@ def test_densify_and_trim_bisection_kernels_give_the_loops_points(plane):
         a_more = np.concatenate([a_in, uv[k[ins]]])
         b_more = np.concatenate([b_out, np.repeat(b_out[:1], ins.sum(), axis=0)])
         for a, b in ((a_in, b_out), (a_more, b_more)):
-            fast = plane_mod._boundaries(s, ev, a, b, zsnap)
+            fast = clip_mod._boundaries(s, ev, a, b, zsnap)
             assert np.array_equal(fast, _boundaries_bisection(s, ev, a, b, zsnap))
 
 
 def test_run_classification_gives_every_points_class():
     s = _plate()
     ev, chains, zsnap = _chains(s, [1, 0.3, 0, -60])
-    h = plane_mod.TRIM_STEP * _dom(ev)
-    uvs = [plane_mod._densify(ev, c["uv"], h, zsnap) for c in chains]
+    h = clip_mod.TRIM_STEP * _dom(ev)
+    uvs = [clip_mod._densify(ev, c["uv"], h, zsnap) for c in chains]
     rng = np.random.default_rng(7)
     (u0, u1), (v0, v1) = s.domain
     # random walks through the domain, grazing the hole and the outer edge
@@ -152,7 +152,7 @@ def test_run_classification_gives_every_points_class():
         uvs += [on, on + 1e-10, on - 3e-9, on[::-1] * (1 + 1e-9)]
     for uv in uvs:
         uv = np.ascontiguousarray(uv)
-        assert np.array_equal(plane_mod._not_outside(s, uv), s.classify_uv(uv) != OUTSIDE)
+        assert np.array_equal(clip_mod._not_outside(s, uv), s.classify_uv(uv) != OUTSIDE)
 
 
 def test_boundary_distance_nearest_segments_as_all_segments():
