@@ -255,18 +255,62 @@ def _items_fast(s: str):
     return cur, deep
 
 
+def _flat_tokens(tokens, out: list, sub) -> bool:
+    """Append the simple tokens ``tokens`` to ``out`` (``sub`` for the marker of a
+    list read before); False at anything else."""
+    for t in tokens:
+        t = t.strip()
+        if not t:
+            return False
+        c = t[0]
+        if c == "#":
+            d = t[1:]
+            if not (d.isascii() and d.isdigit()):
+                return False
+            out.append(Ref(d))
+        elif c == ".":
+            if _ENUM.fullmatch(t) is None:
+                return False
+            e = t[1:-1].upper()
+            out.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        elif (c == "$" or c == "*") and len(t) == 1:
+            out.append(None if c == "$" else DERIVED)
+        elif c == "\x00" and len(t) == 1 and sub is not None:
+            out.append(sub)
+        elif _NUMBER.fullmatch(t) is not None:
+            out.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
+        else:
+            return False
+    return True
+
+
 def _flat(s: str):
-    """``(NAME, params)`` of a body with no nested list and at most a leading string
-    (``EDGE_CURVE('',#13,#14,#6,.T.)``: half a part's records), read by splitting at
+    """``(NAME, params)`` of a body with at most one nested list, of simple tokens,
+    and at most a leading string (``EDGE_CURVE('',#13,#14,#6,.T.)``,
+    ``EDGE_LOOP('',(#1,#2,#3))``: most of a part's records), read by splitting at
     its commas, or None for anything else (then :func:`_items_fast` reads it)."""
     k = s.find("(")
-    if k <= 0 or s[-1] != ")":
+    if k <= 0 or s[-1] != ")" or "\x00" in s:
         return None
     inner = s[k + 1:-1]
-    if "(" in inner or ")" in inner:
-        return None
     name = s[:k].strip()
     if _WORD.fullmatch(name) is None:
+        return None
+    sub = None
+    i = inner.find("(")
+    if i >= 0:  # one list of simple tokens, as a parameter of its own
+        j = inner.find(")")
+        if j < i or inner.find("(", i + 1) >= 0 or inner.find(")", j + 1) >= 0:
+            return None
+        head, body, tail = inner[:i], inner[i + 1:j], inner[j + 1:]
+        h, t = head.rstrip(), tail.lstrip()
+        if (h and h[-1] != ",") or (t and t[0] != ",") or "'" in body:
+            return None
+        sub = []
+        if body.strip() and not _flat_tokens(body.split(","), sub, None):
+            return None
+        inner = head + "\x00" + tail
+    elif ")" in inner:
         return None
     out: list = []
     if "'" in inner:  # one string, first: a label
@@ -285,27 +329,8 @@ def _flat(s: str):
         return name.upper(), out
     else:
         tokens = inner.split(",")
-    for t in tokens:
-        t = t.strip()
-        if not t:
-            return None
-        c = t[0]
-        if c == "#":
-            d = t[1:]
-            if not (d.isascii() and d.isdigit()):
-                return None
-            out.append(Ref(d))
-        elif c == ".":
-            if _ENUM.fullmatch(t) is None:
-                return None
-            e = t[1:-1].upper()
-            out.append(_ENUMS[e] if e in _ENUMS else Enum(e))
-        elif (c == "$" or c == "*") and len(t) == 1:
-            out.append(None if c == "$" else DERIVED)
-        elif _NUMBER.fullmatch(t) is not None:
-            out.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
-        else:
-            return None
+    if not _flat_tokens(tokens, out, sub):
+        return None
     return name.upper(), out
 
 
