@@ -296,6 +296,26 @@ def test_unique_rows_as_numpy_unique():
         assert np.array_equal(u[inv], a)
 
 
+def test_unique_rows_small_as_lexsort():
+    """The Python sort of up to SMALL_ROWS rows gives the lexsort path's arrays bit for
+    bit (signed zeros: the same one kept), and NaN rows go to the lexsort path."""
+    from geomkit.section import trace
+
+    rng = np.random.default_rng(11)
+    vals = np.array([0.0, -0.0, 1.0, -1.0, 2.5, 1e-300, np.inf, -np.inf])
+    for n in list(range(1, trace.SMALL_ROWS + 1)) * 20:
+        for a in (rng.choice(vals, size=(n, 2)), rng.integers(-3, 4, size=(n, 2)),
+                  rng.normal(size=(n, 2))):
+            u, inv = trace.unique_rows(a)
+            u0, inv0 = trace._unique_rows_sorted(a)
+            assert u.dtype == u0.dtype and inv.dtype == inv0.dtype
+            assert np.array_equal(u, u0) and np.array_equal(inv, inv0)
+            assert np.array_equal(np.signbit(u), np.signbit(u0))
+    a = np.array([[np.nan, 1.0], [0.0, 1.0], [0.0, 1.0]])
+    u, inv = trace.unique_rows(a)
+    assert np.array_equal(inv, [1, 0, 0]) and len(u) == 2
+
+
 def test_merge_nodes_as_the_tree():
     """trace._merge_nodes (a close-pair check before the tree) gives the tree's union on
     grids of leaf corners (many equal u and v), with pairs a hair inside and outside
