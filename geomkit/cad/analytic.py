@@ -160,13 +160,18 @@ def arc_curve(center, xaxis, yaxis, radius: float, theta0: float, theta1: float)
     a, b, w, U = _arc_coeffs(theta0, theta1)
     C, X, Y = (np.asarray(v, float) for v in (center, xaxis, yaxis))
     P = C + radius * (a[:, None] * X + b[:, None] * Y)
-    return 2, U, np.column_stack([P * w[:, None], w])
+    Pw = np.empty((len(w), 4))
+    Pw[:, :3] = P * w[:, None]
+    Pw[:, 3] = w
+    return 2, U, Pw
 
 
 def line_curve(p0, p1, t0: float = 0.0, t1: float = 1.0):
     """The segment ``p0 + (t - t0) / (t1 - t0) (p1 - p0)`` as a degree-1 curve."""
-    P = np.array([p0, p1], float)
-    return 1, np.array([t0, t0, t1, t1], float), np.column_stack([P, np.ones(2)])
+    Pw = np.ones((2, 4))
+    Pw[0, :3] = p0
+    Pw[1, :3] = p1
+    return 1, np.array([t0, t0, t1, t1], float), Pw
 
 
 def curve_derivs(curve, t, d: int) -> np.ndarray:

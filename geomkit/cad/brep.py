@@ -84,7 +84,9 @@ class Analytic:
         d = np.asarray(P, float) - self.O
         x, y, z = d @ self.X, d @ self.Y, d @ self.A
         if self.kind == "plane":
-            return np.column_stack([x, y]), np.ones(len(d))
+            out = np.empty((len(d), 2))
+            out[:, 0], out[:, 1] = x, y
+            return out, np.ones(len(d))
         rho = np.hypot(x, y)
         th = np.arctan2(y, x)
         if self.kind in ("cylinder", "cone"):
@@ -102,7 +104,9 @@ class Analytic:
                     np.abs(np.hypot(rho - self.R, z) - self.r)
                 a = np.where(lemon, np.arctan2(z, -rho - self.R), a)
                 th = np.where(lemon, th + np.pi, th)
-        return np.column_stack([a, th]), rho
+        out = np.empty((len(d), 2))
+        out[:, 0], out[:, 1] = a, th
+        return out, rho
 
     def residual(self, P):
         """Distance of points from the surface (closed form)."""
