@@ -80,22 +80,12 @@ def norm3(v) -> float:
 
 
 def unwrap(x, period: float = 2 * math.pi) -> np.ndarray:
-    """``np.unwrap(x, period=period)`` of a 1-D array (same values, without its
-    generic argument handling: the readers unwrap thousands of short edges)."""
-    x = np.asarray(x, float)
-    if x.ndim == 1 and x.size >= 2:
-        return unwrap_angles(np.ascontiguousarray(x), float(period))
-    out = x.copy()
-    if x.size < 2:
-        return out
-    half = period / 2
-    d = np.diff(x)
-    dm = np.mod(d + half, period) - half
-    dm[(dm == -half) & (d > 0)] = half
-    corr = dm - d
-    corr[np.abs(d) < half] = 0.0
-    out[1:] += np.cumsum(corr)
-    return out
+    """``np.unwrap(x, period=period)`` of a 1-D array (the same values, compiled: the
+    readers unwrap thousands of short edges)."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    if x.ndim != 1:
+        raise ValueError(f"unwrap takes a 1-D array, got shape {x.shape}")
+    return unwrap_angles(x, float(period))
 
 
 def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:

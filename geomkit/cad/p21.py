@@ -194,6 +194,27 @@ def _items(s: str, where: str):
     return cur
 
 
+_NOT = object()
+"""What :func:`_atom` returns for a token that is not a simple value."""
+
+
+def _atom(t: str):
+    """The value of one stripped, non-empty token that is a simple value (a
+    reference, ``$``, ``*``, a number, an enumeration), else :data:`_NOT`."""
+    c = t[0]
+    if c == "#":
+        d = t[1:]
+        return Ref(d) if d.isascii() and d.isdigit() else _NOT
+    if c == "$" or c == "*":
+        return _NOT if len(t) != 1 else None if c == "$" else DERIVED
+    if _NUMBER.fullmatch(t) is not None:
+        return float(t) if ("." in t or "e" in t or "E" in t) else int(t)
+    if c == "." and _ENUM.fullmatch(t) is not None:
+        e = t[1:-1].upper()
+        return _ENUMS[e] if e in _ENUMS else Enum(e)
+    return _NOT
+
+
 def _items_fast(s: str):
     """``(top-level items, deepest nesting a typed parameter closed at)`` of a record
     body parsed in one pass over its pieces cut at strings and punctuation (what
@@ -230,22 +251,9 @@ def _items_fast(s: str):
             continue
         if pending is not None:
             return None
-        c = t[0]
-        if c == "#":
-            if not (t[1:].isascii() and t[1:].isdigit()):
-                return None
-            cur.append(Ref(t[1:]))
-        elif c == "$" or c == "*":
-            if len(t) != 1:
-                return None
-            cur.append(None if c == "$" else DERIVED)
-        elif _NUMBER.fullmatch(t) is not None:
-            cur.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
-        elif c == ".":
-            if _ENUM.fullmatch(t) is None:
-                return None
-            e = t[1:-1].upper()
-            cur.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        v = _atom(t)
+        if v is not _NOT:
+            cur.append(v)
         elif _WORD.fullmatch(t) is not None:
             pending = t.upper()
         else:
@@ -262,23 +270,11 @@ def _flat_tokens(tokens, out: list, sub) -> bool:
         t = t.strip()
         if not t:
             return False
-        c = t[0]
-        if c == "#":
-            d = t[1:]
-            if not (d.isascii() and d.isdigit()):
-                return False
-            out.append(Ref(d))
-        elif c == ".":
-            if _ENUM.fullmatch(t) is None:
-                return False
-            e = t[1:-1].upper()
-            out.append(_ENUMS[e] if e in _ENUMS else Enum(e))
-        elif (c == "$" or c == "*") and len(t) == 1:
-            out.append(None if c == "$" else DERIVED)
-        elif c == "\x00" and len(t) == 1 and sub is not None:
+        v = _atom(t)
+        if v is not _NOT:
+            out.append(v)
+        elif t == "\x00" and sub is not None:
             out.append(sub)
-        elif _NUMBER.fullmatch(t) is not None:
-            out.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
         else:
             return False
     return True
