@@ -22,7 +22,7 @@ import numpy as np
 from .numba_ext.policy import jit_plain as jit
 from .basis import basis_funs, find_span
 
-CYLINDER, CONE, SPHERE, TORUS = 0, 1, 2, 3
+CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
 TWO_PI = 2.0 * math.pi
 
 
@@ -60,11 +60,57 @@ def _interp(x, xs, ys):
 
 
 @jit
+def _local_xyz(px, py, pz, kind, frame, R, r, tan_a):
+    """Local coordinates ``(a, b)`` of the model point ``(px, py, pz)`` and its distance
+    from the axis (closed form, :meth:`geomkit.cad.brep.Analytic.local`): PLANE
+    ``(x, y)`` in the plane's frame (distance 1); CYLINDER / CONE ``(height,
+    angle)``; SPHERE ``(latitude, longitude)``; TORUS ``(minor angle, major angle)``
+    (CYLINDER with ``R = 0`` gives height and angle about any axis).  ``frame``:
+    ``O, X, Y, A`` (12,)."""
+    dx = px - frame[0]
+    dy = py - frame[1]
+    dz = pz - frame[2]
+    x = dx * frame[3] + dy * frame[4] + dz * frame[5]
+    y = dx * frame[6] + dy * frame[7] + dz * frame[8]
+    if kind == PLANE:
+        return x, y, 1.0
+    z = dx * frame[9] + dy * frame[10] + dz * frame[11]
+    rho = math.hypot(x, y)
+    th = math.atan2(y, x)
+    if kind == CYLINDER or kind == CONE:
+        a = z
+        if kind == CONE and R + z * tan_a < 0:  # beyond the apex the radius is
+            # negative: the generator there lies at the angle th + pi
+            th += math.pi
+    elif kind == SPHERE:
+        a = math.atan2(z, rho)
+    else:
+        a = math.atan2(z, rho - R)
+        if r > R and abs(math.hypot(rho + R, z) - r) < abs(math.hypot(rho - R, z) - r):
+            # a spindle torus's inner (lemon) part passes the axis: its points lie
+            # at the angle th + pi
+            a = math.atan2(z, -rho - R)
+            th += math.pi
+    return a, th, rho
+
+
+@jit
+def local_points(P, kind, frame, R, r, tan_a):
+    """:func:`_local_xyz` of the points ``P`` (n, 3): ``(ab (n, 2), rho (n,))``."""
+    n = P.shape[0]
+    ab = np.empty((n, 2))
+    rho = np.empty(n)
+    for i in range(n):
+        ab[i, 0], ab[i, 1], rho[i] = _local_xyz(P[i, 0], P[i, 1], P[i, 2], kind, frame,
+                                                R, r, tan_a)
+    return ab, rho
+
+
+@jit
 def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
-    revolution (closed form: :meth:`geomkit.cad.brep.Analytic.local`; CYLINDER with
-    ``R = 0`` gives height and angle about any axis).  ``N``, ``left``, ``right``:
-    scratch of length p + 1."""
+    revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length
+    p + 1."""
     span = find_span(Pw.shape[0] - 1, p, te, U)
     basis_funs(span, te, p, U, N, left, right)
     wx = wy = wz = w = 0.0
@@ -74,25 +120,7 @@ def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
         wy += N[j] * Pw[q, 1]
         wz += N[j] * Pw[q, 2]
         w += N[j] * Pw[q, 3]
-    dx = wx / w - frame[0]
-    dy = wy / w - frame[1]
-    dz = wz / w - frame[2]
-    x = dx * frame[3] + dy * frame[4] + dz * frame[5]
-    y = dx * frame[6] + dy * frame[7] + dz * frame[8]
-    z = dx * frame[9] + dy * frame[10] + dz * frame[11]
-    rho = math.hypot(x, y)
-    th = math.atan2(y, x)
-    if kind == CYLINDER or kind == CONE:
-        a = z
-        if kind == CONE and R + z * tan_a < 0:
-            th += math.pi
-    elif kind == SPHERE:
-        a = math.atan2(z, rho)
-    else:
-        a = math.atan2(z, rho - R)
-        if r > R and abs(math.hypot(rho + R, z) - r) < abs(math.hypot(rho - R, z) - r):
-            a = math.atan2(z, -rho - R)
-            th += math.pi
+    a, th, _ = _local_xyz(wx / w, wy / w, wz / w, kind, frame, R, r, tan_a)
     return a, th
 
 

@@ -41,7 +41,7 @@ from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
-from geomkit._kernels.pcurve_map import CONE, CYLINDER, SPHERE, TORUS
+from geomkit._kernels.pcurve_map import CONE, CYLINDER, PLANE, SPHERE, TORUS, local_points
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -52,6 +52,8 @@ ANALYTIC = {108: "plane", 190: "plane surface", 192: "right circular cylindrical
 _NS = 65  # samples per edge for the inversion
 KIND_CODE = {"cylinder": CYLINDER, "cone": CONE, "sphere": SPHERE, "torus": TORUS}
 """The compiled kernels' code of each kind of :class:`Analytic` surface of revolution."""
+_LOCAL_CODE = {"plane": PLANE, **KIND_CODE}
+"""The code of each kind for :func:`~geomkit._kernels.pcurve_map.local_points`."""
 TWO_PI = 2 * math.pi
 
 
@@ -74,39 +76,19 @@ class Analytic:
         self.Y = cross3(self.A, self.X)
         self.R, self.r, self.alpha = R, r, alpha
         self.frame = np.concatenate([self.O, self.X, self.Y, self.A])
+        self._code = _LOCAL_CODE[kind]
+        self._tan_a = math.tan(alpha)
         self.periodic = {"plane": (False, False), "cylinder": (False, True),
                          "cone": (False, True), "sphere": (False, True),
                          "torus": (True, True)}[kind]
 
     def local(self, P):
         """Closed-form inverse: model points (n, 3) to local ``(a, b)`` (n, 2) and the
-        distance of each point from the axis (1 for planes)."""
-        d = np.asarray(P, float) - self.O
-        x, y, z = d @ self.X, d @ self.Y, d @ self.A
-        if self.kind == "plane":
-            out = np.empty((len(d), 2))
-            out[:, 0], out[:, 1] = x, y
-            return out, np.ones(len(d))
-        rho = np.hypot(x, y)
-        th = np.arctan2(y, x)
-        if self.kind in ("cylinder", "cone"):
-            a = z
-            if self.kind == "cone":  # beyond the apex the radius is negative: the
-                # generator there lies at the angle th + pi
-                th = np.where(self.R + z * math.tan(self.alpha) < 0, th + np.pi, th)
-        elif self.kind == "sphere":
-            a = np.arctan2(z, rho)
-        else:
-            a = np.arctan2(z, rho - self.R)
-            if self.r > self.R:  # a spindle torus: its inner (lemon) part passes the
-                # axis, its points lie at the angle th + pi
-                lemon = np.abs(np.hypot(rho + self.R, z) - self.r) < \
-                    np.abs(np.hypot(rho - self.R, z) - self.r)
-                a = np.where(lemon, np.arctan2(z, -rho - self.R), a)
-                th = np.where(lemon, th + np.pi, th)
-        out = np.empty((len(d), 2))
-        out[:, 0], out[:, 1] = a, th
-        return out, rho
+        distance of each point from the axis (1 for planes); one compiled call
+        (:func:`~geomkit._kernels.pcurve_map.local_points`, as the pcurve kernels
+        invert)."""
+        return local_points(np.ascontiguousarray(P, dtype=np.float64), self._code,
+                            self.frame, float(self.R), float(self.r), self._tan_a)
 
     def residual(self, P):
         """Distance of points from the surface (closed form)."""

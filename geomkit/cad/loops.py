@@ -98,7 +98,7 @@ def _inside(p, domain, size) -> bool:
     return u0 - e <= p[0] <= u1 + e and v0 - e <= p[1] <= v1 + e
 
 
-def close_gaps(pieces, domain, where: str, same_point=None):
+def close_gaps(pieces, domain, where: str, same_point=None, gaps=None):
     """``(pieces with bridging segments, [gap sizes in UV])``.
 
     With ``same_point(uv_a, uv_b) -> bool`` (the two UV points are one model point: a
@@ -107,7 +107,8 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     bridged too (the segment maps to that point: a pole) — unless the same pieces, none
     reversed, close in another order without it (a loop listed out of order across a
     seam corner, whose UV images of one point are not joined by a degenerate edge):
-    then the loop is re-chained instead."""
+    then the loop is re-chained instead.  ``gaps``: :func:`join_gaps` of ``pieces``
+    when the caller has it."""
     (u0, u1), (v0, v1) = domain
     size = max(u1 - u0, v1 - v0)
 
@@ -120,7 +121,7 @@ def close_gaps(pieces, domain, where: str, same_point=None):
     def joins(p):
         return [(a, p[(k + 1) % len(p)]) for k, a in enumerate(p)]
 
-    g = join_gaps(pieces)
+    g = join_gaps(pieces) if gaps is None else gaps
     if same_point is not None and len(pieces) > 1 and bool((g > GAP_TOL * size).any()):
         chained = chain(pieces, size)
         if any(bad(a, b) for a, b in joins(pieces)):
@@ -294,15 +295,17 @@ def finish_loop(pieces, base, periods, ftol: float, what: str):
     (u0, u1), (v0, v1) = domain = base.domain
     size = max(u1 - u0, v1 - v0)
     probe = same_point_3d(base, ftol)  # a gap at a pole is not out of order
-    far = np.flatnonzero(join_gaps(pieces) > GAP_TOL * size).tolist()
+    gaps = join_gaps(pieces)
+    far = np.flatnonzero(gaps > GAP_TOL * size).tolist()
     nxt = pieces[1:] + pieces[:1]
     if any(not probe(pieces[k].end, nxt[k].start) for k in far):
-        pieces = chain(pieces, size, periods, domain)
+        pieces, gaps = chain(pieces, size, periods, domain), None
     if _inside_domain(pieces, domain):  # nothing to clip
         moved, moved3 = [], []
     else:
         pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)
         pieces, moved3 = clip_in_3d(pieces, base, ftol)
+        gaps = None
     same = same_point_3d(base, ftol)
-    pieces, g = close_gaps(pieces, domain, what, same)
+    pieces, g = close_gaps(pieces, domain, what, same, gaps)
     return pieces, moved + g, moved3 + same.errors

@@ -40,6 +40,7 @@ from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceErr
 from geomkit.mesh.tessellate import closed_directions
 from geomkit.nurbs.surface import Surface
 from geomkit.tolerances import EDGE_TOL, PCURVE_TOL
+from geomkit._kernels.pcurve_map import CYLINDER, local_points
 
 __all__ = ["read_native", "file_units", "UnreadFaces"]
 
@@ -274,11 +275,13 @@ class _Axis:
         self.X = X - (X @ A) * A
         self.X /= np.linalg.norm(self.X)
         self.Y = cross3(A, self.X)
+        self.frame = np.concatenate([O, self.X, self.Y, A])
 
     def local(self, P):
-        d = np.asarray(P, float) - self.O
-        x, y = d @ self.X, d @ self.Y
-        return np.column_stack([d @ self.A, np.arctan2(y, x)]), np.hypot(x, y)
+        """Height along and angle about the axis of points (n, 3), and their distance
+        from it."""
+        return local_points(np.ascontiguousarray(P, dtype=np.float64), CYLINDER,
+                            self.frame, 0.0, 0.0, 0.0)
 
 
 def _swept_base(kind, srf, loops):
