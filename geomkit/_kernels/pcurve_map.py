@@ -21,6 +21,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_plain as jit
 from .basis import basis_funs, find_span
+from .bezier import curve_derivs
 
 CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
 TWO_PI = 2.0 * math.pi
@@ -104,6 +105,26 @@ def local_points(P, kind, frame, R, r, tan_a):
         ab[i, 0], ab[i, 1], rho[i] = _local_xyz(P[i, 0], P[i, 1], P[i, 2], kind, frame,
                                                 R, r, tan_a)
     return ab, rho
+
+
+@jit
+def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
+    """The curve at ``n`` evenly spaced parameters of ``[t0, t1]`` (``n >= 2``; the
+    values of :func:`geomkit.cad.analytic.curve_eval` at the reader's linspace) and
+    their :func:`local_points`: ``(X (n, 3), ab (n, 2), rho (n,))`` in one call."""
+    X = np.empty((n, 3))
+    ab = np.empty((n, 2))
+    rho = np.empty(n)
+    dN = np.empty((1, p + 1))
+    row = np.empty((1, 3))
+    step = (t1 - t0) / (n - 1)
+    for i in range(n):
+        t = t1 if i == n - 1 else float(i) * step + t0
+        curve_derivs(Pw, p, U, t, 0, dN, row)
+        X[i, 0], X[i, 1], X[i, 2] = row[0, 0], row[0, 1], row[0, 2]
+        ab[i, 0], ab[i, 1], rho[i] = _local_xyz(row[0, 0], row[0, 1], row[0, 2], kind,
+                                                frame, R, r, tan_a)
+    return X, ab, rho
 
 
 @jit

@@ -41,7 +41,8 @@ from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
-from geomkit._kernels.pcurve_map import CONE, CYLINDER, PLANE, SPHERE, TORUS, local_points
+from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
+                                         local_points)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -76,8 +77,9 @@ class Analytic:
         self.Y = cross3(self.A, self.X)
         self.R, self.r, self.alpha = R, r, alpha
         self.frame = np.concatenate([self.O, self.X, self.Y, self.A])
-        self._code = _LOCAL_CODE[kind]
-        self._tan_a = math.tan(alpha)
+        self.inverse = (_LOCAL_CODE[kind], self.frame, float(R), float(r),
+                        math.tan(alpha))
+        """The arguments of the compiled inverse (:func:`local_points`)."""
         self.periodic = {"plane": (False, False), "cylinder": (False, True),
                          "cone": (False, True), "sphere": (False, True),
                          "torus": (True, True)}[kind]
@@ -87,8 +89,7 @@ class Analytic:
         distance of each point from the axis (1 for planes); one compiled call
         (:func:`~geomkit._kernels.pcurve_map.local_points`, as the pcurve kernels
         invert)."""
-        return local_points(np.ascontiguousarray(P, dtype=np.float64), self._code,
-                            self.frame, float(self.R), float(self.r), self._tan_a)
+        return local_points(np.ascontiguousarray(P, dtype=np.float64), *self.inverse)
 
     def residual(self, P):
         """Distance of points from the surface (closed form)."""
@@ -237,8 +238,18 @@ class _Edge:
         key = (srf, id(self.curve), n)
         v = self._cache.get(key)
         if v is None:
-            self.points(n)
-            v = self._cache[key] = srf.local(self._cache[(id(self.curve), n)])
+            pk = (id(self.curve), n)
+            if pk in self._cache or n < 2:
+                self.points(n)
+                v = srf.local(self._cache[pk])
+            else:  # the samples and their inverse in one compiled call
+                p, U, Pw = self.curve
+                X, ab, rho = edge_local(np.ascontiguousarray(Pw, dtype=np.float64), p,
+                                        np.asarray(U, dtype=np.float64), self.t0,
+                                        self.t1, n, *srf.inverse)
+                self._cache[pk] = X
+                v = ab, rho
+            self._cache[key] = v
         ab, rho = v
         if self.reverse:
             return ab[::-1].copy(), rho[::-1]

@@ -276,12 +276,12 @@ class _Axis:
         self.X /= np.linalg.norm(self.X)
         self.Y = cross3(A, self.X)
         self.frame = np.concatenate([O, self.X, self.Y, A])
+        self.inverse = (CYLINDER, self.frame, 0.0, 0.0, 0.0)
 
     def local(self, P):
         """Height along and angle about the axis of points (n, 3), and their distance
         from it."""
-        return local_points(np.ascontiguousarray(P, dtype=np.float64), CYLINDER,
-                            self.frame, 0.0, 0.0, 0.0)
+        return local_points(np.ascontiguousarray(P, dtype=np.float64), *self.inverse)
 
 
 def _swept_base(kind, srf, loops):

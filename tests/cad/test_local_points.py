@@ -77,3 +77,29 @@ def test_local_accepts_lists_and_strided_arrays():
     ab, _ = s.local(P[::2])
     np.testing.assert_array_equal(ab, s.local(P[::2].copy())[0])
     np.testing.assert_array_equal(s.local(P.tolist())[0], s.local(P)[0])
+
+
+@pytest.mark.parametrize("name", ["cylinder", "cone", "torus", "plane"])
+def test_edge_samples_and_their_inverse_in_one_call(name):
+    """edge_local: the curve's samples as curve_eval gives them at the reader's
+    linspace (to rounding) and local() of them, on a rational arc and a cubic."""
+    from geomkit.cad.analytic import arc_curve, curve_eval
+    from geomkit.cad.brep import _linspace
+    from geomkit._kernels.pcurve_map import edge_local
+
+    s = SURFACES[name]
+    arc = arc_curve(np.array([0.5, 0.2, 1.0]), np.array([3.0, 0.0, 0.0]),
+                    np.array([0.0, 3.0, 0.0]), 1.0, 0.3, 4.0)
+    rng = np.random.default_rng(3)
+    P = rng.normal(size=(7, 3)) * 4
+    cubic = (3, np.array([0, 0, 0, 0, 0.3, 0.5, 0.9, 1, 1, 1, 1.0]),
+             np.column_stack([P, np.ones(7)]))
+    for (p, U, Pw), (t0, t1) in ((arc, (0.3, 4.0)), (cubic, (0.1, 0.95))):
+        for n in (2, 9, 65):
+            X, ab, rho = edge_local(np.ascontiguousarray(Pw, float), p, U, t0, t1, n,
+                                    *s.inverse)
+            ref = curve_eval((p, U, Pw), _linspace(t0, t1, n))
+            np.testing.assert_allclose(X, ref, rtol=0, atol=1e-14 * np.abs(ref).max())
+            ab2, rho2 = s.local(X)
+            np.testing.assert_array_equal(ab, ab2)
+            np.testing.assert_array_equal(rho, rho2)
