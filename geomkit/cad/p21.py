@@ -462,6 +462,10 @@ class P21:
             out = self._cache[i] = _parse(raw, f"{self.source} #{i}")
         return out
 
+    def body(self, i) -> str:
+        """Record ``i``'s text after ``#i =`` (stripped, unparsed), or ``''``."""
+        return self._raw.get(int(i), "")
+
     def numbers(self, i, name: str):
         """The coordinate tuple of a plain ``CARTESIAN_POINT`` / ``DIRECTION`` record
         ``i`` (``NAME('label', (x, y[, z]))``) read at once, or None (then

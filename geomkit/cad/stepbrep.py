@@ -34,6 +34,7 @@ from geomkit.cad.loose import duplicate_faces
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.p21 import P21, Ref, read_p21
 from geomkit.cad.stepasm import instances
+from geomkit.cad.stepedges import line_and_circle_edges
 from geomkit.cad.stepgeom import StepGeometry, reverse_curve
 from geomkit.cad.stepseam import cap_point, cut_at_seam, merge_winding, start_inside
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
@@ -195,7 +196,7 @@ class UnreadFaces(FileFormatError):
 class _Faces:
     def __init__(self, p: P21, geom: StepGeometry):
         self.p, self.g = p, geom
-        self._edges: dict = {}
+        self._edges: dict = line_and_circle_edges(p)  # id -> its curve (see edge)
         self._samples: dict = {}  # (id(edge curve), n) -> its points
 
     def edge(self, i):

@@ -223,7 +223,10 @@ class StepGeometry:
                            "SEAM_CURVE", "INTERSECTION_CURVE", "TRIMMED_CURVE",
                            "POLYLINE")
         if name == "LINE":
-            return Curve("line", O=self.point(a[1]), D=self.vector(a[2]))
+            D = self.vector(a[2])
+            if not D.any():
+                raise self._bad(i, "a LINE whose VECTOR has zero magnitude")
+            return Curve("line", O=self.point(a[1]), D=D)
         if name in ("CIRCLE", "ELLIPSE"):
             C, Z, X = self.axis2(a[1])
             r1 = float(self.numbers(i, [a[2]], 1)[0])

@@ -1,0 +1,215 @@
+"""The line and circle edges of a STEP B-rep built file-wide, for
+:class:`geomkit.cad.stepbrep._Faces`.
+
+Most edges of a machined part are ``EDGE_CURVE``\\ s on a ``LINE`` or a ``CIRCLE``
+between two ``VERTEX_POINT``\\ s.  Built one by one, each goes through a dozen
+record lookups and small array operations; here the points, directions and
+parameters of all of them are gathered in a few array operations, with the values
+the edge-by-edge route (:meth:`~geomkit.cad.stepbrep._Faces.edge`) computes, bit for
+bit: the same parsed numbers, each dot product taken as that route takes it (one
+pair at a time, as ``numpy`` sums three terms), element-wise operations in the same
+order.  An edge with anything else (a complex or non-plain record, a non-finite or
+zero value, vertices in reverse order on the curve) is left to the edge-by-edge
+route, which reads it or names the fault.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from geomkit.cad.analytic import arc_curve, cross3, line_curve, norm3
+from geomkit.cad.p21 import P21, Ref
+from geomkit.cad.stepgeom import reverse_curve
+
+__all__ = ["line_and_circle_edges"]
+
+TWO_PI = 2.0 * math.pi
+
+
+_NUM = r"([-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?)"
+_REF = r"\s*,\s*#(\d+)"
+_LABEL = r"\s*\(\s*'[^']*'"
+_FIELDS = {
+    "EDGE_CURVE": re.compile("EDGE_CURVE" + _LABEL + _REF * 3 + r"\s*,\s*\.([TF])\.\s*\)"),
+    "VERTEX_POINT": re.compile("VERTEX_POINT" + _LABEL + _REF + r"\s*\)"),
+    "LINE": re.compile("LINE" + _LABEL + _REF * 2 + r"\s*\)"),
+    "VECTOR": re.compile("VECTOR" + _LABEL + _REF + r"\s*,\s*" + _NUM + r"\s*\)"),
+    "AXIS2_PLACEMENT_3D": re.compile("AXIS2_PLACEMENT_3D" + _LABEL + _REF * 3 + r"\s*\)"),
+    "CIRCLE": re.compile("CIRCLE" + _LABEL + _REF + r"\s*,\s*" + _NUM + r"\s*\)"),
+}
+"""The writers' plain form of each record read here: a label, then references, a
+number, an enumeration (read at once; any other form goes through the parser)."""
+_KINDS = {"EDGE_CURVE": "rrre", "VERTEX_POINT": "r", "LINE": "rr", "VECTOR": "rn",
+          "AXIS2_PLACEMENT_3D": "rrr", "CIRCLE": "rn"}
+"""The fields after the label: r a reference, n a number, e an enumeration (T, F)."""
+
+
+def _fields(p: P21, i, name: str):
+    """The fields of simple record ``i`` of entity ``name`` after its label (ints for
+    references, floats for numbers, the enumeration's value), or None when it is
+    another entity or its fields are not of those kinds."""
+    if p.names.get(int(i)) != name:
+        return None
+    m = _FIELDS[name].fullmatch(p.body(i))
+    if m is not None:
+        return tuple(int(g) if k == "r" else float(g) if k == "n" else g == "T"
+                     for k, g in zip(_KINDS[name], m.groups()))
+    try:
+        got = p.get(i)
+    except Exception:  # a malformed record: the edge-by-edge route names it
+        return None
+    a = got[1]
+    if got[0] != name or len(a) != len(_KINDS[name]) + 1:
+        return None
+    out = []
+    for k, v in zip(_KINDS[name], a[1:]):
+        if k == "r" and isinstance(v, Ref):
+            out.append(int(v))
+        elif k == "n" and isinstance(v, (int, float)) and not isinstance(v, bool):
+            out.append(float(v))
+        elif k == "e":
+            out.append(v is not False)  # .F. reverses, anything else does not
+        else:
+            return None
+    return tuple(out)
+
+
+def _coords(p: P21, ids, name: str):
+    """Coordinates (n, 3) of plain ``name`` records (all finite), or None."""
+    if not ids:
+        return np.empty((0, 3))
+    X = p.coordinates(ids, name, 3)
+    if X is None or not np.isfinite(X).all():
+        return None
+    return X
+
+
+def _units(V):
+    """Rows of ``V`` over their norms (``v / norm3(v)``, row by row), and whether each
+    norm is positive and finite."""
+    n = np.array([norm3(v) for v in V])
+    ok = (n > 0) & np.isfinite(n)
+    return V / np.where(ok, n, 1.0)[:, None], ok
+
+
+def line_and_circle_edges(p: P21) -> dict:
+    """``{EDGE_CURVE id: (p, U, Pw)}`` of the file's plain line and circle edges, as
+    :meth:`~geomkit.cad.stepbrep._Faces.edge` builds them (the curve run from the start
+    vertex to the end vertex, reversed when its sense is ``.F.``)."""
+    edges = []  # (id, start point, end point, curve kind, curve fields, same, closed)
+    for i in p.of_type("EDGE_CURVE"):
+        a = _fields(p, i, "EDGE_CURVE")
+        if a is None:
+            continue
+        v1, v2, cid, same = a
+        x1, x2 = _fields(p, v1, "VERTEX_POINT"), _fields(p, v2, "VERTEX_POINT")
+        name = p.names.get(cid)
+        if x1 is None or x2 is None or name not in ("LINE", "CIRCLE"):
+            continue
+        c = _fields(p, cid, name)
+        if c is not None:
+            edges.append((i, x1[0], x2[0], name, c, same, v1 == v2))
+    out = {}
+    lines = [e for e in edges if e[3] == "LINE"]
+    circles = [e for e in edges if e[3] == "CIRCLE"]
+    if lines:
+        out.update(_lines(p, lines))
+    if circles:
+        out.update(_circles(p, circles))
+    return out
+
+
+def _vertices(p, edges):
+    X1 = _coords(p, [e[1] for e in edges], "CARTESIAN_POINT")
+    X2 = _coords(p, [e[2] for e in edges], "CARTESIAN_POINT")
+    return (None, None) if X1 is None or X2 is None else (X1, X2)
+
+
+def _finish(out, i, curve, t1, t2, same):
+    """The edge's curve (``t1``, ``t2``: its vertices' parameters, swapped when the
+    sense is ``.F.``) unless its vertices are in reverse order (left to the edge-by-edge
+    route, which names it)."""
+    if not t2 > t1:
+        return
+    c = curve(t1, t2)
+    out[i] = c if same else reverse_curve(c)
+
+
+def _lines(p, edges):
+    out = {}
+    vecs = [_fields(p, e[4][1], "VECTOR") for e in edges]
+    keep = [k for k, v in enumerate(vecs) if v is not None]
+    edges = [edges[k] for k in keep]
+    vecs = [vecs[k] for k in keep]
+    if not edges:
+        return out
+    X1, X2 = _vertices(p, edges)
+    O = _coords(p, [e[4][0] for e in edges], "CARTESIAN_POINT")
+    Dr = _coords(p, [v[0] for v in vecs], "DIRECTION")
+    if X1 is None or O is None or Dr is None:
+        return out
+    U, ok = _units(Dr)
+    mag = np.array([v[1] for v in vecs])
+    ok &= np.isfinite(mag) & (mag != 0)
+    D = U * mag[:, None]
+    for k, e in enumerate(edges):
+        if not ok[k]:
+            continue
+        o, d = O[k], D[k]
+        dd = d @ d
+        t1 = float((X1[k] - o) @ d / dd)
+        t2 = float((X2[k] - o) @ d / dd)
+        same = e[5]
+        if not same:
+            t1, t2 = t2, t1
+        _finish(out, e[0], lambda a, b: line_curve(o + a * d, o + b * d, a, b), t1, t2,
+                same)
+    return out
+
+
+def _circles(p, edges):
+    out = {}
+    axes = [_fields(p, e[4][0], "AXIS2_PLACEMENT_3D") for e in edges]
+    keep = [k for k, a in enumerate(axes) if a is not None]
+    edges = [edges[k] for k in keep]
+    axes = [axes[k] for k in keep]
+    if not edges:
+        return out
+    X1, X2 = _vertices(p, edges)
+    C = _coords(p, [a[0] for a in axes], "CARTESIAN_POINT")
+    Zr = _coords(p, [a[1] for a in axes], "DIRECTION")
+    Xr = _coords(p, [a[2] for a in axes], "DIRECTION")
+    if X1 is None or C is None or Zr is None or Xr is None:
+        return out
+    Z, okz = _units(Zr)
+    Xd, okx = _units(Xr)
+    r = np.array([e[4][1] for e in edges])
+    ok = okz & okx & np.isfinite(r) & (r > 0)
+    for k, e in enumerate(edges):
+        if not ok[k]:
+            continue
+        z, x = Z[k], Xd[k]
+        xz = x @ z
+        if abs(float(xz)) > 1 - 1e-12:  # the edge-by-edge route's default X
+            continue
+        x = x - xz * z
+        x = x / norm3(x)
+        y = cross3(z, x)
+        c, rk = C[k], float(r[k])
+        t = []
+        for P in (X1[k], X2[k]):
+            d = P - c
+            t.append(math.atan2((d @ y) / rk, (d @ x) / rk) % TWO_PI)
+        t1, t2 = t
+        same = e[5]
+        if not same:
+            t1, t2 = t2, t1
+        t2 = t1 + (t2 - t1) % TWO_PI
+        if e[6] or t2 - t1 <= 1e-12:
+            t2 = t1 + TWO_PI
+        _finish(out, e[0], lambda a, b: arc_curve(c, rk * x, rk * y, 1.0, a, b), t1, t2,
+                same)
+    return out
