@@ -128,6 +128,39 @@ def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
 
 
 @jit
+def iso_ends(ab, tol, maps):
+    """Whether an edge's local coordinates ``ab`` (n, 2) keep coordinate 0 / 1 within
+    ``tol`` of the first sample's (an iso-line: a circle, a generator), and the UV
+    segment between its ends: ``(iso0, iso1, q (2, 2))``, each iso coordinate held
+    at the first sample's, coordinate ``c`` mapped by the arc ``maps[c]`` when
+    ``maps[c, 0] > 0`` (:func:`_angle_param`).  A NaN sample is never iso; ends
+    that are not finite give None (the caller names them)."""
+    n = ab.shape[0]
+    for c in range(2):
+        if not (math.isfinite(ab[0, c]) and math.isfinite(ab[n - 1, c])):
+            return None
+    dev = np.zeros(2)
+    for c in range(2):
+        for i in range(n):
+            d = abs(ab[i, c] - ab[0, c])
+            if not d <= dev[c]:
+                dev[c] = d
+                if d != d:
+                    break
+    iso0 = dev[0] <= tol
+    iso1 = dev[1] <= tol
+    q = np.empty((2, 2))
+    for c in range(2):
+        iso = iso0 if c == 0 else iso1
+        for j in range(2):
+            v = ab[0, c] if iso or j == 0 else ab[n - 1, c]
+            if maps[c, 0] > 0:
+                v = _angle_param(v, maps[c, 1], maps[c, 2])
+            q[j, c] = v
+    return iso0, iso1, q
+
+
+@jit
 def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
     revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length

@@ -35,14 +35,14 @@ from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import is_clamped, readonly
 from geomkit.validate import check_knots
 from geomkit.cad.analytic import (AngleMap, arc_curve, cross3, curve_eval, line_curve,
-                                  plane_patch, revolve, unwrap)
+                                  norm3, plane_patch, revolve, unwrap)
 from geomkit.cad.iges.entities import curve3d
 from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
-                                         local_points)
+                                         iso_ends, local_points)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -60,7 +60,7 @@ TWO_PI = 2 * math.pi
 
 def _unit(v):
     v = np.asarray(v, float)
-    n = np.linalg.norm(v)
+    n = norm3(v) if v.ndim == 1 else np.linalg.norm(v)
     if not n > 0:
         raise Unsupported("zero direction vector")
     return v / n
@@ -424,6 +424,12 @@ def _mapped_piece(p, U, Q, w):
 
 def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
     pieces = []
+    maps = None  # the angle maps as iso_ends takes them (None: mapped in Python)
+    if srf.kind != "plane" and all(f is None or isinstance(f, AngleMap) for f in (fu, fv)):
+        maps = np.zeros((2, 3))
+        for c, f in enumerate((fu, fv)):
+            if f is not None:
+                maps[c] = 1.0, f.theta0, f.theta1
     for e, ab in zip(loop, chains):
         if srf.kind == "plane":
             p, U, Pw = e.curve
@@ -436,6 +442,10 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
                 U = (U[0] + U[-1]) - np.asarray(U)[::-1]
                 Q, w = Q[::-1], w[::-1]
             c = _mapped_piece(p, U, Q, None if np.all(w == w[0]) else w)
+        elif maps is not None and (got := iso_ends(ab, ISO_TOL * max(size, 1.0), maps)):
+            # an iso-line's mapped ends (as below) in one compiled call
+            iso0, iso1, q = got
+            c = _segment(q) if iso0 or iso1 else _fit(srf, e, ab, fu, fv, tol)
         else:
             dev = np.abs(ab - ab[0])
             iso = [float(dev[:, k].max()) <= ISO_TOL * max(size, 1.0) for k in (0, 1)]

@@ -34,7 +34,7 @@ from geomkit.cad.loose import duplicate_faces
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.p21 import P21, Ref, read_p21
 from geomkit.cad.stepasm import instances
-from geomkit.cad.stepedges import line_and_circle_edges
+from geomkit.cad.stepedges import fields, line_and_circle_edges
 from geomkit.cad.stepgeom import StepGeometry, reverse_curve
 from geomkit.cad.stepseam import cap_point, cut_at_seam, merge_winding, start_inside
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
@@ -247,9 +247,13 @@ class _Faces:
                 continue
             edges = []
             for oe in la[1]:
-                _, oa = self.g.rec(oe, "ORIENTED_EDGE")
-                edges.append(_Edge(self.edge(oa[3]), int(oa[3]), oa[4] is False,
-                                   self._samples))
+                f = fields(self.p, oe, "ORIENTED_EDGE")
+                if f is None:
+                    _, oa = self.g.rec(oe, "ORIENTED_EDGE")
+                    key, rev = int(oa[3]), oa[4] is False
+                else:
+                    key, rev = f[0], not f[1]
+                edges.append(_Edge(self.edge(key), key, rev, self._samples))
             if ba[2] is False:
                 edges = [_Edge(e.curve, e.key, not e.reverse, self._samples)
                          for e in edges[::-1]]

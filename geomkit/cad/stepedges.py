@@ -1,5 +1,6 @@
 """The line and circle edges of a STEP B-rep built file-wide, for
-:class:`geomkit.cad.stepbrep._Faces`.
+:class:`geomkit.cad.stepbrep._Faces`, and the plain records they and the faces'
+oriented edges are read from (:func:`fields`).
 
 Most edges of a machined part are ``EDGE_CURVE``\\ s on a ``LINE`` or a ``CIRCLE``
 between two ``VERTEX_POINT``\\ s.  Built one by one, each goes through a dozen
@@ -21,10 +22,10 @@ import re
 import numpy as np
 
 from geomkit.cad.analytic import arc_curve, cross3, line_curve, norm3
-from geomkit.cad.p21 import P21, Ref
+from geomkit.cad.p21 import DERIVED, P21, Ref
 from geomkit.cad.stepgeom import reverse_curve
 
-__all__ = ["line_and_circle_edges"]
+__all__ = ["line_and_circle_edges", "fields"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -39,15 +40,17 @@ _FIELDS = {
     "VECTOR": re.compile("VECTOR" + _LABEL + _REF + r"\s*,\s*" + _NUM + r"\s*\)"),
     "AXIS2_PLACEMENT_3D": re.compile("AXIS2_PLACEMENT_3D" + _LABEL + _REF * 3 + r"\s*\)"),
     "CIRCLE": re.compile("CIRCLE" + _LABEL + _REF + r"\s*,\s*" + _NUM + r"\s*\)"),
+    "ORIENTED_EDGE": re.compile("ORIENTED_EDGE" + _LABEL + r"\s*,\s*\*\s*,\s*\*" + _REF
+                                + r"\s*,\s*\.([TF])\.\s*\)"),
 }
 """The writers' plain form of each record read here: a label, then references, a
 number, an enumeration (read at once; any other form goes through the parser)."""
 _KINDS = {"EDGE_CURVE": "rrre", "VERTEX_POINT": "r", "LINE": "rr", "VECTOR": "rn",
-          "AXIS2_PLACEMENT_3D": "rrr", "CIRCLE": "rn"}
+          "AXIS2_PLACEMENT_3D": "rrr", "CIRCLE": "rn", "ORIENTED_EDGE": "re"}
 """The fields after the label: r a reference, n a number, e an enumeration (T, F)."""
 
 
-def _fields(p: P21, i, name: str):
+def fields(p: P21, i, name: str):
     """The fields of simple record ``i`` of entity ``name`` after its label (ints for
     references, floats for numbers, the enumeration's value), or None when it is
     another entity or its fields are not of those kinds."""
@@ -62,8 +65,13 @@ def _fields(p: P21, i, name: str):
     except Exception:  # a malformed record: the edge-by-edge route names it
         return None
     a = got[1]
-    if got[0] != name or len(a) != len(_KINDS[name]) + 1:
+    stars = 2 if name == "ORIENTED_EDGE" else 0
+    if got[0] != name or len(a) != len(_KINDS[name]) + 1 + stars:
         return None
+    if name == "ORIENTED_EDGE":  # its two derived (*) parameters
+        if a[1:3] != [DERIVED, DERIVED]:
+            return None
+        a = a[:1] + a[3:]
     out = []
     for k, v in zip(_KINDS[name], a[1:]):
         if k == "r" and isinstance(v, Ref):
@@ -101,15 +109,15 @@ def line_and_circle_edges(p: P21) -> dict:
     vertex to the end vertex, reversed when its sense is ``.F.``)."""
     edges = []  # (id, start point, end point, curve kind, curve fields, same, closed)
     for i in p.of_type("EDGE_CURVE"):
-        a = _fields(p, i, "EDGE_CURVE")
+        a = fields(p, i, "EDGE_CURVE")
         if a is None:
             continue
         v1, v2, cid, same = a
-        x1, x2 = _fields(p, v1, "VERTEX_POINT"), _fields(p, v2, "VERTEX_POINT")
+        x1, x2 = fields(p, v1, "VERTEX_POINT"), fields(p, v2, "VERTEX_POINT")
         name = p.names.get(cid)
         if x1 is None or x2 is None or name not in ("LINE", "CIRCLE"):
             continue
-        c = _fields(p, cid, name)
+        c = fields(p, cid, name)
         if c is not None:
             edges.append((i, x1[0], x2[0], name, c, same, v1 == v2))
     out = {}
@@ -140,7 +148,7 @@ def _finish(out, i, curve, t1, t2, same):
 
 def _lines(p, edges):
     out = {}
-    vecs = [_fields(p, e[4][1], "VECTOR") for e in edges]
+    vecs = [fields(p, e[4][1], "VECTOR") for e in edges]
     keep = [k for k, v in enumerate(vecs) if v is not None]
     edges = [edges[k] for k in keep]
     vecs = [vecs[k] for k in keep]
@@ -172,7 +180,7 @@ def _lines(p, edges):
 
 def _circles(p, edges):
     out = {}
-    axes = [_fields(p, e[4][0], "AXIS2_PLACEMENT_3D") for e in edges]
+    axes = [fields(p, e[4][0], "AXIS2_PLACEMENT_3D") for e in edges]
     keep = [k for k, a in enumerate(axes) if a is not None]
     edges = [edges[k] for k in keep]
     axes = [axes[k] for k in keep]

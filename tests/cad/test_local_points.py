@@ -103,3 +103,35 @@ def test_edge_samples_and_their_inverse_in_one_call(name):
             ab2, rho2 = s.local(X)
             np.testing.assert_array_equal(ab, ab2)
             np.testing.assert_array_equal(rho, rho2)
+
+
+def test_iso_ends_against_the_numpy_iso_test_and_angle_maps():
+    """iso_ends: the iso flags of the numpy test, the mapped ends of AngleMap (to
+    rounding), NaN samples never iso, non-finite ends refused."""
+    from geomkit.cad.analytic import AngleMap
+    from geomkit._kernels.pcurve_map import iso_ends
+
+    rng = np.random.default_rng(11)
+    for _ in range(500):
+        ab = rng.normal(size=(65, 2))
+        flat = rng.integers(0, 3)  # 0: coordinate 0 iso, 1: coordinate 1, 2: none
+        if flat < 2:
+            ab[:, flat] = ab[0, flat] + rng.uniform(-1, 1, 65) * 1e-12
+        t0 = rng.uniform(-4, 0)
+        fmap = AngleMap(t0 - 3.0, t0 + 6.0)
+        maps = np.array([[0.0, 0.0, 0.0], [1.0, fmap.theta0, fmap.theta1]])
+        iso0, iso1, q = iso_ends(ab, 1e-10, maps)
+        dev = np.abs(ab - ab[0]).max(axis=0)
+        assert (iso0, iso1) == (dev[0] <= 1e-10, dev[1] <= 1e-10)
+        want = np.array([ab[0], ab[-1]])
+        for k, iso in enumerate((iso0, iso1)):
+            if iso:
+                want[:, k] = ab[0, k]
+        want[:, 1] = fmap(want[:, 1])
+        np.testing.assert_allclose(q, want, rtol=0, atol=1e-14)
+    ab = np.zeros((9, 2))
+    ab[4, 0] = np.nan
+    iso0, iso1, _ = iso_ends(ab, 1e-10, np.zeros((2, 3)))
+    assert not iso0 and iso1
+    ab[-1, 1] = np.inf
+    assert iso_ends(ab, 1e-10, np.zeros((2, 3))) is None

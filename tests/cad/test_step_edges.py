@@ -109,3 +109,23 @@ def test_a_full_circle_and_a_line_read_alike():
     line, circle = bulk[9], bulk[15]
     np.testing.assert_array_equal(line[1], [0.5, 0.5, 5.5, 5.5])  # t = (X - O).D / D.D
     assert circle[1][0] == 0.0 and circle[1][-1] == pytest.approx(np.pi)
+
+
+def test_fields_read_by_regex_as_the_parser_reads_them(monkeypatch):
+    """Every record of the kinds read at once (edges, vertices, lines, vectors,
+    placements, circles, oriented edges), on all parts: the regex's fields are the
+    parser's."""
+    from geomkit.cad import stepedges
+
+    kinds = set(stepedges._FIELDS)
+    seen = 0
+    for path in PARTS:
+        p = read_p21(path)
+        ids = [i for i, n in p.names.items() if n in kinds]
+        fast = {i: stepedges.fields(p, i, p.names[i]) for i in ids}
+        with monkeypatch.context() as m:
+            m.setattr(p, "body", lambda i: "")   # no regex match: the parser's route
+            slow = {i: stepedges.fields(p, i, p.names[i]) for i in ids}
+        assert fast == slow
+        seen += sum(v is not None for v in fast.values())
+    assert seen > 15_000
