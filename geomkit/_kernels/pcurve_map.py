@@ -161,6 +161,40 @@ def iso_ends(ab, tol, maps):
 
 
 @jit
+def seam_margins(paths, starts, spans, cand):
+    """Margins of the candidate seam angles ``cand`` (:func:`geomkit.cad.stepseam.
+    cut_at_seam`): -1 where a loop around the axis (``paths``, the unwrapped angles of
+    all such loops one after another, loop ``k`` from ``starts[k]`` to
+    ``starts[k + 1]``) is not crossed exactly once or the angle lies in a span
+    ``spans[i] = (lo, hi)`` of another loop; else the distance to the nearest span
+    (at most pi)."""
+    m = cand.shape[0]
+    margin = np.full(m, math.pi)
+    for j in range(m):
+        c = cand[j]
+        for k in range(starts.shape[0] - 1):
+            total = 0.0
+            for i in range(starts[k], starts[k + 1] - 1):
+                lo = min(paths[i], paths[i + 1])
+                hi = max(paths[i], paths[i + 1])
+                n = math.floor((hi - c) / TWO_PI) - math.ceil((lo - c) / TWO_PI) + 1
+                if n > 0:
+                    total += n
+            if total != 1:
+                margin[j] = -1.0
+        if margin[j] < 0:
+            continue
+        for i in range(spans.shape[0]):
+            w = spans[i, 1] - spans[i, 0]
+            d = (c - spans[i, 0]) % TWO_PI
+            if d <= w:
+                margin[j] = -1.0
+                break
+            margin[j] = min(margin[j], min(d - w, TWO_PI - d))
+    return margin
+
+
+@jit
 def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
     revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length
