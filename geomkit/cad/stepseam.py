@@ -27,11 +27,14 @@ from geomkit.cad.brep import KIND_CODE, _Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
-from geomkit._kernels.pcurve_map import CYLINDER, seam_crossing
+from geomkit._kernels.pcurve_map import CYLINDER, seam_crossing, seam_margins
 
 __all__ = ["cut_at_seam", "cap_point", "merge_winding", "start_inside"]
 
 TWO_PI = 2.0 * np.pi
+_CANDIDATES = np.linspace(0.0, TWO_PI, 720, endpoint=False) + 1e-3
+"""The seam angles tried (every quarter degree)."""
+_CANDIDATES.setflags(write=False)
 
 
 def start_inside(pieces, base):
@@ -51,8 +54,8 @@ def _angles(srf, e, n=65, full=False):
     """Unwrapped angles about the axis along edge ``e``; None when it reaches the
     axis (a pole or an apex), unless ``full``: then the angle there is the
     neighbour's."""
+    ab, rho = e.local(srf, n)  # (first: the samples and their inverse in one call)
     X = e.points(n)
-    ab, rho = e.local(srf, n)
     b = ab[:, 1]
     on = rho <= 1e-9 * max(1.0, float(np.ptp(X, axis=0).max()))
     if not on.any():
@@ -140,25 +143,13 @@ def cut_at_seam(srf, loops, sweep=False):
         return loops, turns
     # theta: crossed once by each loop around the axis, as far from the other loops'
     # angle ranges as can be
-    cand = np.linspace(0.0, TWO_PI, 720, endpoint=False) + 1e-3
-    ok = np.ones(cand.size, bool)
-    for path in paths:
-        lo = np.minimum(path[:-1], path[1:])[:, None]
-        hi = np.maximum(path[:-1], path[1:])[:, None]
-        first = np.ceil((lo - cand[None]) / TWO_PI)
-        last = np.floor((hi - cand[None]) / TWO_PI)
-        ok &= np.maximum(last - first + 1, 0).sum(axis=0) == 1
-    margin = np.full(cand.size, np.pi)
-    for lo, hi in spans:
-        c = (cand - lo) % TWO_PI
-        inside = c <= hi - lo
-        margin = np.where(inside, -1.0, np.minimum(margin, np.minimum(c - (hi - lo),
-                                                                      TWO_PI - c)))
-    margin[~ok] = -1.0
+    starts = np.cumsum([0] + [len(path) for path in paths])
+    margin = seam_margins(np.concatenate(paths) if paths else np.zeros(0), starts,
+                          np.array(spans, dtype=np.float64).reshape(-1, 2), _CANDIDATES)
     if not (margin > 0).any():
         raise Unsupported("no angle about the axis is crossed once by every loop "
                           "around it and by no other loop")
-    theta = float(cand[int(np.argmax(margin))])
+    theta = float(_CANDIDATES[int(np.argmax(margin))])
     if sweep:
         return _cut_loops(srf, loops, turns, theta), turns, theta
     return _cut_loops(srf, loops, turns, theta), turns
