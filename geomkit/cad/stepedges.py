@@ -146,12 +146,17 @@ def _finish(out, i, curve, t1, t2, same):
     out[i] = c if same else reverse_curve(c)
 
 
+def _with_record(p, edges, slot: int, name: str):
+    """The edges whose curve's field ``slot`` is a plain ``name`` record, with that
+    record's fields."""
+    got = [(e, fields(p, e[4][slot], name)) for e in edges]
+    got = [(e, f) for e, f in got if f is not None]
+    return [e for e, _ in got], [f for _, f in got]
+
+
 def _lines(p, edges):
     out = {}
-    vecs = [fields(p, e[4][1], "VECTOR") for e in edges]
-    keep = [k for k, v in enumerate(vecs) if v is not None]
-    edges = [edges[k] for k in keep]
-    vecs = [vecs[k] for k in keep]
+    edges, vecs = _with_record(p, edges, 1, "VECTOR")
     if not edges:
         return out
     X1, X2 = _vertices(p, edges)
@@ -180,10 +185,7 @@ def _lines(p, edges):
 
 def _circles(p, edges):
     out = {}
-    axes = [fields(p, e[4][0], "AXIS2_PLACEMENT_3D") for e in edges]
-    keep = [k for k, a in enumerate(axes) if a is not None]
-    edges = [edges[k] for k in keep]
-    axes = [axes[k] for k in keep]
+    edges, axes = _with_record(p, edges, 0, "AXIS2_PLACEMENT_3D")
     if not edges:
         return out
     X1, X2 = _vertices(p, edges)
