@@ -344,7 +344,7 @@ def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin,
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, floor):
+             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, floor, Tall, j0, j1):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
@@ -353,7 +353,12 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
     ``gc = (a_u, a_v, b_u, b_v, c_u, c_v)`` (each 0 or k) instead of evaluated.
     Returns ``max(floor, deviation)``: a sample whose gap is at most the running
     maximum cannot raise it (its value is at most its gap), so its exact one-sided
-    distances are not measured.
+    distances are not measured.  ``Tall[j0:j1]`` (n, 3, 3) are other triangles of the
+    mesh (the other half of the cell's split): the surface point's distance to the
+    mesh is bounded by its distance to the nearest of them and T (a long cell of a cone or a revolved face slides its
+    parametrisation across the diagonal: the surface point of a sample lies over the
+    other half).  The other direction, the triangle point's distance to the surface,
+    is measured from T's own points as before.
     """
     worst = floor
     for i in range(k + 1):
@@ -382,6 +387,10 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
             gap = _dist3(x, y, z, P[0], P[1], P[2])
             if gap > exact_above and gap > worst:
                 d_st = point_triangle_distance(P[0], P[1], P[2], T)
+                for j in range(j0, j1):
+                    if d_st <= exact_above:
+                        break
+                    d_st = min(d_st, point_triangle_distance(P[0], P[1], P[2], Tall[j]))
                 d_ts = _foot_descent(Pw, p, q, U, V, x, y, z, u, v, gap, d_st, exact_above,
                                      umin, umax, vmin, vmax, Nu, Nv, left, right, tmp, Q,
                                      SKL, bin_, dscr)
@@ -420,7 +429,8 @@ def _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, u
     for t in range(i0, i1):
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, 0.0)
+                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, 0.0,
+                          tri_xyz, 0, 0)
 
 
 def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vmax,
@@ -490,9 +500,14 @@ def _cell_grid(Pw, p, q, U, V, u0, u1, v0, v1, k, Nu, Nv, left, right, Bu, Bv, H
             G[a, b, 2] = h2 / h3
 
 
+# corners (0: (u0,v0), 1: (u1,v0), 2: (u1,v1), 3: (u0,v1)) of the two triangles of
+# each diagonal: 0 (AC): ABC, ACD; 1 (BD): ABD, BCD
+_HALF = np.array([[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]], dtype=np.int64)
+
+
 @jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
-                          exact_above, target, out):
+                          exact_above, target, pair, out):
     Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr = _dev_scratch(p, q)
     G = np.empty((k + 1, k + 1, 3))
     Bu = np.empty((k + 1, p + 1))
@@ -501,16 +516,16 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
     gc = np.empty(6, dtype=np.int64)
     UVc = np.empty((4, 2))
     X = np.empty((4, 3))
-    T = np.empty((3, 3))
+    T = np.empty((2, 3, 3))
     _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
-                         exact_above, target, out,
+                         exact_above, target, pair, out,
                          (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T,
                           bin_, dscr))
 
 
 @jit
 def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
-                         exact_above, target, out, scratch):
+                         exact_above, target, pair, out, scratch):
     """The loop of :func:`_cell_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, cells, first, out,
@@ -540,37 +555,44 @@ def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vm
             diag = first[c] if step == 0 else 1 - first[c]
             if step == 1 and out[c, first[c]] <= target:
                 break
+            for half in range(2):
+                for r in range(3):
+                    for h in range(3):
+                        T[half, h, r] = X[_HALF[diag, half, h], r]
             worst = 0.0
             for half in range(2):
-                if diag == 0:
-                    a, b, cc = (0, 1, 2) if half == 0 else (0, 2, 3)
-                else:
-                    a, b, cc = (0, 1, 3) if half == 0 else (1, 2, 3)
-                for r in range(3):
-                    T[0, r] = X[a, r]
-                    T[1, r] = X[b, r]
-                    T[2, r] = X[cc, r]
+                j1 = 2 - half if pair else 1 - half  # the other half, or none
+                a = _HALF[diag, half, 0]
+                b = _HALF[diag, half, 1]
+                cc = _HALF[diag, half, 2]
                 gc[0] = k if a == 1 or a == 2 else 0
                 gc[1] = k if a >= 2 else 0
                 gc[2] = k if b == 1 or b == 2 else 0
                 gc[3] = k if b >= 2 else 0
                 gc[4] = k if cc == 1 or cc == 2 else 0
                 gc[5] = k if cc >= 2 else 0
-                worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T, k,
-                                            umin, umax, vmin, vmax, exact_above, Nu, Nv,
+                worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T[half],
+                                            k, umin, umax, vmin, vmax, exact_above, Nu, Nv,
                                             left, right, tmp, P, Q, SKL, G, gc, bin_,
-                                            dscr, worst))
+                                            dscr, worst, T, 1 - half, j1))
             out[c, diag] = worst
 
 
 def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exact_above,
-                   target, out):
+                   target, out, pair=False):
     """Measured deviation of the two-triangle splits of UV cells (parallel).
 
     ``cells`` (N, 4) ``u0, u1, v0, v1``; ``out`` (N, 2): column 0 for the diagonal
     (u0,v0)-(u1,v1), column 1 for (u1,v0)-(u0,v1), each the larger of its two
     triangles' :func:`triangle_deviation`.  Diagonal ``first[c]`` is measured first;
-    when it is within ``target`` the other is not measured (+inf).
+    when it is within ``target`` the other is not measured (+inf).  With ``pair``, a
+    sample's surface point is measured against the nearer triangle of its split (both
+    must be in the mesh: the cell is emitted as that pair, no hanging node), which
+    bounds its distance to the mesh; the triangle points are measured against the
+    surface as always.  Only where the feet's box ``umin..vmax`` is the face (an
+    untrimmed face, a rectangle face): the feet then bound the distance to the face,
+    whereas a trimmed face's mesh point can lie off the trimmed region, which only
+    the surface point of its own triangle's sample showed.
     """
     _run(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
-         umin, umax, vmin, vmax, exact_above, target, out)
+         umin, umax, vmin, vmax, exact_above, target, bool(pair), out)

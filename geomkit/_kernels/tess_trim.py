@@ -331,3 +331,79 @@ def speed_bound_of(P, Pw, p, q, U, V):
                 h = min(h, d)
         total += 4.0 * deg * ratio * D / h
     return total
+
+
+@jit
+def box_edge_sags(Pw, p, q, U, V, cells, m, bu0, bu1, bv0, bv1, out):
+    """How far a face's boundary bends away from the chords of the cells along it.
+
+    For each cell ``u0, u1, v0, v1`` and each of its edges that
+    lies on an edge line of the face's box (``u = bu0`` or ``bu1``, ``v = bv0`` or
+    ``bv1``; exact comparison: grid lines keep the box's ends), the largest 3-D
+    distance of ``S`` at ``m`` equally spaced samples along the edge from the segment
+    between the edge's end points.  ``out[c, 0]``: over its edges along u (``v``
+    fixed), ``out[c, 1]``: along v; 0 for a cell with no edge on the box.
+
+    The cell error estimates (:func:`geomkit._kernels.tess.cell_errors`) see only the
+    gap along the normal; at the face's boundary the measured deviation also sees the
+    sag in the tangent plane (a rim circle of a flat annulus: the boundary point lies
+    off every triangle, or the chord point off the face), which this distance is.
+    """
+    mm = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(mm)
+    right = np.empty(mm)
+    tmp = np.empty(4)
+    A = np.empty(3)
+    B = np.empty(3)
+    X = np.empty(3)
+    last = m - 1
+    for c in range(cells.shape[0]):
+        u0 = cells[c, 0]
+        u1 = cells[c, 1]
+        v0 = cells[c, 2]
+        v1 = cells[c, 3]
+        out[c, 0] = 0.0
+        out[c, 1] = 0.0
+        for e in range(4):
+            along_u = e < 2
+            if along_u:
+                fixed = v0 if e == 0 else v1
+                if fixed != bv0 and fixed != bv1:
+                    continue
+                t0 = u0
+                t1 = u1
+            else:
+                fixed = u0 if e == 2 else u1
+                if fixed != bu0 and fixed != bu1:
+                    continue
+                t0 = v0
+                t1 = v1
+            if along_u:
+                surface_point(Pw, p, q, U, V, t0, fixed, Nu, Nv, left, right, tmp, A)
+                surface_point(Pw, p, q, U, V, t1, fixed, Nu, Nv, left, right, tmp, B)
+            else:
+                surface_point(Pw, p, q, U, V, fixed, t0, Nu, Nv, left, right, tmp, A)
+                surface_point(Pw, p, q, U, V, fixed, t1, Nu, Nv, left, right, tmp, B)
+            worst = 0.0
+            d0 = B[0] - A[0]
+            d1 = B[1] - A[1]
+            d2 = B[2] - A[2]
+            ll = d0 * d0 + d1 * d1 + d2 * d2
+            for i in range(1, last):
+                t = t0 + (t1 - t0) * (i / last)
+                if along_u:
+                    surface_point(Pw, p, q, U, V, t, fixed, Nu, Nv, left, right, tmp, X)
+                else:
+                    surface_point(Pw, p, q, U, V, fixed, t, Nu, Nv, left, right, tmp, X)
+                s = 0.0  # the closest point of the chord segment
+                if ll > 0.0:
+                    s = ((X[0] - A[0]) * d0 + (X[1] - A[1]) * d1 + (X[2] - A[2]) * d2) / ll
+                    s = min(1.0, max(0.0, s))
+                e0 = A[0] + s * d0 - X[0]
+                e1 = A[1] + s * d1 - X[1]
+                e2 = A[2] + s * d2 - X[2]
+                worst = max(worst, np.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+            k = 0 if along_u else 1
+            out[c, k] = max(out[c, k], worst)

@@ -168,6 +168,33 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     return V, F[good], UV, dev[good], tri_uv[good], stats
 
 
+def _box_grid(s: Surface, box, ub, vb, m: int, k: int, tol: float, size: float,
+              t0: float):
+    """A face that is its surface restricted to a UV rectangle ``box``
+    (:meth:`geomkit.mesh.trim_polylines.TrimPolylines.rectangle`) as one uniform grid
+    over the box (:func:`geomkit.mesh.quadtree.uniform_grid`, feet measured inside the
+    box): no clipping, the box's edges are the mesh boundary.  None when the grid is
+    refused."""
+    a0, a1, b0, b1 = box
+    ub = np.concatenate([[a0], ub[(ub > a0) & (ub < a1)], [a1]])
+    vb = np.concatenate([[b0], vb[(vb > b0) & (vb < b1)], [b1]])
+    grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
+                           GRID_CELLS, box=box, pair=True)
+    if grid is None:
+        return None
+    tri_uv, dev, cells, (u, v, diag) = grid
+    welded = weld_grid(s, u, v, diag, size)
+    V, F, UV, good = welded if welded is not None else weld(s, tri_uv, size, near_uv=False)
+    closed = closed_directions(s, size)
+    (u0, u1), (v0, v1) = s.domain
+    stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
+             "collapsed_dropped": int(np.count_nonzero(~good)),
+             "closed_u": closed[0] and (a0, a1) == (u0, u1),
+             "closed_v": closed[1] and (b0, b1) == (v0, v1), "box_grid": True,
+             "seconds": time.perf_counter() - t0}
+    return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET, fallback: str | None = None,
                     planar=None, size: float | None = None):
@@ -209,7 +236,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     if whole and max_angle is None and max_edge is None:
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                               GRID_CELLS)
+                               GRID_CELLS, pair=True)
         if grid is not None:
             tri_uv, dev, cells, (u, v, diag) = grid
             welded = weld_grid(s, u, v, diag, size)
@@ -225,6 +252,11 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                 return V, F, UV, dev, tri_uv, stats
             return V, F[good], UV, dev[good], tri_uv[good], stats
     if trim is not None and max_angle is None and max_edge is None:
+        box = trim.rectangle()
+        if box is not None:
+            gridded = _box_grid(s, box, ub, vb, m, k, tol, size, t0)
+            if gridded is not None:
+                return gridded
         gridded = _trimmed_grid(s, trim, ub, vb, m, k, tol, size, t0)
         if gridded is not None:
             return gridded

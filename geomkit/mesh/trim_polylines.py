@@ -40,6 +40,7 @@ class TrimPolylines:
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
                  packed=None):
         self.surface = surface
+        self.chord_tol = chord_tol
         self.affine = affine  # S maps UV chords to 3-D chords: sample the curve only
         (u0, u1), (v0, v1) = surface.domain
         self.loops = []
@@ -103,6 +104,32 @@ class TrimPolylines:
         area = [abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1])) for p in loops]
         k = int(np.argmax(area))
         return [loops[k]] + loops[:k] + loops[k + 1:]
+
+    def rectangle(self):
+        """``(a0, a1, b0, b1)`` when the trimmed region is one axis-aligned UV rectangle
+        (one loop, every polyline point on the edge lines of its bounding box and its
+        area the box's, both within the ``eps`` of the domain rectangle test: in 3-D
+        within ``1e-3 chord_tol``); else None.  Such a face is the surface restricted to
+        the box: its boundary is the box's edges (a revolved profile cut at two angles,
+        a swept face)."""
+        if len(self.loops) != 1 or self.domain_loop:
+            return None
+        pts = self.loops[0]
+        a0, b0 = pts.min(axis=0)
+        a1, b1 = pts.max(axis=0)
+        size_uv = max(a1 - a0, b1 - b0)
+        if not size_uv > 0:
+            return None
+        gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
+        hi = 1e-6 * size_uv
+        perimeter = a1 - a0 + b1 - b0
+        if not (gap <= hi and area_gap <= hi * perimeter):
+            return None
+        eps = min(hi, 1e-3 * self.chord_tol / max(speed_bound(self.surface), 1e-300))
+        eps = max(eps, 1e-12 * size_uv)
+        if not (gap <= eps and area_gap <= eps * perimeter):
+            return None
+        return float(a0), float(a1), float(b0), float(b1)
 
     @property
     def tree(self):
