@@ -10,13 +10,16 @@ S-shaped arc has its midpoint on the chord).  A segment above half the tolerance
 split at ``m`` and both halves are tested again, down to ``max_rounds`` halvings of an
 input segment.  Each segment depends on its own ends only, so the points are those of
 halving all segments above the tolerance in rounds (``max_rounds`` rounds), as the
-section did with one array operation per round.
+section did with one array operation per round.  On a leaf monotone in u the midpoint's
+root is found on a line of constant v whose control-row sums are taken once
+(:func:`_root_on_u_line`: ``edge_root``'s iterates and bits, at a fraction of the cost).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .basis import basis_funs, find_span
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .section import MONO_U, MONO_V, _f_at, edge_root
@@ -57,7 +60,8 @@ def refine_chains(Pw, p, q, U, V, plane, leaves, uv, segleaf, starts, tol, zsnap
     mm = max(p, q) + 1
     sp = (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
           np.empty(3))
-    nd = (_binomial_table(D1), derivs_scratch(p, q, D1), np.empty((2, 2, 3)))
+    nd = (_binomial_table(D1), derivs_scratch(p, q, D1), np.empty((2, 2, 3)),
+          np.empty((Pw.shape[0], 4)))
     nch = starts.shape[0] - 1
     out = np.empty((max(2 * uv.shape[0], 16), 2))
     out_starts = np.zeros(nch + 1, np.int64)
@@ -218,7 +222,13 @@ def _midpoint(Pw, p, q, U, V, plane, leaves, leaf, au, av, bu, bv, seg, zsnap, t
     mu = 0.5 * (au + bu)
     mv = 0.5 * (av + bv)
     state = leaves[leaf, 4]
-    if state == MONO_U or state == MONO_V:
+    if state == MONO_U and mv != 0.0:   # a line of constant v: its row sums once
+        lu = leaves[leaf, 0]
+        hu = leaves[leaf, 1]
+        t = _root_on_u_line(Pw, p, q, U, V, plane, lu, hu, mv, zsnap, ttol, sp, nd)
+        if t >= 0.0:
+            return lu + t * (hu - lu), mv + t * (mv - mv)
+    elif state == MONO_U or state == MONO_V:
         lu = mu
         lv = mv
         hu = mu
@@ -239,7 +249,115 @@ def _midpoint(Pw, p, q, U, V, plane, leaves, leaf, au, av, bu, bv, seg, zsnap, t
             t = edge_root(Pw, p, q, U, V, plane, lu, lv, hu, hv, flo, fhi, ttol, Nu, Nv,
                           left, right, tmp, X)
             return lu + t * (hu - lu), lv + t * (hv - lv)
-    bin_, scr, SKL = nd
+    bin_, scr, SKL, _rows = nd
     u, v, _f = _project_point(Pw, p, q, U, V, plane, mu, mv, seg, box, 0.25 * zsnap, 40,
                               bin_, scr, SKL, sp)
     return u, v
+
+
+@jit
+def _root_on_u_line(Pw, p, q, U, V, plane, lu, hu, v, zsnap, ttol, sp, nd):
+    """The root parameter ``t`` of :func:`.section.edge_root` on the u-line
+    ``(lu, v) -> (hu, v)`` (``v`` not zero), or -1 when the ends' plane values (snapped
+    to zero within ``zsnap``) do not bracket a root.
+
+    The same iterates and bits as ``edge_root`` with ``_f_at`` at the ends first, as
+    :func:`_midpoint` had them: ``surface_point`` sums each control row over v first
+    (``a_k = sum_l N_l(v) P_kl``) and then the rows over u, so on a line of constant v
+    the row sums are computed once (:func:`_u_rows`) and each evaluation is the u basis
+    and the outer sum alone.  (``v + t * 0.0`` is ``v`` for ``v`` not zero, the reason
+    zero is left to ``edge_root``.)"""
+    Nu, Nv, left, right, tmp, X = sp
+    rows = nd[3]
+    nu = Pw.shape[0]
+    r0 = find_span(nu - 1, p, lu, U) - p
+    r1 = find_span(nu - 1, p, hu, U)
+    _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows)
+    flo = _f_u_line(Pw, p, U, plane, lu, rows, r0, Nu, left, right)
+    fhi = _f_u_line(Pw, p, U, plane, hu, rows, r0, Nu, left, right)
+    if abs(flo) <= zsnap:
+        flo = 0.0
+    if abs(fhi) <= zsnap:
+        fhi = 0.0
+    if not flo * fhi < 0:
+        return -1.0
+    lo = 0.0
+    hi = 1.0
+    side = 0
+    t = 0.5
+    for it in range(200):
+        if hi - lo <= ttol:
+            break
+        if it % 3 == 2:
+            t = 0.5 * (lo + hi)
+        else:
+            t = lo + (hi - lo) * flo / (flo - fhi)
+            if not (t > lo and t < hi):
+                t = 0.5 * (lo + hi)
+        ft = _f_u_line(Pw, p, U, plane, lu + t * (hu - lu), rows, r0, Nu, left, right)
+        if ft == 0.0:
+            lo = t
+            hi = t
+            break
+        if (ft < 0.0) == (flo < 0.0):
+            lo = t
+            flo = ft
+            if side == -1:
+                fhi *= 0.5
+            side = -1
+        else:
+            hi = t
+            fhi = ft
+            if side == 1:
+                flo *= 0.5
+            side = 1
+    return 0.5 * (lo + hi)
+
+
+@jit
+def _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows):
+    """``rows[k - r0]`` = the row sums ``sum_l N_l(v) P_kl`` of ``surface_point`` at
+    ``v``, for the control rows ``r0 <= k <= r1``."""
+    nv = Pw.shape[1]
+    sv = find_span(nv - 1, q, v, V)
+    basis_funs(sv, v, q, V, Nv, left, right)
+    for row in range(r0, r1 + 1):
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+        for l in range(q + 1):
+            col = sv - q + l
+            b = Nv[l]
+            a0 += b * Pw[row, col, 0]
+            a1 += b * Pw[row, col, 1]
+            a2 += b * Pw[row, col, 2]
+            a3 += b * Pw[row, col, 3]
+        rows[row - r0, 0] = a0
+        rows[row - r0, 1] = a1
+        rows[row - r0, 2] = a2
+        rows[row - r0, 3] = a3
+
+
+@jit
+def _f_u_line(Pw, p, U, plane, u, rows, r0, Nu, left, right):
+    """The plane function at ``(u, v)`` from the row sums of :func:`_u_rows` at ``v``,
+    as :func:`.section._f_at` computes it."""
+    nu = Pw.shape[0]
+    su = find_span(nu - 1, p, u, U)
+    basis_funs(su, u, p, U, Nu, left, right)
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    t3 = 0.0
+    for k in range(p + 1):
+        i = su - p + k - r0
+        a = Nu[k]
+        t0 += a * rows[i, 0]
+        t1 += a * rows[i, 1]
+        t2 += a * rows[i, 2]
+        t3 += a * rows[i, 3]
+    x = t0 / t3
+    y = t1 / t3
+    z = t2 / t3
+    return plane[0] * x + plane[1] * y + plane[2] * z + plane[3]
