@@ -60,7 +60,7 @@ TWO_PI = 2 * math.pi
 
 def _unit(v):
     v = np.asarray(v, float)
-    n = norm3(v) if v.ndim == 1 else np.linalg.norm(v)
+    n = norm3(v)
     if not n > 0:
         raise Unsupported("zero direction vector")
     return v / n
