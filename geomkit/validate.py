@@ -7,6 +7,7 @@ is unusable.
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -59,6 +60,15 @@ def as_points(value, dim, field) -> tuple[np.ndarray, tuple]:
 _SHORT_KNOTS = 64
 """Knot vectors up to this length are first checked in plain Python (a reader builds
 thousands of short ones; numpy's per-call cost is then most of the check)."""
+
+
+def clamped_knots_ok(U: list, degree: int, count: int) -> bool:
+    """Whether the knots ``U`` (a list of floats) are clamped and pass every check of
+    :func:`check_knots` for ``count`` control points of ``degree``, checked in plain
+    Python (short vectors only; False for anything else)."""
+    return (len(U) == count + degree + 1 <= _SHORT_KNOTS and math.isfinite(sum(U))
+            and U[0] == U[degree] and U[-1] == U[-degree - 1]
+            and _plain_knots(U, degree, count))
 
 
 def _plain_knots(U: list, degree: int, count: int) -> bool:

@@ -266,7 +266,7 @@ class _Faces:
 
 def _bspline_base(args, name):
     p, q, U, V, P, W = args
-    return Surface(p, q, U, V, P, W, name=name)
+    return Surface.of_arrays(p, q, U, V, P, W, name=name)
 
 
 class _Axis:

@@ -19,7 +19,8 @@ from geomkit import tolerances as tols
 from geomkit._kernels import surface as K
 from geomkit._kernels.bezier import decompose
 from geomkit._kernels.trim import BOUNDARY, INSIDE, OUTSIDE, classify_points
-from geomkit.validate import as_float_array, as_int, as_points, check_knots
+from geomkit.validate import (as_float_array, as_int, as_points, check_knots,
+                              clamped_knots_ok)
 from geomkit.errors import InvalidInputError, InvalidSurfaceError, InvalidTrimError
 from geomkit.nurbs import serial
 from geomkit.nurbs.trims import (TrimCurve, TrimLoop, check_loop, clamp_knots, is_clamped,
@@ -189,6 +190,47 @@ class Surface:
         self.name = name
         self.approx_error = err
         self.trim = self._parse_trim(trim)
+
+    @classmethod
+    def of_arrays(cls, p: int, q: int, U, V, P, W=None, name: str | None = None):
+        """``Surface(p, q, U, V, P, W, name=name)`` of arrays as a reader builds them
+        (float64, C-ordered, of matching shapes, finite, weights > 0, clamped knots
+        that pass :func:`~geomkit.validate.check_knots`) without the constructor's
+        conversions: thousands per part.  The same checks are made, in plain Python
+        where numpy's per-call cost would dominate; anything else goes through the
+        constructor (an error naming the fault)."""
+        if not (type(p) is int and type(q) is int and p >= 1 and q >= 1
+                and all(isinstance(a, np.ndarray) and a.dtype == np.float64
+                        and a.flags.c_contiguous for a in (U, V, P))
+                and P.ndim == 3 and P.shape[2] == 3):
+            return cls(p, q, U, V, P, W, name=name)
+        nu, nv = P.shape[:2]
+        rational = W is not None
+        if not (nu >= p + 1 and nv >= q + 1 and clamped_knots_ok(U.tolist(), p, nu)
+                and clamped_knots_ok(V.tolist(), q, nv)
+                and (not rational or (isinstance(W, np.ndarray) and W.dtype == np.float64
+                                      and W.shape == (nu, nv)))):
+            return cls(p, q, U, V, P, W, name=name)
+        w = W if rational else np.ones((nu, nv))
+        Pw = np.empty((nu, nv, 4))
+        Pw[..., :3] = P * w[..., None]
+        Pw[..., 3] = w
+        # finite products: finite points and weights (an overflow is left to the
+        # constructor, which names it)
+        if not (np.isfinite(Pw).all() and (not rational or (W > 0).all())):
+            return cls(p, q, U, V, P, W, name=name)
+        rational = rational and not bool((W == 1.0).all())
+        s = object.__new__(cls)
+        s.degree_u, s.degree_v = p, q
+        s.knots_u, s.knots_v = readonly(np.array(U)), readonly(np.array(V))
+        s.control_points = readonly(np.array(P))
+        s.weights = readonly(Pw[..., 3]) if rational else None
+        s._Pw = readonly(Pw)
+        s._cache = {}
+        s.name = name
+        s.approx_error = 0.0
+        s.trim = ()
+        return s
 
     def with_trim(self, trim, name: str | None = None, approx_error: float | None = None):
         """The same surface (its validated arrays shared, not copied) with the trim
