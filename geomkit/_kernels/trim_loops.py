@@ -1,5 +1,6 @@
-"""Trim loop validation kernels: a loop's points (every piece in one call) and its
-enclosed area with a test that it is more than two points (a degenerate loop).
+"""Trim loop validation kernels: a loop's points (every piece in one call), its
+enclosed area with a test that it is more than two points (a degenerate loop), and
+all of a loop's checks in one call (its joins, its control points in the domain).
 
 :func:`geomkit.nurbs.trims.check_loop` validates every loop of every surface built
 (a STEP part: thousands), where numpy's per-call costs were most of the work.
@@ -117,3 +118,29 @@ def loop_area_spread(P, close):
             spread = True
             break
     return 0.5 * s, spread
+
+
+@jit
+def loop_check(Q, W, off, deg, U, uoff, per, close, box):
+    """What :func:`geomkit.nurbs.trims.check_loop` tests, in one call over a loop
+    packed as :func:`loop_points` takes it: ``(i, gap, inside, area, spread)`` with
+    ``i`` the first piece whose end is more than ``close`` from the next piece's start
+    (``gap`` that distance; -1 when none), whether every control point lies in
+    ``box`` (u0, u1, v0, v1) and :func:`loop_area_spread` of the loop's points."""
+    m = deg.shape[0]
+    first, gap = -1, 0.0
+    for i in range(m):
+        e = off[i + 1] - 1
+        s = off[i + 1] if i + 1 < m else 0
+        d = np.hypot(Q[e, 0] - Q[s, 0], Q[e, 1] - Q[s, 1])
+        if d > close:
+            first, gap = i, d
+            break
+    inside = True
+    for r in range(Q.shape[0]):
+        if not (Q[r, 0] >= box[0] and Q[r, 0] <= box[1] and Q[r, 1] >= box[2]
+                and Q[r, 1] <= box[3]):
+            inside = False
+            break
+    area, spread = loop_area_spread(loop_points(Q, W, off, deg, U, uoff, per), close)
+    return first, gap, inside, area, spread

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geomkit._kernels.bezier import curve_points, de_casteljau_split, decompose, insert_knot
-from geomkit._kernels.trim_loops import loop_area_spread, loop_points
+from geomkit._kernels.trim_loops import loop_check, loop_points
 from geomkit.validate import as_float_array, as_int, check_knots
 from geomkit.errors import InvalidInputError, InvalidTrimError
 
@@ -223,32 +223,37 @@ def first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
     return None
 
 
+def _packed(pcs):
+    """A loop's pieces as :func:`~geomkit._kernels.trim_loops.loop_points` takes them."""
+    Q = np.concatenate([c.control_points for c in pcs])
+    n = np.cumsum([0] + [c.control_points.shape[0] for c in pcs])
+    u = np.cumsum([0] + [c.knots.shape[0] for c in pcs])
+    return (Q, np.concatenate([c.weights for c in pcs]), n,
+            np.array([c.degree for c in pcs], dtype=np.int64),
+            np.concatenate([c.knots for c in pcs]), u)
+
+
 def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
     """Points along a loop (for validation only: area, domain containment): a
     polyline piece's points, a curved piece at ``per_segment`` parameters a span and
     its end; every piece in one compiled call."""
-    pcs = loop.pieces
-    n = np.cumsum([0] + [c.control_points.shape[0] for c in pcs])
-    u = np.cumsum([0] + [c.knots.shape[0] for c in pcs])
-    return loop_points(np.concatenate([c.control_points for c in pcs]),
-                       np.concatenate([c.weights for c in pcs]), n,
-                       np.array([c.degree for c in pcs], dtype=np.int64),
-                       np.concatenate([c.knots for c in pcs]), u, int(per_segment))
+    return loop_points(*_packed(loop.pieces), int(per_segment))
 
 
 def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
     """Validate a loop against the domain ``((u0, u1), (v0, v1))``: the pieces join
     within ``close``, the loop stays in the domain (to ``close``) and encloses area.
-    Raises :class:`InvalidTrimError` naming ``field``."""
+    Raises :class:`InvalidTrimError` naming ``field``.  The tests are one compiled
+    call (:func:`~geomkit._kernels.trim_loops.loop_check`)."""
     (u0, u1), (v0, v1) = domain
     pcs = loop.pieces
     if not pcs:
         raise InvalidTrimError("a loop of no pieces", field)
-    E = np.array([c.control_points[-1] for c in pcs])
-    S = np.array([c.control_points[0] for c in pcs])
-    gaps = np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T)  # piece i's end to i+1's start
-    for i in np.flatnonzero(gaps > close)[:1].tolist():   # the first gap too wide
-        c, nxt, gap = pcs[i], pcs[(i + 1) % len(pcs)], float(gaps[i])
+    close = float(close)
+    box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
+    i, gap, inside, area, spread = loop_check(*_packed(pcs), 24, close, box)
+    if i >= 0:   # the first gap too wide
+        c, nxt = pcs[i], pcs[(i + 1) % len(pcs)]
         if len(pcs) == 1:
             what = (f"loop is open: it ends at {c.end.tolist()}, {gap:.3g} away "
                     f"from its start {nxt.start.tolist()}")
@@ -257,17 +262,12 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
             what = (f"pieces do not join: piece {i} ends at {c.end.tolist()} but "
                     f"piece {j} starts at {nxt.start.tolist()}, {gap:.3g} away")
         raise InvalidTrimError(f"{what} (closure tolerance {close:.3g})", field)
-    box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
-    P = np.concatenate([c.control_points for c in pcs])
-    inside = ((P[:, 0] >= box[0]) & (P[:, 0] <= box[1]) & (P[:, 1] >= box[2])
-              & (P[:, 1] <= box[3])).all()  # then every curve is (convex hulls)
-    for c in () if inside else pcs:
+    for c in () if inside else pcs:  # (inside: every curve is, by its convex hull)
         bad = first_point_outside(c, box, close)
         if bad is not None:
             raise InvalidTrimError(
                 f"loop leaves the parameter domain [{u0}, {u1}] x [{v0}, {v1}] at "
                 f"({bad[0]:.6g}, {bad[1]:.6g})", field)
-    area, spread = loop_area_spread(loop_samples(loop), float(close))
     if abs(area) <= (close * close) or not spread:
         raise InvalidTrimError(f"degenerate loop: enclosed area {area:.3g} in UV", field)
 

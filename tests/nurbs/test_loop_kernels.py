@@ -96,3 +96,44 @@ def test_loop_area_and_spread(seed):
         area, spread = loop_area_spread(P, close)
         assert area == pytest.approx(_area_reference(P), rel=1e-12, abs=1e-15)
         assert spread == _spread_reference(P, close)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_loop_check_against_numpy(seed):
+    """``loop_check``'s first wide gap, box test and area against the numpy formulas
+    it replaced, on random loops with gaps, some leaving the box."""
+    from geomkit._kernels.trim_loops import loop_check
+    from geomkit.nurbs.trims import _packed
+    rng = np.random.default_rng(10 + seed)
+    seen = {"gap": 0, "out": 0}
+    for _ in range(200):
+        pieces, start = [], rng.uniform(0, 1, 2)
+        for _ in range(int(rng.integers(1, 6))):
+            c = _random_piece(rng, start)
+            pieces.append(c)
+            start = c.end + (rng.normal(0, 0.01, 2) if rng.random() < 0.3 else 0.0)
+        if rng.random() < 0.7:  # closed
+            last = pieces[-1]
+            Q = last.control_points.copy()
+            Q[-1] = pieces[0].start
+            pieces[-1] = TrimCurve.create(last.degree, last.knots, Q, last.weights)
+        loop = TrimLoop(tuple(pieces))
+        close = float(rng.choice([1e-9, 1e-3, 2e-2]))
+        box = np.array([0.05, 0.95, 0.05, 0.95]) if rng.random() < 0.5 else \
+            np.array([-1.0, 2.0, -1.0, 2.0])
+        i, gap, inside, area, spread = loop_check(*_packed(loop.pieces), 24, close, box)
+        E = np.array([c.control_points[-1] for c in pieces])
+        S = np.array([c.control_points[0] for c in pieces])
+        gaps = np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T)
+        wide = np.flatnonzero(gaps > close)
+        assert i == (int(wide[0]) if wide.size else -1)
+        if wide.size:
+            assert gap == gaps[wide[0]]
+            seen["gap"] += 1
+        P = np.concatenate([c.control_points for c in pieces])
+        assert inside == bool(((P[:, 0] >= box[0]) & (P[:, 0] <= box[1])
+                               & (P[:, 1] >= box[2]) & (P[:, 1] <= box[3])).all())
+        seen["out"] += not inside
+        ref = loop_area_spread(loop_samples(loop), close)
+        assert (area, spread) == ref
+    assert seen["gap"] > 20 and seen["out"] > 20
