@@ -384,3 +384,60 @@ def unwrap_angles(x, period):
         c += corr
         out[i + 1] = x[i + 1] + c
     return out
+
+
+@jit
+def _clamped_knots_ok(U, p, n):
+    """Whether the knots ``U`` are clamped and pass every check of
+    :func:`geomkit.validate.check_knots` for ``n`` control points of degree ``p``."""
+    m = U.shape[0]
+    if m != n + p + 1 or n < p + 1:
+        return False
+    for j in range(m):
+        if not math.isfinite(U[j]):
+            return False
+    lo, hi = U[p], U[n]
+    if not hi > lo or U[0] != U[p] or U[m - 1] != U[m - p - 1]:
+        return False
+    run = 0
+    for j in range(m):
+        if j and U[j] < U[j - 1]:
+            return False
+        run = run + 1 if j and U[j] == U[j - 1] else 1
+        if run > p + 1 or (run > p and lo < U[j] < hi):
+            return False
+    return True
+
+
+@jit
+def plane_piece(Pw, p, U, reverse, O, X, Y):
+    """An edge's own NURBS ``(p, U, Pw)`` mapped onto the plane ``O + a X + b Y``
+    (affine: exact), in loop order: ``(U, Q, w, plain, ok)`` with ``w`` the weights
+    (ones when all the edge's weights are equal: ``plain``), ``Q`` the mapped control
+    points (``Q w / w`` when rational, as the Cartesian points are stored), ``ok``
+    whether the knots are clamped and valid (:func:`_clamped_knots_ok`)."""
+    n = Pw.shape[0]
+    m = U.shape[0]
+    U2 = np.empty(m)
+    for j in range(m):
+        U2[j] = (U[0] + U[m - 1]) - U[m - 1 - j] if reverse else U[j]
+    Q = np.empty((n, 2))
+    w = np.empty(n)
+    plain = True
+    for i in range(n):
+        k = n - 1 - i if reverse else i
+        wi = Pw[k, 3]
+        w[i] = wi
+        plain = plain and wi == Pw[0, 3]
+        dx = Pw[k, 0] / wi - O[0]
+        dy = Pw[k, 1] / wi - O[1]
+        dz = Pw[k, 2] / wi - O[2]
+        Q[i, 0] = dx * X[0] + dy * X[1] + dz * X[2]
+        Q[i, 1] = dx * Y[0] + dy * Y[1] + dz * Y[2]
+    if plain:
+        w[:] = 1.0
+    else:
+        for i in range(n):
+            Q[i, 0] = Q[i, 0] * w[i] / w[i]
+            Q[i, 1] = Q[i, 1] * w[i] / w[i]
+    return U2, Q, w, plain, _clamped_knots_ok(U2, p, n)

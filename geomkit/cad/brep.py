@@ -30,10 +30,8 @@ import math
 import numpy as np
 
 from geomkit.tolerances import ISO_TOL
-from geomkit.errors import InvalidTrimError
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.nurbs.trims import is_clamped, readonly
-from geomkit.validate import check_knots
+from geomkit.nurbs.trims import readonly
 from geomkit.cad.analytic import (AngleMap, arc_curve, cross3, curve_eval, line_curve,
                                   norm3, plane_patch, revolve, unwrap)
 from geomkit.cad.iges.entities import curve3d
@@ -42,7 +40,7 @@ from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
-                                         iso_ends, local_points)
+                                         iso_ends, local_points, plane_piece)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -403,23 +401,19 @@ def _segment(q):
     return TrimCurve(1, _SEGMENT_KNOTS, q, _TWO_ONES)
 
 
-def _mapped_piece(p, U, Q, w):
-    """``TrimCurve.create(p, U, Q, w)`` of an edge's own NURBS mapped onto a plane,
-    without create's conversions when the curve is as the readers build it (finite,
-    clamped, weights > 0; its knots checked as create checks them): thousands per
-    part.  Anything else goes through create (an error naming the fault)."""
-    U = np.asarray(U, dtype=np.float64)
-    n = Q.shape[0]
-    if not (n >= p + 1 and U.shape[0] == n + p + 1 and np.isfinite(Q).all()
-            and (w is None or bool((w > 0).all()))):
-        return TrimCurve.create(p, U, Q, w)
-    U = check_knots(U, p, n, "trim.knots", InvalidTrimError)
-    if not is_clamped(U, p):
-        return TrimCurve.create(p, U, Q, w)
-    if w is None:
-        return TrimCurve(p, readonly(U), readonly(Q), readonly(np.ones(n)))
-    w = np.asarray(w, dtype=np.float64)
-    return TrimCurve(p, readonly(U), readonly(Q * w[:, None] / w[:, None]), readonly(w))
+def _plane_piece(curve, reverse, srf):
+    """An edge's own NURBS ``curve`` mapped onto the plane ``srf`` as a trim piece in
+    loop order (one compiled call,
+    :func:`~geomkit._kernels.pcurve_map.plane_piece`): thousands per part.  A curve
+    that is not as the readers build it (finite, clamped, weights > 0) goes through
+    ``TrimCurve.create`` (an error naming the fault)."""
+    p, U, Pw = curve
+    U2, Q, w, plain, ok = plane_piece(np.ascontiguousarray(Pw, dtype=np.float64), int(p),
+                                      np.asarray(U, dtype=np.float64), bool(reverse),
+                                      srf.O, srf.X, srf.Y)
+    if not (ok and np.isfinite(Q).all() and (plain or bool((w > 0).all()))):
+        return TrimCurve.create(p, U2, Q, None if plain else w)
+    return TrimCurve(p, readonly(U2), readonly(Q), readonly(w))
 
 
 def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
@@ -432,16 +426,7 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
                 maps[c] = 1.0, f.theta0, f.theta1
     for e, ab in zip(loop, chains):
         if srf.kind == "plane":
-            p, U, Pw = e.curve
-            w = Pw[:, 3]
-            d = Pw[:, :3] / w[:, None] - srf.O
-            Q = np.empty((d.shape[0], 2))
-            Q[:, 0] = d @ srf.X
-            Q[:, 1] = d @ srf.Y
-            if e.reverse:
-                U = (U[0] + U[-1]) - np.asarray(U)[::-1]
-                Q, w = Q[::-1], w[::-1]
-            c = _mapped_piece(p, U, Q, None if np.all(w == w[0]) else w)
+            c = _plane_piece(e.curve, e.reverse, srf)
         elif maps is not None and (got := iso_ends(ab, ISO_TOL * max(size, 1.0), maps)):
             # an iso-line's mapped ends (as below) in one compiled call
             iso0, iso1, q = got

@@ -179,3 +179,55 @@ def test_seam_margins_against_numpy():
         got = seam_margins(np.concatenate(paths) if paths else np.zeros(0), starts,
                            np.array(spans, dtype=np.float64).reshape(-1, 2), _CANDIDATES)
         np.testing.assert_array_equal(got, _numpy_margins(paths, spans, _CANDIDATES))
+
+
+def _numpy_plane_piece(curve, reverse, s):
+    """The numpy reference of a plane face's piece: the edge's NURBS with its
+    control points mapped into the plane's frame, run in loop order."""
+    from geomkit.nurbs.surface import TrimCurve
+    p, U, Pw = curve
+    w = Pw[:, 3]
+    d = Pw[:, :3] / w[:, None] - s.O
+    Q = np.column_stack([d @ s.X, d @ s.Y])
+    if reverse:
+        U = (U[0] + U[-1]) - np.asarray(U)[::-1]
+        Q, w = Q[::-1], w[::-1]
+    return TrimCurve.create(p, U, Q, None if np.all(w == w[0]) else w)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_plane_piece_against_numpy(seed):
+    """``_plane_piece`` (one compiled call) against the numpy route on random
+    rational and polynomial edges with repeated knots, both ways round; a curve
+    with a bad knot vector or a zero weight is refused as ``TrimCurve.create``
+    refuses it."""
+    from geomkit.cad.brep import _plane_piece
+    from geomkit.errors import InvalidTrimError
+    rng = np.random.default_rng(seed)
+    s = SURFACES["plane"]
+    worst = 0.0
+    for _ in range(300):
+        p = int(rng.integers(1, 5))
+        n = p + 1 + int(rng.integers(0, 4))
+        inner = np.sort(rng.choice([0.25, 0.5, 0.75], n - p - 1))
+        if n - p - 1 and np.unique(inner, return_counts=True)[1].max() > p:
+            inner = np.linspace(0, 1, n - p + 1)[1:-1]
+        U = np.concatenate([np.zeros(p + 1), inner, np.ones(p + 1)]) * 3.0 - 1.0
+        w = np.full(n, rng.choice([1.0, 2.0])) if rng.random() < 0.4 else \
+            rng.uniform(0.3, 3.0, n)
+        P = rng.normal(0, 5, (n, 3))
+        curve = (p, U, np.column_stack([P * w[:, None], w]))
+        for rev in (False, True):
+            a, b = _plane_piece(curve, rev, s), _numpy_plane_piece(curve, rev, s)
+            assert a.degree == b.degree
+            assert np.array_equal(a.knots, b.knots) and np.array_equal(a.weights, b.weights)
+            worst = max(worst, float(np.abs(a.control_points - b.control_points).max()))
+    assert worst <= 1e-14 * 5.0 * 8
+    p, U, Pw = curve
+    for bad in ((p, U[::-1].copy(), Pw), (p, U[:-1].copy(), Pw)):
+        with pytest.raises(InvalidTrimError, match="knots"):
+            _plane_piece(bad, False, s)
+    Pw0 = Pw.copy()
+    Pw0[0, 3] = 0.0
+    with pytest.raises(InvalidTrimError):
+        _plane_piece((p, U, Pw0), False, s)
