@@ -121,26 +121,39 @@ def loop_area_spread(P, close):
 
 
 @jit
-def loop_check(Q, W, off, deg, U, uoff, per, close, box):
-    """What :func:`geomkit.nurbs.trims.check_loop` tests, in one call over a loop
-    packed as :func:`loop_points` takes it: ``(i, gap, inside, area, spread)`` with
-    ``i`` the first piece whose end is more than ``close`` from the next piece's start
-    (``gap`` that distance; -1 when none), whether every control point lies in
-    ``box`` (u0, u1, v0, v1) and :func:`loop_area_spread` of the loop's points."""
-    m = deg.shape[0]
-    first, gap = -1, 0.0
+def loop_joins(Q, off, box):
+    """``(gaps, inside)`` of a loop's pieces (2-D control points of piece i in rows
+    ``off[i]:off[i+1]`` of ``Q``): the distance from each piece's end to the next
+    one's start (the last piece's to the first's) and whether every control point
+    lies in ``box`` (u0, u1, v0, v1)."""
+    m = off.shape[0] - 1
+    gaps = np.empty(m)
     for i in range(m):
         e = off[i + 1] - 1
         s = off[i + 1] if i + 1 < m else 0
-        d = np.hypot(Q[e, 0] - Q[s, 0], Q[e, 1] - Q[s, 1])
-        if d > close:
-            first, gap = i, d
-            break
+        gaps[i] = np.hypot(Q[e, 0] - Q[s, 0], Q[e, 1] - Q[s, 1])
     inside = True
     for r in range(Q.shape[0]):
         if not (Q[r, 0] >= box[0] and Q[r, 0] <= box[1] and Q[r, 1] >= box[2]
                 and Q[r, 1] <= box[3]):
             inside = False
+            break
+    return gaps, inside
+
+
+@jit
+def loop_check(Q, W, off, deg, U, uoff, per, close, box):
+    """What :func:`geomkit.nurbs.trims.check_loop` tests, in one call over a loop
+    packed as :func:`loop_points` takes it: ``(i, gap, inside, area, spread)`` with
+    ``i`` the first piece whose end is more than ``close`` from the next piece's start
+    (``gap`` that distance; -1 when none), whether every control point lies in
+    ``box`` (u0, u1, v0, v1) (:func:`loop_joins`) and :func:`loop_area_spread` of the
+    loop's points."""
+    gaps, inside = loop_joins(Q, off, box)
+    first, gap = -1, 0.0
+    for i in range(gaps.shape[0]):
+        if gaps[i] > close:
+            first, gap = i, gaps[i]
             break
     area, spread = loop_area_spread(loop_points(Q, W, off, deg, U, uoff, per), close)
     return first, gap, inside, area, spread

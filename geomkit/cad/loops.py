@@ -14,6 +14,7 @@ from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import evaluate_trim_curve
 from geomkit.cad.uvmap import map_pcurve
+from geomkit._kernels.trim_loops import loop_joins
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
            "same_point_3d", "finish_loop"]
@@ -23,24 +24,25 @@ class Unsupported(Exception):
     """A face or entity that cannot be read exactly (the message says which and why)."""
 
 
+_NO_BOX = np.array([-np.inf, np.inf, -np.inf, np.inf])
+
+
+def _joins(pieces, domain=None):
+    """``(gaps, inside)``: the UV distance from each piece's end to the next one's
+    start (cyclic: the last piece's end to the first's start) and whether every
+    control point lies in ``domain`` (closed), in one compiled call."""
+    if not pieces:
+        return np.zeros(0), True
+    Q = np.concatenate([c.control_points for c in pieces])
+    off = np.cumsum([0] + [c.control_points.shape[0] for c in pieces])
+    box = _NO_BOX if domain is None else np.array([*domain[0], *domain[1]], dtype=float)
+    return loop_joins(Q, off, box)
+
+
 def join_gaps(pieces) -> np.ndarray:
     """The UV distance from each piece's end to the next one's start (cyclic: the last
     piece's end to the first's start), all at once."""
-    if not pieces:
-        return np.zeros(0)
-    E = np.array([c.control_points[-1] for c in pieces])
-    S = np.array([c.control_points[0] for c in pieces])
-    return np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T)
-
-
-def _inside_domain(pieces, domain) -> bool:
-    """Whether every control point of every piece lies in ``domain`` (closed)."""
-    (u0, u1), (v0, v1) = domain
-    if not pieces:
-        return True
-    P = np.concatenate([c.control_points for c in pieces])
-    return bool(((P[:, 0] >= u0) & (P[:, 0] <= u1) & (P[:, 1] >= v0)
-                 & (P[:, 1] <= v1)).all())
+    return _joins(pieces)[0]
 
 
 def reverse(c: TrimCurve) -> TrimCurve:
@@ -294,13 +296,16 @@ def finish_loop(pieces, base, periods, ftol: float, what: str):
     face's ``approx_error`` holds them)."""
     (u0, u1), (v0, v1) = domain = base.domain
     size = max(u1 - u0, v1 - v0)
+    gaps, inside = _joins(pieces, domain)
+    if inside and not bool((gaps > 1e-9 * size).any()):  # closed, in the domain
+        return list(pieces), [], []
     probe = same_point_3d(base, ftol)  # a gap at a pole is not out of order
-    gaps = join_gaps(pieces)
     far = np.flatnonzero(gaps > GAP_TOL * size).tolist()
     nxt = pieces[1:] + pieces[:1]
     if any(not probe(pieces[k].end, nxt[k].start) for k in far):
         pieces, gaps = chain(pieces, size, periods, domain), None
-    if _inside_domain(pieces, domain):  # nothing to clip
+        inside = _joins(pieces, domain)[1]
+    if inside:  # nothing to clip
         moved, moved3 = [], []
     else:
         pieces, moved = clip_to_domain(pieces, domain, PCURVE_CLIP_TOL, GAP_TOL)

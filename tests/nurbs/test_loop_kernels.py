@@ -3,7 +3,9 @@ references: the loop's samples (:func:`geomkit.nurbs.trims.loop_samples`, one
 compiled call a loop) against each piece evaluated on its own with the curve kernel
 at the same parameters (polyline pieces' own points, curved pieces, rational, with
 repeated knots, degrees 1-5, at ``per`` parameters a non-empty span and their end);
-the loop's area and its three-distinct-grid-points test."""
+the loop's area and its three-distinct-grid-points test; the joins' gaps and the
+domain-box test (``loop_joins``) and all of a loop's checks in one call
+(``loop_check``)."""
 
 from __future__ import annotations
 
@@ -137,3 +139,22 @@ def test_loop_check_against_numpy(seed):
         ref = loop_area_spread(loop_samples(loop), close)
         assert (area, spread) == ref
     assert seen["gap"] > 20 and seen["out"] > 20
+
+
+def test_loop_joins_against_numpy():
+    """Every join's gap and the box test of ``loop_joins`` against numpy."""
+    from geomkit._kernels.trim_loops import loop_joins
+    rng = np.random.default_rng(21)
+    box = np.array([0.0, 1.0, 0.0, 1.0])
+    outside = 0
+    for _ in range(300):
+        sizes = rng.integers(2, 6, int(rng.integers(1, 6)))
+        Q = rng.uniform(-0.1, 1.1, (int(sizes.sum()), 2))
+        off = np.concatenate([[0], np.cumsum(sizes)])
+        gaps, inside = loop_joins(Q, off, box)
+        E, S = Q[off[1:] - 1], Q[off[:-1]]
+        assert np.array_equal(gaps, np.hypot(*(E - np.concatenate([S[1:], S[:1]])).T))
+        assert inside == bool(((Q[:, 0] >= 0) & (Q[:, 0] <= 1) & (Q[:, 1] >= 0)
+                               & (Q[:, 1] <= 1)).all())
+        outside += not inside
+    assert 0 < outside < 300
