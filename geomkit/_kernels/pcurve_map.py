@@ -110,7 +110,8 @@ def local_points(P, kind, frame, R, r, tan_a):
 @jit
 def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
     """The curve at ``n`` evenly spaced parameters of ``[t0, t1]`` (``n >= 2``; the
-    values of :func:`geomkit.cad.analytic.curve_eval` at the reader's linspace) and
+    reader's linspace, bit for bit; the points those of
+    :func:`geomkit.cad.analytic.curve_eval` to rounding: another evaluation order) and
     their :func:`local_points`: ``(X (n, 3), ab (n, 2), rho (n,))`` in one call."""
     X = np.empty((n, 3))
     ab = np.empty((n, 2))

@@ -226,7 +226,15 @@ class _Edge:
         k = (id(self.curve), n)
         X = self._cache.get(k)
         if X is None:
-            X = self._cache[k] = curve_eval(self.curve, _linspace(self.t0, self.t1, n))
+            dense = self._cache.get((id(self.curve), _NS))
+            if dense is not None and n >= 2 and (_NS - 1) % (n - 1) == 0:
+                # every ((NS - 1) / (n - 1))th of the dense samples: the same
+                # parameters bit for bit (the steps differ by a power of two), the
+                # points as edge_local evaluates them (curve_eval's to rounding)
+                X = dense[::(_NS - 1) // (n - 1)]
+            else:
+                X = curve_eval(self.curve, _linspace(self.t0, self.t1, n))
+            self._cache[k] = X
         return X[::-1] if self.reverse else X
 
     def local(self, srf, n: int):
