@@ -388,6 +388,8 @@ class P21:
         self._raw: dict[int, str] = {}
         self.names: dict[int, str] = {}
         self._cache: dict[int, tuple] = {}
+        self._by_name: dict | None = None  # entity name -> ids (of_type)
+        self._ordered: bool | None = None  # whether the ids increase through the file
         self._cut(data)
 
     def _sections(self, text):
@@ -504,8 +506,26 @@ class P21:
         return out.reshape(-1, k)
 
     def of_type(self, *names: str) -> list[int]:
-        """Ids of the simple records of these entity names, in file order."""
+        """Ids of the simple records of these entity names, in file order (from an
+        index of the names built at the first call: a reader asks for a dozen)."""
+        if self._by_name is None:
+            idx: dict = {}
+            for i, n in self.names.items():
+                got = idx.get(n)
+                if got is None:
+                    idx[n] = [i]
+                else:
+                    got.append(i)
+            self._by_name = idx
         want = {n.upper() for n in names}
+        lists = [self._by_name[n] for n in want if n in self._by_name]
+        if len(lists) <= 1:
+            return list(lists[0]) if lists else []
+        if self._ordered is None:  # ids increasing through the file: file order
+            ids = list(self.names)
+            self._ordered = all(a < b for a, b in zip(ids, ids[1:]))
+        if self._ordered:
+            return sorted(i for ids in lists for i in ids)
         return [i for i, n in self.names.items() if n in want]
 
     def complex_ids(self, part: str | None = None) -> list[int]:

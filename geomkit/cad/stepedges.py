@@ -25,7 +25,7 @@ from geomkit.cad.analytic import arc_curve, cross3, line_curve, norm3
 from geomkit.cad.p21 import DERIVED, P21, Ref
 from geomkit.cad.stepgeom import reverse_curve
 
-__all__ = ["line_and_circle_edges", "fields"]
+__all__ = ["line_and_circle_edges", "fields", "fields_of"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -48,6 +48,36 @@ number, an enumeration (read at once; any other form goes through the parser).""
 _KINDS = {"EDGE_CURVE": "rrre", "VERTEX_POINT": "r", "LINE": "rr", "VECTOR": "rn",
           "AXIS2_PLACEMENT_3D": "rrr", "CIRCLE": "rn", "ORIENTED_EDGE": "re"}
 """The fields after the label: r a reference, n a number, e an enumeration (T, F)."""
+
+
+_CONVERT = {
+    "EDGE_CURVE": lambda g: (int(g[0]), int(g[1]), int(g[2]), g[3] == "T"),
+    "VERTEX_POINT": lambda g: (int(g[0]),),
+    "LINE": lambda g: (int(g[0]), int(g[1])),
+    "VECTOR": lambda g: (int(g[0]), float(g[1])),
+    "AXIS2_PLACEMENT_3D": lambda g: (int(g[0]), int(g[1]), int(g[2])),
+    "CIRCLE": lambda g: (int(g[0]), float(g[1])),
+    "ORIENTED_EDGE": lambda g: (int(g[0]), g[1] == "T"),
+}
+"""Each record's fields from its regex groups (what :func:`fields` converts)."""
+_MANY = {name: re.compile("(?:" + r.pattern + r"|[^\x00]*)\x00") for name, r in _FIELDS.items()}
+"""The plain form of each record, else anything, up to the separator: one match per
+record of a joined text (:func:`fields_of`)."""
+
+
+def fields_of(p: P21, ids, name: str) -> list:
+    """``[fields(p, i, name) for i in ids]``: the plain records read by one regex pass
+    over their joined texts, the others by :func:`fields`."""
+    names, raw = p.names, p.body
+    bodies = [raw(i) if names.get(int(i)) == name else "" for i in ids]
+    text = "\x00".join(bodies) + "\x00"
+    got = _MANY[name].findall(text) if text.count("\x00") == len(bodies) else None
+    if got is None or len(got) != len(bodies):
+        return [fields(p, i, name) for i in ids]
+    if _MANY[name].groups == 1:  # (findall gives the group itself)
+        got = [(g,) for g in got]
+    conv = _CONVERT[name]
+    return [conv(g) if g[0] else fields(p, i, name) for i, g in zip(ids, got)]
 
 
 def fields(p: P21, i, name: str):
@@ -108,16 +138,22 @@ def line_and_circle_edges(p: P21) -> dict:
     :meth:`~geomkit.cad.stepbrep._Faces.edge` builds them (the curve run from the start
     vertex to the end vertex, reversed when its sense is ``.F.``)."""
     edges = []  # (id, start point, end point, curve kind, curve fields, same, closed)
-    for i in p.of_type("EDGE_CURVE"):
-        a = fields(p, i, "EDGE_CURVE")
-        if a is None:
-            continue
-        v1, v2, cid, same = a
-        x1, x2 = fields(p, v1, "VERTEX_POINT"), fields(p, v2, "VERTEX_POINT")
+    ids = p.of_type("EDGE_CURVE")
+    ecs = [(i, a) for i, a in zip(ids, fields_of(p, ids, "EDGE_CURVE")) if a is not None]
+    vids = list({v: None for _, a in ecs for v in a[:2]})
+    vf = dict(zip(vids, fields_of(p, vids, "VERTEX_POINT")))
+    cids = {"LINE": [], "CIRCLE": []}
+    for _, a in ecs:
+        name = p.names.get(a[2])
+        if name in cids:
+            cids[name].append(a[2])
+    cf = {name: dict(zip(c, fields_of(p, c, name))) for name, c in cids.items()}
+    for i, (v1, v2, cid, same) in ecs:
+        x1, x2 = vf[v1], vf[v2]
         name = p.names.get(cid)
-        if x1 is None or x2 is None or name not in ("LINE", "CIRCLE"):
+        if x1 is None or x2 is None or name not in cf:
             continue
-        c = fields(p, cid, name)
+        c = cf[name][cid]
         if c is not None:
             edges.append((i, x1[0], x2[0], name, c, same, v1 == v2))
     out = {}
@@ -149,7 +185,7 @@ def _finish(out, i, curve, t1, t2, same):
 def _with_record(p, edges, slot: int, name: str):
     """The edges whose curve's field ``slot`` is a plain ``name`` record, with that
     record's fields."""
-    got = [(e, fields(p, e[4][slot], name)) for e in edges]
+    got = zip(edges, fields_of(p, [e[4][slot] for e in edges], name))
     got = [(e, f) for e, f in got if f is not None]
     return [e for e, _ in got], [f for _, f in got]
 

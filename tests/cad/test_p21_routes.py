@@ -90,3 +90,23 @@ def test_mutated_records_read_alike_or_are_refused_alike(seed):
             if f is not None:
                 assert _shape(f) == _shape(ref), m
             assert _shape(p21._parse(m, "x")) == _shape(ref), m
+
+
+def test_of_type_from_its_index_is_the_scan():
+    """``of_type`` (an index of the names) gives the records a scan of the file gives,
+    in file order, for one name and for several, on files whose ids increase through
+    the file and on files whose ids do not."""
+    orders = set()
+    for path in PARTS:
+        p = read_p21(path)
+        names = sorted(set(p.names.values()))
+        combos = [(n,) for n in names] + [tuple(names[k:k + 3]) for k in range(0, 30, 3)]
+        combos += [("edge_curve", "vertex_point"), ("NO_SUCH_ENTITY",), ()]
+        for combo in combos:
+            want = {n.upper() for n in combo}
+            got = p.of_type(*combo)
+            assert got == [i for i, n in p.names.items() if n in want]
+            got.append(-1)  # a copy: the index is not the caller's
+            assert p.of_type(*combo) == got[:-1]
+        orders.add(p._ordered)
+    assert orders == {True, False}

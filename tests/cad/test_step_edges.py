@@ -129,3 +129,24 @@ def test_fields_read_by_regex_as_the_parser_reads_them(monkeypatch):
         assert fast == slow
         seen += sum(v is not None for v in fast.values())
     assert seen > 15_000
+
+
+def test_fields_of_many_records_are_each_records_fields():
+    """``fields_of`` (one regex pass over the joined records) against ``fields``
+    record by record: every record of each kind on all parts, with records of other
+    kinds, complex records and ids that are not records mixed in, and a hand-written
+    file whose records are not all of the plain form."""
+    from geomkit.cad import stepedges
+
+    for path in PARTS[:6] + [None]:
+        p = read_p21(path) if path is not None else _file(mag="LENGTH_MEASURE(2.)",
+                                                           xref="1.,0.")
+        other = list(p.names)[:40] + p.complex_ids()[:10] + [10 ** 9]
+        for name in stepedges._FIELDS:
+            ids = p.of_type(name) + other
+            assert stepedges.fields_of(p, ids, name) == \
+                [stepedges.fields(p, i, name) for i in ids]
+    p = _file()
+    p._raw[6] = "VECTOR('',#5,\x00 2.)"  # a separator inside a record: record by record
+    assert stepedges.fields_of(p, [6, 9], "VECTOR") == [None, None]
+    assert stepedges.fields_of(p, [9], "EDGE_CURVE") == [(3, 4, 8, True)]
