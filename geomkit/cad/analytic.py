@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from geomkit._kernels.arcs import arc_net
 from geomkit._kernels.bezier import curve_points
 from geomkit._kernels.pcurve_map import unwrap_angles
 
@@ -147,12 +148,11 @@ def param_to_angle(s, theta0: float, theta1: float) -> np.ndarray:
 def arc_curve(center, xaxis, yaxis, radius: float, theta0: float, theta1: float):
     """Exact rational quadratic arc ``center + radius (cos t X + sin t Y)``, ``t`` in
     ``[theta0, theta1]`` (X, Y orthonormal); knots at the angles (see module doc)."""
-    a, b, w, U = _arc_coeffs(theta0, theta1)
-    C, X, Y = (np.asarray(v, float) for v in (center, xaxis, yaxis))
-    P = C + radius * (a[:, None] * X + b[:, None] * Y)
-    Pw = np.empty((len(w), 4))
-    Pw[:, :3] = P * w[:, None]
-    Pw[:, 3] = w
+    if not (theta1 - theta0 > 0 and math.isfinite(theta1 - theta0)):
+        raise ValueError(f"arc sweep must be finite and > 0, got {theta1 - theta0!r}")
+    U, Pw = arc_net(*(np.ascontiguousarray(v, dtype=np.float64)
+                      for v in (center, xaxis, yaxis)), float(radius), float(theta0),
+                    float(theta1))
     return 2, U, Pw
 
 

@@ -7,7 +7,8 @@
 * ``nogil=True``: kernels release the GIL and can run in threads.
 * fastmath allows only contraction (fused multiply-add) and signed-zero freedom: no
   ``nnan``/``ninf`` (NaN checks must keep working) and no reassociation (results stay
-  reproducible and as accurate as the reference algorithms).
+  reproducible and as accurate as the reference algorithms); :data:`jit_exact` kernels
+  do not contract either (numpy's values, bit for bit).
 * ``error_model="numpy"``: a float division by zero gives inf/nan instead of raising
   inside the kernel (no hidden branch per division); kernels guard their own
   degenerate cases and the public functions check results.
@@ -186,8 +187,8 @@ if _RECORD:
 
 
 def _decorator(cache=True, dispatcher=None, **options):
-    targetoptions = dict(nopython=True, nogil=True, fastmath=FASTMATH, error_model="numpy",
-                         **options)
+    targetoptions = dict(dict(nopython=True, nogil=True, fastmath=FASTMATH,
+                              error_model="numpy"), **options)
     cls = _Dispatcher if dispatcher is None else dispatcher
     if _RECORD:
         cls = type(cls.__name__, (_Recording, cls), {})
@@ -217,6 +218,11 @@ constant argument gains nothing at run time (the distance and motion kernels).  
 the default: a literal derivative order or size lets LLVM unroll the small loops of
 the evaluation kernels (tessellating freeform_1 at 1e-3 looked ~15 % slower with
 every kernel compiled for plain types, noisy runs on a loaded machine)."""
+
+jit_exact = _decorator(fastmath={"nsz"})
+"""Like :data:`jit_plain`, without contraction: each ``a * b + c`` rounded twice, as
+numpy computes it, for kernels that replace numpy formulas value for value (the CAD
+readers' closed forms, whose faces are compared bit for bit with the formulas')."""
 
 jit_inline = _decorator(dispatcher=_CachedDispatcher, inline="always")
 """Decorator for tiny helpers called in hot loops with array arguments: inlined at the

@@ -1,0 +1,63 @@
+"""Exact rational quadratic arcs: the control nets the CAD readers build thousands of
+(every circle edge), each in one call with the arithmetic of the numpy formulas they
+replace (:func:`geomkit.cad.analytic.arc_curve`): the same operations in the same
+order, none contracted, so the same values.
+
+An arc ``[theta0, theta1]`` has ``n = ceil(sweep / (pi / 2))`` spans of angle ``d``;
+its knots are the span ends, doubled inside; per span the control points are the span
+start, the tangents' meeting point (weight ``cos(d / 2)``) and the span end.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .numba_ext.policy import jit_exact as jit
+
+
+@jit
+def arc_coeffs(theta0, theta1):
+    """``(a, b, w, U)``: per control point of the arc ``[theta0, theta1]`` (``theta1 >
+    theta0``) the point ``O + r (a X + b Y)`` and its weight ``w``, and the knots."""
+    sweep = theta1 - theta0
+    n = max(1, int(math.ceil(sweep / (0.5 * math.pi) - 1e-12)))
+    d = sweep / n
+    U = np.empty(2 * n + 4)
+    U[0] = U[1] = U[2] = theta0
+    for k in range(1, n):
+        U[2 * k + 1] = U[2 * k + 2] = theta0 + d * float(k)
+    U[2 * n + 1] = U[2 * n + 2] = U[2 * n + 3] = theta1
+    m = 2 * n + 1
+    a = np.empty(m)
+    b = np.empty(m)
+    w = np.empty(m)
+    wm = math.cos(d / 2)
+    j = 0
+    for k in range(n):
+        t0 = theta0 + k * d
+        tm = t0 + d / 2
+        if k == 0:
+            a[j], b[j], w[j] = math.cos(t0), math.sin(t0), 1.0
+            j += 1
+        a[j], b[j], w[j] = math.cos(tm) / wm, math.sin(tm) / wm, wm
+        t1 = theta1 if k == n - 1 else t0 + d
+        a[j + 1], b[j + 1], w[j + 1] = math.cos(t1), math.sin(t1), 1.0
+        j += 2
+    return a, b, w, U
+
+
+@jit
+def arc_net(C, X, Y, radius, theta0, theta1):
+    """``(U, Pw)`` of the arc ``C + radius (cos t X + sin t Y)``, ``t`` in ``[theta0,
+    theta1]``: knots and homogeneous control points."""
+    a, b, w, U = arc_coeffs(theta0, theta1)
+    m = a.shape[0]
+    Pw = np.empty((m, 4))
+    for j in range(m):
+        for c in range(3):
+            Pw[j, c] = (C[c] + radius * (a[j] * X[c] + b[j] * Y[c])) * w[j]
+        Pw[j, 3] = w[j]
+    return U, Pw
+
