@@ -73,6 +73,7 @@ from geomkit.mesh.cells import (CELL_TARGET, EXACT_ABOVE, adaptive_cells, breakp
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import points, weld, weld_grid
+from geomkit._kernels.tess_trim import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
                                          packed_trims, planar_trimmed)
 from geomkit.validate import as_int
@@ -133,30 +134,41 @@ def _planar_stats(seconds: float) -> dict:
 
 def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: float,
                   size: float, t0: float):
-    """A trimmed surface on one uniform grid (:func:`geomkit.mesh.quadtree.uniform_grid`,
-    every cell's better two-triangle split measured within ``tol``): cells inside the
-    region keep their two triangles, cells the trim crosses are clipped and
-    triangulated (step 3) and their triangles measured.  None when the grid is refused
-    or a clipped triangle measures above ``tol``: the adaptive cells take over."""
-    grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                           GRID_CELLS)
-    if grid is None:
-        return None
-    tri_uv, dev, cells, _ = grid
-    state = trim.classify_uv(cells)
-    cut = np.nonzero(state == 2)[0]
-    keep = np.repeat(state == 1, 2)  # two triangles per cell, in cell order
-    tri_uv, dev = tri_uv[keep], dev[keep]
-    if len(cut):
-        inside = cells[state == 1]
-        cuv, _ = triangulate_pieces(clip_rectangles(
-            cells[cut], trim, float(np.sum((inside[:, 1] - inside[:, 0])
-                                           * (inside[:, 3] - inside[:, 2])))))
-        cdev = deviation(s, cuv, k, tol)
-        if not (cdev <= tol).all():
+    """A trimmed surface on one uniform grid (:func:`geomkit.mesh.quadtree.uniform_grid`):
+    cells inside the region keep their two triangles, cells the trim crosses are
+    clipped and triangulated (step 3).  First the grid whose cells are measured with
+    ``pair``, every kept triangle then measured again within its cell's group
+    (:func:`_grouped_deviation`: feet inside the face); if one fails, the grid of the
+    single-triangle measure, its clipped triangles measured alone.  None when the
+    grid is refused or a triangle measures above ``tol``: the adaptive cells take
+    over."""
+    for pair in (True, False):
+        grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
+                               GRID_CELLS, pair=pair)
+        if grid is None:
             return None
-        tri_uv = np.concatenate([tri_uv, cuv])
-        dev = np.concatenate([dev, cdev])
+        tri_uv, dev, cells, _ = grid
+        state = trim.classify_uv(cells)
+        cut = np.nonzero(state == 2)[0]
+        keep = np.repeat(state == 1, 2)  # two triangles per cell, in cell order
+        tri_uv, dev = tri_uv[keep], dev[keep]
+        cuv = cown = None
+        if len(cut):
+            inside = cells[state == 1]
+            cuv, cown = triangulate_pieces(clip_rectangles(
+                cells[cut], trim, float(np.sum((inside[:, 1] - inside[:, 0])
+                                               * (inside[:, 3] - inside[:, 2])))))
+        if pair:
+            tri_uv, dev = _grouped(s, tri_uv, cuv, cown, k, tol)
+            if tri_uv is not None:
+                break
+            continue
+        if cuv is not None:
+            cdev = deviation(s, cuv, k, tol)
+            if not (cdev <= tol).all():
+                return None
+            tri_uv = np.concatenate([tri_uv, cuv])
+            dev = np.concatenate([dev, cdev])
     if not len(tri_uv):
         return None
     V, F, UV, good = weld(s, tri_uv, size, near_uv=bool(len(cut)))
@@ -164,8 +176,42 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
              "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
-             "seconds": time.perf_counter() - t0}
+             "grouped": pair, "seconds": time.perf_counter() - t0}
     return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
+def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
+    """The inside cells' triangle pairs ``tri_uv`` and the cut cells' clipped triangles
+    ``cuv`` (of piece ``cown``) together, measured by :func:`_grouped_deviation`;
+    ``(None, None)`` when a triangle is above ``tol``."""
+    n = len(tri_uv) // 2
+    group = np.repeat(np.arange(n), 2)
+    if cuv is not None and len(cuv):
+        order = np.argsort(cown, kind="stable")
+        cuv, cown = cuv[order], cown[order]
+        _, cg = np.unique(cown, return_inverse=True)
+        tri_uv = np.concatenate([tri_uv, cuv])
+        group = np.concatenate([group, n + cg.ravel()])
+    dev = _grouped_deviation(s, tri_uv, group, k, tol)
+    if not (dev <= tol).all():
+        return None, None
+    return tri_uv, dev
+
+
+def _grouped_deviation(s: Surface, tri_uv, group, k: int, tol: float):
+    """(n,) measured deviation of UV triangles in consecutive groups ``group`` (n,),
+    each group one cell's part of the face
+    (:func:`geomkit._kernels.tess_trim.group_deviation`)."""
+    out = np.empty(len(tri_uv))
+    if not len(tri_uv):
+        return out
+    sub = np.ascontiguousarray(tri_uv)
+    xyz = points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+    starts = np.searchsorted(group, np.arange(int(group[-1]) + 2)).astype(np.int64)
+    group_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, sub, xyz,
+                    np.ascontiguousarray(group, dtype=np.int64), starts, k,
+                    EXACT_ABOVE * tol, out)
+    return out
 
 
 def _box_grid(s: Surface, box, ub, vb, m: int, k: int, tol: float, size: float,
