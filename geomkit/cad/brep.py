@@ -256,10 +256,30 @@ class _Edge:
                 self._cache[pk] = X
                 v = ab, rho
             self._cache[key] = v
-        ab, rho = v
+        ab, rho = v[0], v[1]
         if self.reverse:
             return ab[::-1].copy(), rho[::-1]
         return ab.copy(), rho
+
+    def spread(self, n: int) -> float:
+        """The largest extent along x, y or z of :meth:`points` (kept)."""
+        key = ("spread", id(self.curve), n)
+        v = self._cache.get(key)
+        if v is None:
+            v = self._cache[key] = float(np.ptp(self.points(n), axis=0).max())
+        return v
+
+    def nearest_axis(self, srf, n: int) -> float:
+        """The least distance of :meth:`local`'s samples from the surface's axis
+        (``-inf`` when one is NaN), kept with them."""
+        key = (srf, id(self.curve), n)
+        v = self._cache.get(key)
+        if v is None or len(v) == 2:
+            self.local(srf, n)
+            ab, rho = self._cache[key]
+            lo = float(rho.min())
+            v = self._cache[key] = (ab, rho, -math.inf if lo != lo else lo)
+        return v[2]
 
     def unwrapped(self, srf, n: int, c: int) -> np.ndarray:
         """``unwrap`` of coordinate ``c`` of :meth:`local` (read-only), computed once
@@ -354,10 +374,12 @@ def _chain(srf, loop, size):
     apex = None  # the last edge that starts at a pole from another edge's end
     for e in loop:
         ab, rho = e.local(srf, _NS)
-        pole = rho <= 1e-9 * size
-        if pole.all():
+        # (the pole flags only when a sample may lie on the axis)
+        pole = rho <= 1e-9 * size if e.nearest_axis(srf, _NS) <= 1e-9 * size else None
+        if pole is not None and pole.all():
             raise Unsupported("an edge lies on the surface's axis")
-        if pole.any():  # angle undefined on the axis: take the neighbour's
+        polar = pole is not None and bool(pole.any())
+        if polar:  # angle undefined on the axis: take the neighbour's
             good = np.nonzero(~pole)[0]
             idx = good[np.clip(np.searchsorted(good, np.arange(len(s))), 0, len(good) - 1)]
             ab[pole, 1] = ab[idx[pole], 1]
@@ -365,7 +387,7 @@ def _chain(srf, loop, size):
         for c in (0, 1):
             if not srf.periodic[c]:
                 continue
-            ab[:, c] = unwrap(ab[:, c]) if pole.any() else e.unwrapped(srf, _NS, c)
+            ab[:, c] = unwrap(ab[:, c]) if polar else e.unwrapped(srf, _NS, c)
             if prev is None:
                 continue
             if c == 1 and prev_pole and e.key in first:
@@ -378,7 +400,7 @@ def _chain(srf, loop, size):
         ab = ab + shift
         first.setdefault(e.key, ab)
         out.append(ab)
-        prev, prev_pole = ab[-1], bool(pole[-1])
+        prev, prev_pole = ab[-1], pole is not None and bool(pole[-1])
     if apex is not None and srf.periodic[1]:
         # at a pole the angle jumps by any amount (a sector of a cone from its apex
         # jumps by its opening, a half cone by exactly pi, either way round): the

@@ -54,7 +54,9 @@ def _angles(srf, e, n=65, full=False):
     """Unwrapped angles about the axis along edge ``e``; None when it reaches the
     axis (a pole or an apex), unless ``full``: then the angle there is the
     neighbour's."""
-    ab, rho = e.local(srf, n)  # (first: the samples and their inverse in one call)
+    if e.nearest_axis(srf, n) > 1e-9 * max(1.0, e.spread(n)):  # (first: the samples and
+        return e.unwrapped(srf, n, 1)  # their inverse in one call)
+    ab, rho = e.local(srf, n)
     X = e.points(n)
     b = ab[:, 1]
     on = rho <= 1e-9 * max(1.0, float(np.ptp(X, axis=0).max()))
