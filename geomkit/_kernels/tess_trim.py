@@ -1,16 +1,19 @@
-"""Trim polylines for tessellation: adaptive subdivision in one kernel call per surface.
+"""Trim polylines for tessellation: one kernel call per surface.
 
 A trim piece ``C(t)`` (a rational 2-D curve) on a surface ``S`` becomes the polyline
-through ``C(t_i)``, starting from the piece's knots; a segment ``[ta, tb]`` is accepted
-when the points ``S(C(ta + f (tb - ta)))`` and ``S(C(ta) + f (C(tb) - C(ta)))`` (the
-exact boundary curve, and the image of the UV chord, which the mesh boundary also
-follows where it crosses cell edges) all lie within ``chord_tol`` of the 3-D chord
-``S(C(ta))``--``S(C(tb))``, for ``f`` in ``{1/4, 1/2, 3/4}`` and, on a curved piece of
-few spans, at every point of the knot span's 1/16 grid inside the segment; otherwise
-it is split into ``k`` equal parameter parts, ``k`` predicted from the measured error
-(chord errors fall with the square of the step), each part tested again.  Curve
-points are clipped to the domain box (trim curves may stray outside it by the
-validation tolerance).
+through ``C(t_i)``.  Its vertices include every knot where the curve has a corner (and
+every knot of a polyline); between them the curve is marched: a segment ``[ta, tb]``
+is accepted when the points ``S(C(t))`` and ``S(C(ta) + f (C(tb) - C(ta)))`` (the exact
+boundary curve, and the image of the UV chord, which the mesh boundary also follows
+where it crosses cell edges) all lie within ``chord_tol`` of the 3-D chord
+``S(C(ta))``--``S(C(tb))`` at the quarter points of its part in each knot span and at
+the knots it crosses (and, on a curved piece of few spans, at every point of the knot
+span's 1/16 grid inside a part longer than a quarter span); each step is the rest of
+the run in equal parts of at most the current step estimate, which a failing part
+shrinks by its measured error (chord errors fall with the square of the step) and a
+passing one lets grow.  Curve points are clipped to the domain box (trim curves may
+stray outside it by the validation tolerance).  Also here: the grouped measure of a
+trimmed grid's triangles (:func:`group_deviation`).
 """
 
 from __future__ import annotations
@@ -23,10 +26,15 @@ from .surface import surface_derivs, surface_point
 from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _dist3, _run,
                    point_triangle_distance)
 
-MAX_DEPTH = 60
-"""Splits of one starting segment at most (the parameter step then reaches rounding)."""
+TINY_STEP = 2.0 ** -50
+"""A segment this short (a fraction of its knot span) is accepted as it is: the step
+has reached rounding."""
 MAX_PARTS = 64
-"""A failing segment is split into at most this many equal parameter parts."""
+"""A failing step shrinks at most this many times."""
+SMOOTH_SIN = 1e-9
+"""A knot of full multiplicity is crossed by segments when the control polygon's
+directions before and after it agree within this sine (the curve is tangent-
+continuous there); any other such knot, and every knot of a polyline, is a vertex."""
 SPLIT_AIM = 0.8
 """Parts are sized for a predicted chord error of ``SPLIT_AIM * chord_tol``."""
 
@@ -66,6 +74,85 @@ def _chord_gap(X, Pa, d0, d1, d2, ll):
 
 
 @jit_inline
+def _smooth_knot(CP, a0, Uc, pc, i):
+    """Whether the curve is tangent-continuous at its knot ``Uc[i]`` (first of its
+    copies): a multiplicity below the degree, or the control points before and after
+    the knot's point (``CP[a0 + i - 1]`` at full multiplicity) in one direction."""
+    m = 1
+    while i + m < Uc.shape[0] and Uc[i + m] == Uc[i]:
+        m += 1
+    if m < pc:
+        return True
+    if m > pc:
+        return False
+    r = a0 + i - 1
+    l0 = CP[r, 0] - CP[r - 1, 0]
+    l1 = CP[r, 1] - CP[r - 1, 1]
+    r0 = CP[r + 1, 0] - CP[r, 0]
+    r1 = CP[r + 1, 1] - CP[r, 1]
+    ll = np.sqrt(l0 * l0 + l1 * l1)
+    rr = np.sqrt(r0 * r0 + r1 * r1)
+    if not (ll > 0.0 and rr > 0.0):
+        return False
+    return l0 * r0 + l1 * r1 > 0.0 and abs(l0 * r1 - l1 * r0) <= SMOOTH_SIN * ll * rr
+
+
+@jit
+def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, lo0, lo1,
+                 hi0, hi1, Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X):
+    """The largest distance from the 3-D chord ``Pa``--``Pb`` of the segment
+    ``[ta, tb]`` (UV ends ``(ua, va)``, ``(ub, vb)``) of the curve's points, and (with
+    ``uv_chords``) of the UV chord's images at the same fractions of the segment: on
+    each knot span the segment overlaps, at the quarter points of its part there and
+    at the knot ending it, and, on a ``dense`` piece where that part is longer than a
+    quarter of the span, at the span's 1/16 grid inside it (see
+    :func:`trim_polylines`)."""
+    d0 = Pb[0] - Pa[0]
+    d1 = Pb[1] - Pa[1]
+    d2 = Pb[2] - Pa[2]
+    ll = d0 * d0 + d1 * d1 + d2 * d2
+    worst = 0.0
+    span = find_span(Pc.shape[0] - 1, pc, ta, Uc)
+    k0 = Uc[span]
+    while True:
+        k1 = Uc[span + 1]
+        s0 = max(ta, k0)
+        s1 = min(tb, k1)
+        h = (k1 - k0) / 16.0
+        grid = dense and s1 - s0 > 4.0 * h  # (a part of at most a quarter span: its
+        for e in range(1, 20):              # quarter points are as dense as the grid)
+            if e < 4:
+                t = s0 + (s1 - s0) * (0.25 * e)
+            elif e == 4:
+                if s1 >= tb:
+                    continue  # the segment's end: a chord end
+                t = s1  # the knot ending the part
+            else:
+                if not grid:
+                    break
+                t = k0 + (e - 4) * h
+                if t <= s0:
+                    continue
+                if t >= s1:
+                    break
+            su, sv = _curve_at(Pc, pc, Uc, t, lo0, lo1, hi0, hi1, Nc, lc, rc)
+            surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+            worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+            if uv_chords:
+                f = (t - ta) / (tb - ta)
+                surface_point(Pw, p, q, U, V, ua + (ub - ua) * f, va + (vb - va) * f, Nu,
+                              Nv, left, right, tmp, X)
+                worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+        if s1 >= tb:
+            break
+        span += 1
+        while Uc[span + 1] <= k1:
+            span += 1
+        k0 = k1
+    return worst
+
+
+@jit_inline
 def _emit(out, n, t, u, v):
     """Row ``n`` of ``out`` set to ``(t, u, v)``: ``n + 1``, or -1 when ``out`` is full."""
     if n >= out.shape[0]:
@@ -83,7 +170,10 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
 
     Piece ``c`` has degree ``deg[c]``, control points ``CP[cp_off[c]:cp_off[c+1]]``
     (n, 2) with weights ``W[...]`` and knots ``K[k_off[c]:k_off[c+1]]``.  Each piece
-    starts from its distinct knots (a segment never crosses a knot).  A segment
+    keeps as vertices its knots where it is not tangent-continuous
+    (:func:`_smooth_knot`; every knot of a polyline) and is marched between them (see
+    the module docstring); a segment is tested at its parts' quarter points in every
+    knot span it overlaps and at the knots it crosses (:func:`_segment_gap`).  A segment
     ``[ta, tb]`` is accepted when the curve points ``S(C(t))`` and the UV-chord
     points (``uv_chords``; False for a surface that is an affine map of its
     parameters, where they lie on the 3-D chord) are within ``chord_tol`` of the 3-D
@@ -92,8 +182,8 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
     of the span's 1/16 grid inside it: sample spacing at most 1/16 of the span on every
     segment, as when such pieces started from 5 seeds a span and checked quarter
     points (the route before, which put 1.2-1.7x the points on gentle curves).  A
-    failing segment is split into ``k`` equal parts, ``k`` from the measured error (see
-    the module docstring).  A degree-1 non-rational piece with distinct knots keeps its control
+    failing segment shortens the step by its measured error (see the module
+    docstring).  A degree-1 non-rational piece with distinct knots keeps its control
     points exactly as its seeds (``C(t_i) = P_i``).
 
     Writes ``(t, u, v)`` rows into ``out`` piece after piece (each piece from its
@@ -108,7 +198,6 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
     Pa = np.empty(3)
     Pb = np.empty(3)
     X = np.empty(3)
-    stack = np.empty(((MAX_DEPTH + 2) * MAX_PARTS, 7))
     n = 0
     for c in range(deg.shape[0]):
         pc = deg[c]
@@ -144,92 +233,71 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
             ua, va = _curve_at(Pc, pc, Uc, ta, lo0, lo1, hi0, hi1, Nc, lc, rc)
         surface_point(Pw, p, q, U, V, ua, va, Nu, Nv, left, right, tmp, Pa)
         seed = 0
-        for i in range(pc + 1, kend):
+        i = pc + 1
+        while i < kend:
             if not Uc[i] > Uc[i - 1]:
+                i += 1
                 continue
+            # the run [A, B]: from here over the knots the curve is smooth across (a
+            # polyline stops at every knot: its corners stay vertices)
             seed += 1
-            a = ta  # the span [a, b]: segments split from it stay inside
-            tb = Uc[i]
-            h = (tb - a) / 16.0
+            A = ta
+            while not polyline and i < kend - 1 and _smooth_knot(CP, a0, Uc, pc, i):
+                i += 1
+                while i < kend and not Uc[i] > Uc[i - 1]:
+                    i += 1
+            B = Uc[i]
+            i += 1
             if exact:
                 ub = min(max(CP[a0 + seed, 0], lo0), hi0)
                 vb = min(max(CP[a0 + seed, 1], lo1), hi1)
             else:
-                ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
+                ub, vb = _curve_at(Pc, pc, Uc, B, lo0, lo1, hi0, hi1, Nc, lc, rc)
             surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
-            stack[0, 0] = tb
-            stack[0, 1] = ub
-            stack[0, 2] = vb
-            stack[0, 3] = Pb[0]
-            stack[0, 4] = Pb[1]
-            stack[0, 5] = Pb[2]
-            stack[0, 6] = 0
-            top = 1
-            while top > 0:
-                tb = stack[top - 1, 0]
-                ub = stack[top - 1, 1]
-                vb = stack[top - 1, 2]
-                depth = int(stack[top - 1, 6])
-                d0 = stack[top - 1, 3] - Pa[0]
-                d1 = stack[top - 1, 4] - Pa[1]
-                d2 = stack[top - 1, 5] - Pa[2]
-                ll = d0 * d0 + d1 * d1 + d2 * d2
-                worst = 0.0
-                for s in range(6 if uv_chords else 3):
-                    f = 0.25 * (s % 3 + 1)
-                    if s < 3:
-                        su, sv = _curve_at(Pc, pc, Uc, ta + (tb - ta) * f, lo0, lo1, hi0,
-                                           hi1, Nc, lc, rc)
-                    else:
-                        su = ua + (ub - ua) * f
-                        sv = va + (vb - va) * f
-                    surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
-                    worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
-                if dense and tb - ta > 4.0 * h:  # the span's 1/16 grid inside the segment
-                    # (a segment of at most a quarter span: its quarter points are as dense)
-                    j = int(np.floor((ta - a) / h)) + 1
-                    while j < 16:
-                        g = a + j * h
-                        j += 1
-                        if g <= ta:
-                            continue
-                        if g >= tb:
-                            break
-                        su, sv = _curve_at(Pc, pc, Uc, g, lo0, lo1, hi0, hi1, Nc, lc, rc)
-                        surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
-                        worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
-                        if uv_chords:
-                            f = (g - ta) / (tb - ta)
-                            surface_point(Pw, p, q, U, V, ua + (ub - ua) * f,
-                                          va + (vb - va) * f, Nu, Nv, left, right, tmp, X)
-                            worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
-                if worst > chord_tol and depth < MAX_DEPTH:
-                    k = int(np.ceil(np.sqrt(worst / (SPLIT_AIM * chord_tol))))
-                    k = min(max(k, 2), MAX_PARTS)
-                    stack[top - 1, 6] = depth + 1
-                    for j in range(k - 1, 0, -1):
-                        tm = ta + (tb - ta) * (j / k)
-                        um, vm = _curve_at(Pc, pc, Uc, tm, lo0, lo1, hi0, hi1, Nc, lc, rc)
-                        surface_point(Pw, p, q, U, V, um, vm, Nu, Nv, left, right, tmp, X)
-                        stack[top, 0] = tm
-                        stack[top, 1] = um
-                        stack[top, 2] = vm
-                        stack[top, 3] = X[0]
-                        stack[top, 4] = X[1]
-                        stack[top, 5] = X[2]
-                        stack[top, 6] = depth + 1
-                        top += 1
+            # march from A to B: each step is the rest of the run in equal parts of at
+            # most `step`, the first part tested (:func:`_segment_gap`); a failing part
+            # shrinks `step` by its measured error (chord errors fall with the square
+            # of the step), a passing one is emitted and lets `step` grow by its margin
+            ue = ub
+            ve = vb
+            e0 = Pb[0]
+            e1 = Pb[1]
+            e2 = Pb[2]
+            tiny = (B - A) * TINY_STEP
+            step = B - A
+            while ta < B:
+                rest = B - ta
+                parts = max(1, int(np.ceil(rest / step - 1e-9)))
+                tb = ta + rest / parts if parts > 1 else B
+                if tb >= B:
+                    tb = B
+                    ub = ue
+                    vb = ve
+                    Pb[0] = e0
+                    Pb[1] = e1
+                    Pb[2] = e2
+                else:
+                    ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
+                    surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
+                worst = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
+                                     uv_chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
+                                     Nc, lc, rc, Nu, Nv, left, right, tmp, X)
+                if worst > chord_tol and tb - ta > tiny:
+                    r = np.sqrt(SPLIT_AIM * chord_tol / worst)
+                    step = (tb - ta) * min(max(r, 1.0 / MAX_PARTS), 0.9)
                     continue
                 n = _emit(out, n, ta, ua, va)
                 if n < 0:
                     return -1
+                grow = 2.0 if not worst > 0.0 else min(max(
+                    np.sqrt(SPLIT_AIM * chord_tol / worst), 1.0), 2.0)
+                step = max(step, (tb - ta) * grow)
                 ta = tb
                 ua = ub
                 va = vb
-                Pa[0] = stack[top - 1, 3]
-                Pa[1] = stack[top - 1, 4]
-                Pa[2] = stack[top - 1, 5]
-                top -= 1
+                Pa[0] = Pb[0]
+                Pa[1] = Pb[1]
+                Pa[2] = Pb[2]
         n = _emit(out, n, ta, ua, va)
         if n < 0:
             return -1

@@ -297,3 +297,44 @@ def test_speed_bound_kernel_matches_its_numpy_formula():
             d = np.diff(U)
             want += 4.0 * deg * ratio * D / float(d[d > 0].min())
         assert abs(speed_bound(s) - want) <= 1e-14 * want
+
+
+def _parabola_pieces(n, kink=None):
+    """``y = 0.2 + 0.6 x^2`` (x in [0.1, 0.9]) as a quadratic B-spline of ``n`` spans,
+    every interior knot of full multiplicity (each span the parabola's own Bezier
+    piece: tangent-continuous at every knot); with ``kink = j`` the middle control
+    points next to knot j are moved off so the curve has a corner there."""
+    from geomkit.nurbs.trims import TrimCurve
+
+    x = np.linspace(0.1, 0.9, n + 1)
+    P = [[x[0], 0.2 + 0.6 * x[0] ** 2]]
+    for i in range(n):
+        m = [0.5 * (x[i] + x[i + 1]), 0.2 + 0.6 * x[i] * x[i + 1]]
+        if kink is not None and i in (kink - 1, kink):
+            m[1] += 1e-4  # a corner of 1e-3 in 3-D: a chord across it would pass
+        P += [m, [x[i + 1], 0.2 + 0.6 * x[i + 1] ** 2]]
+    t = np.linspace(0.0, 1.0, n + 1)
+    knots = [0.0] * 3 + [v for v in t[1:-1] for _ in range(2)] + [1.0] * 3
+    return TrimCurve.create(2, knots, np.array(P)), t
+
+
+def test_smooth_knots_are_crossed_and_corners_kept():
+    """A quadratic piece of 40 spans, every knot of full multiplicity: where the curve
+    is tangent-continuous (all knots) its segments run across knots, far fewer
+    vertices than knots, every segment within ``chord_tol``; with a corner at one
+    knot (too small for the chord test to see), that knot is a vertex."""
+    from geomkit.nurbs.trims import TrimCurve
+
+    gu, gv = np.meshgrid(np.linspace(0, 10, 2), np.linspace(0, 10, 2), indexing="ij")
+    flat = np.stack([gu, gv, 0 * gu], axis=-1)
+    for kink in (None, 17):
+        arc, t = _parabola_pieces(40, kink)
+        P = arc.control_points
+        back = TrimCurve.create(1, [0, 0, 1, 1], [P[-1], P[0]])
+        s = Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], flat, trim=[[arc, back]])
+        chord_tol = 1e-2
+        rows = _kernel(s, [arc, back], chord_tol, uv_chords=False)
+        _check_piece(s, arc, rows[0], chord_tol, uv_chords=False)
+        assert len(rows[0]) < 20, len(rows[0])
+        if kink is not None:
+            assert t[kink] in rows[0][:, 0]
