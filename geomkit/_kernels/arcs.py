@@ -1,7 +1,8 @@
 """Exact rational quadratic arcs: the control nets the CAD readers build thousands of
 (every circle edge), each in one call with the arithmetic of the numpy formulas they
-replace (:func:`geomkit.cad.analytic.arc_curve`): the same operations in the same
-order, none contracted, so the same values.
+replace (:func:`geomkit.cad.analytic.arc_curve`, and the arc coefficients of
+:func:`geomkit.cad.analytic.revolve`): the same operations in the same order, none
+contracted, so the same values.
 
 An arc ``[theta0, theta1]`` has ``n = ceil(sweep / (pi / 2))`` spans of angle ``d``;
 its knots are the span ends, doubled inside; per span the control points are the span

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from geomkit._kernels.arcs import arc_net
+from geomkit._kernels.arcs import arc_coeffs, arc_net
 from geomkit._kernels.bezier import curve_points
 from geomkit._kernels.pcurve_map import unwrap_angles
 
@@ -49,22 +49,6 @@ def arc_knots(theta0: float, theta1: float):
     ks[-1] = theta1
     U = np.concatenate([[theta0] * 3, np.repeat(ks[1:-1], 2), [theta1] * 3])
     return n, d, U
-
-
-def _arc_coeffs(theta0: float, theta1: float):
-    """``(a, b, w)`` per control point: point = O + r (a X + b Y), weight w."""
-    n, d, U = arc_knots(theta0, theta1)
-    wm = math.cos(d / 2)
-    a, b, w = [], [], []
-    for k in range(n):
-        t0 = theta0 + k * d
-        tm = t0 + d / 2
-        if k == 0:
-            a.append(math.cos(t0)); b.append(math.sin(t0)); w.append(1.0)
-        a.append(math.cos(tm) / wm); b.append(math.sin(tm) / wm); w.append(wm)
-        t1 = theta1 if k == n - 1 else t0 + d
-        a.append(math.cos(t1)); b.append(math.sin(t1)); w.append(1.0)
-    return np.array(a), np.array(b), np.array(w), U
 
 
 def cross3(a, b) -> np.ndarray:
@@ -196,7 +180,9 @@ def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
     S = np.asarray(axis_point, float)
     T = np.asarray(axis_dir, float)
     T = T / norm3(T)
-    a, b, wa, V = _arc_coeffs(theta0, theta1)
+    if not (theta1 - theta0 > 0 and math.isfinite(theta1 - theta0)):
+        raise ValueError(f"arc sweep must be finite and > 0, got {theta1 - theta0!r}")
+    a, b, wa, V = arc_coeffs(float(theta0), float(theta1))
     wc = Pw[:, 3]
     P = Pw[:, :3] / wc[:, None]
     n, m = P.shape[0], a.size
