@@ -34,7 +34,7 @@ from geomkit.cad.loose import duplicate_faces
 from geomkit.cad.loops import Unsupported, finish_loop
 from geomkit.cad.p21 import P21, Ref, read_p21
 from geomkit.cad.stepasm import instances
-from geomkit.cad.stepedges import fields, line_and_circle_edges
+from geomkit.cad.stepedges import fields_of, line_and_circle_edges
 from geomkit.cad.stepgeom import StepGeometry, reverse_curve
 from geomkit.cad.stepseam import cap_point, cut_at_seam, merge_winding, start_inside
 from geomkit.errors import FileFormatError, InvalidInputError, InvalidSurfaceError
@@ -198,6 +198,8 @@ class _Faces:
         self.p, self.g = p, geom
         self._edges: dict = line_and_circle_edges(p)  # id -> its curve (see edge)
         self._samples: dict = {}  # (id(edge curve), n) -> its points
+        ids = p.of_type("ORIENTED_EDGE")  # id -> (edge id, same sense), plain ones
+        self._oriented = dict(zip(ids, fields_of(p, ids, "ORIENTED_EDGE")))
 
     def edge(self, i):
         """The edge curve (exact NURBS) run from its start vertex to its end vertex."""
@@ -247,7 +249,7 @@ class _Faces:
                 continue
             edges = []
             for oe in la[1]:
-                f = fields(self.p, oe, "ORIENTED_EDGE")
+                f = self._oriented.get(int(oe))
                 if f is None:
                     _, oa = self.g.rec(oe, "ORIENTED_EDGE")
                     key, rev = int(oa[3]), oa[4] is False
