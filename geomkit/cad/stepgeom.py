@@ -48,6 +48,7 @@ class Curve:
         self.kind = kind
         self.__dict__.update(kw)
         self.period = TWO_PI if kind in ("circle", "ellipse") else None
+        self._ends = None  # a B-spline's Cartesian control points and 1e-6 x extent
 
     def param(self, X) -> float:
         X = np.asarray(X, float)
@@ -68,8 +69,10 @@ class Curve:
         # extent of it on the outer side of the end's tangent (the end is then the
         # local minimum Newton would reach, clamped)
         # (the nearer end of a closed curve)
-        P = Pw[:, :3] / Pw[:, 3:]
-        near = 1e-6 * float(np.ptp(P, axis=0).max())
+        if self._ends is None:  # (kept: each of an edge's two vertices asks)
+            P = Pw[:, :3] / Pw[:, 3:]
+            self._ends = P, 1e-6 * float(np.ptp(P, axis=0).max())
+        P, near = self._ends
         best = None
         for k, t, ends, step in ((0, lo, U[:p + 1], P[1] - P[0]),
                                  (-1, hi, U[-p - 1:], P[-2] - P[-1])):

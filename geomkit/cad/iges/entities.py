@@ -56,6 +56,8 @@ def restrict(p, U, Pw, t0, t1):
     U = np.asarray(U, float)
     n = Pw.shape[0]
     lo, hi = U[p], U[n]
+    if t0 <= lo and t1 >= hi:  # the whole curve (most edges)
+        return U, Pw
     t0 = max(t0, lo)
     t1 = min(t1, hi) if t1 > t0 else hi
     eps = 1e-12 * (hi - lo)
