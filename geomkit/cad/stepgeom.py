@@ -12,6 +12,7 @@ here), a B-spline's its knots.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -26,6 +27,16 @@ from geomkit._kernels.bezier import curve_nearest_param
 __all__ = ["StepGeometry", "Curve", "reverse_curve"]
 
 TWO_PI = 2.0 * math.pi
+
+_NUM = r"[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?"
+_ENUM = r"\s*,\s*\.[A-Za-z_]+\."
+_BSPLINE_CURVE = re.compile(
+    r"B_SPLINE_CURVE_WITH_KNOTS\s*\(\s*'[^']*'\s*,\s*(\d+)\s*,"
+    r"\s*\(\s*(#\d+(?:\s*,\s*#\d+)*)\s*\)" + _ENUM * 3 + r"\s*,"
+    r"\s*\(\s*(\d+(?:\s*,\s*\d+)*)\s*\)\s*,"
+    r"\s*\(\s*(" + _NUM + r"(?:\s*,\s*" + _NUM + r")*)\s*\)" + _ENUM + r"\s*\)")
+"""A writer's plain B-spline curve record: a label, the degree, the control points'
+references, three enumerations, the multiplicities and the knots, an enumeration."""
 
 
 def reverse_curve(curve):
@@ -221,6 +232,14 @@ class StepGeometry:
         return c
 
     def _curve(self, i) -> Curve:
+        if self.p.names.get(i) == "B_SPLINE_CURVE_WITH_KNOTS":  # read at once when plain
+            m = _BSPLINE_CURVE.fullmatch(self.p.body(i))
+            if m is not None:
+                a = ["", int(m[1]), [int(x.strip()[1:]) for x in m[2].split(",")], None,
+                     None, None, [int(x) for x in m[3].split(",")],
+                     [float(x) for x in m[4].split(",")]]
+                return Curve("bspline", spline=self._bspline_curve(
+                    i, "B_SPLINE_CURVE_WITH_KNOTS", a))
         name, a = self.rec(i, "LINE", "CIRCLE", "ELLIPSE", "B_SPLINE_CURVE_WITH_KNOTS",
                            "B_SPLINE_CURVE", "BEZIER_CURVE", "SURFACE_CURVE",
                            "SEAM_CURVE", "INTERSECTION_CURVE", "TRIMMED_CURVE",

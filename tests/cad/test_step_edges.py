@@ -150,3 +150,26 @@ def test_fields_of_many_records_are_each_records_fields():
     p._raw[6] = "VECTOR('',#5,\x00 2.)"  # a separator inside a record: record by record
     assert stepedges.fields_of(p, [6, 9], "VECTOR") == [None, None]
     assert stepedges.fields_of(p, [9], "EDGE_CURVE") == [(3, 4, 8, True)]
+
+
+def test_bspline_curves_read_at_once_are_the_parsers():
+    """Every plain B_SPLINE_CURVE_WITH_KNOTS record of the parts, read by its regex,
+    gives the curve the parser's fields give; a record not of the plain form (an
+    escaped quote in its label, a knot of another form) is read by the parser."""
+    from geomkit.cad.stepgeom import _BSPLINE_CURVE
+
+    seen = 0
+    for path in PARTS:
+        p = read_p21(path)
+        g = StepGeometry(p)
+        for i in p.of_type("B_SPLINE_CURVE_WITH_KNOTS"):
+            seen += _BSPLINE_CURVE.fullmatch(p.body(i)) is not None
+            a = g._curve(i).spline
+            b = g._bspline_curve(i, *g.rec(i, "B_SPLINE_CURVE_WITH_KNOTS"))
+            assert a[0] == b[0] and np.array_equal(a[1], b[1]) and np.array_equal(a[2], b[2])
+    assert seen > 400
+    body = ("B_SPLINE_CURVE_WITH_KNOTS('{}',2,(#1,#2,#3),.UNSPECIFIED.,.F.,.F.,(3,3),"
+            "({}),.UNSPECIFIED.)")
+    assert _BSPLINE_CURVE.fullmatch(body.format("a", "0.,1.")) is not None
+    assert _BSPLINE_CURVE.fullmatch(body.format("it''s", "0.,1.")) is None
+    assert _BSPLINE_CURVE.fullmatch(body.format("a", "0.,PARAMETER_VALUE(1.)")) is None
