@@ -15,6 +15,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
+from .bezier import de_casteljau_split
 from .section_project import _project_point, point_scratch
 from .surface import D1, _binomial_table, derivs_scratch
 from .trim import (MAX_DEPTH as TRIM_MAX_DEPTH, OUTSIDE as TRIM_OUTSIDE, _segment_winding,
@@ -110,16 +111,135 @@ def _bin_of(y, vlo, w, nb):
     return int(t)
 
 
+TREE_NODES = 2048
+""":func:`winding_tree` holds at most this many halved trim segments (a face's trims
+past them are walked as :func:`.trim._segment_winding` walks them, halving anew)."""
+
+
+@jit
+def winding_tree(seg):
+    """Scratch for :func:`_tree_winding`: the halvings of the trim segments ``seg`` (as
+    packed by ``Surface.trim_segments``) made so far, kept for the next points.
+
+    ``(root, pieces, box, child, depth, count)``: ``root[s]`` the node of segment ``s``
+    (-1 until needed), ``pieces[k]`` a node's control points, ``box[k]`` its
+    ``xmin, xmax, ymin, ymax`` and its ends ``x1, y1, x2, y2`` (as
+    :func:`.trim._segment_winding` computes them), ``child[k]`` its first half (-1:
+    not halved yet; the second half follows it), ``depth[k]`` its halvings from the
+    segment, ``count[0]`` the nodes used.  No room when every segment is a line."""
+    S = seg.shape[0]
+    p1 = seg.shape[1]
+    n = TREE_NODES if p1 > 2 else 0
+    return (np.full(S, -1, np.int64), np.empty((n, p1, 3)), np.empty((n, 8)),
+            np.empty(n, np.int64), np.empty(n, np.int64), np.zeros(1, np.int64))
+
+
+@jit
+def _tree_node(tree, k, deg, d):
+    """Fill node ``k``'s box and ends from its control points; depth ``d``, not halved."""
+    _root, pieces, box, child, depth, _count = tree
+    xmin = np.inf
+    xmax = -np.inf
+    ymin = np.inf
+    ymax = -np.inf
+    for i in range(deg + 1):
+        x = pieces[k, i, 0] / pieces[k, i, 2]
+        y = pieces[k, i, 1] / pieces[k, i, 2]
+        xmin = min(xmin, x)
+        xmax = max(xmax, x)
+        ymin = min(ymin, y)
+        ymax = max(ymax, y)
+    box[k, 0] = xmin
+    box[k, 1] = xmax
+    box[k, 2] = ymin
+    box[k, 3] = ymax
+    box[k, 4] = pieces[k, 0, 0] / pieces[k, 0, 2]
+    box[k, 5] = pieces[k, 0, 1] / pieces[k, 0, 2]
+    box[k, 6] = pieces[k, deg, 0] / pieces[k, deg, 2]
+    box[k, 7] = pieces[k, deg, 1] / pieces[k, deg, 2]
+    child[k] = -1
+    depth[k] = d
+
+
+@jit
+def _tree_winding(tree, s, Q, deg, px, py, tol, nodes, stack, depths, left, right):
+    """``_segment_winding(Q, deg, px, py, tol, ...)`` of trim segment ``s`` (``Q`` its
+    control points), the halvings taken from ``tree`` (:func:`winding_tree`) where an
+    earlier point made them, else made and kept there.
+
+    The same answer bit for bit: ``_segment_winding`` visits the nodes of one binary
+    tree of halvings (de Casteljau at 1/2 of the segment, of its halves, ...), which
+    does not depend on the point; a node's pieces, box and ends are computed from its
+    parent's pieces by the same operations, its tests are the same comparisons, and
+    the answer (the sum of the crossings of the nodes left whole, or on the boundary
+    when any node visited is small or deep) does not depend on the order of the
+    visits.  ``nodes`` (MAX_DEPTH + 2,) int scratch; a tree out of room walks the
+    segment as ``_segment_winding`` does (``stack``, ``depths``, ``left``, ``right``)."""
+    root, pieces, box, child, depth, count = tree
+    if deg == 1 or pieces.shape[0] == 0:
+        return _segment_winding(Q, deg, px, py, tol, stack, depths, left, right)
+    r = root[s]
+    if r < 0:
+        if count[0] + 1 > pieces.shape[0]:
+            return _segment_winding(Q, deg, px, py, tol, stack, depths, left, right)
+        r = count[0]
+        count[0] += 1
+        for i in range(deg + 1):
+            for c in range(3):
+                pieces[r, i, c] = Q[i, c]
+        _tree_node(tree, r, deg, 0)
+        root[s] = r
+    wind = 0
+    grow = 0.25 * tol
+    nodes[0] = r
+    top = 1
+    while top > 0:
+        top -= 1
+        k = nodes[top]
+        xmin = box[k, 0]
+        xmax = box[k, 1]
+        ymin = box[k, 2]
+        ymax = box[k, 3]
+        if px < xmin - grow or px > xmax + grow or py < ymin - grow or py > ymax + grow:
+            y1 = box[k, 5]
+            y2 = box[k, 7]
+            up = y1 <= py < y2
+            down = y2 <= py < y1
+            if (up or down) and px < xmin - grow:
+                wind += 1 if up else -1
+            continue
+        if max(xmax - xmin, ymax - ymin) <= grow or depth[k] >= TRIM_MAX_DEPTH:
+            return 0, True
+        c = child[k]
+        if c < 0:
+            if count[0] + 2 > pieces.shape[0]:
+                return _segment_winding(Q, deg, px, py, tol, stack, depths, left, right)
+            c = count[0]
+            count[0] += 2
+            de_casteljau_split(pieces[k, :deg + 1], 0.5, pieces[c, :deg + 1],
+                               pieces[c + 1, :deg + 1])
+            _tree_node(tree, c, deg, depth[k] + 1)
+            _tree_node(tree, c + 1, deg, depth[k] + 1)
+            child[k] = c
+        nodes[top] = c + 1
+        nodes[top + 1] = c
+        top += 2
+    return wind, False
+
+
 @jit
 def outside_binned(seg, seg_deg, seg_loop, nloops, u, v, box, tol, bins, winding, stack,
-                   depths, left, right):
+                   depths, left, right, tree, nodes):
     """``Surface.classify_uv((u, v), tol) == OUTSIDE``: outside the domain rectangle
     ``box`` by more than ``tol`` (:func:`_off_domain`), or outside the trim loops
     (``classify_point(...) == OUTSIDE``, the parity of the loops around the point),
     with ``bins = trim_bins(seg, seg_deg, t)`` for some ``t >= tol``: the same answer
     as ``classify_point``, walking only the segments of the bin holding ``v`` (the
-    others add nothing, see :func:`trim_bins`); a ``v`` that is not finite walks
-    every segment."""
+    others add nothing, see :func:`trim_bins`), their halvings kept in ``tree``
+    (:func:`winding_tree` of ``seg``; ``nodes`` its scratch, :func:`_tree_winding`)
+    unless it is None (each point's halvings made anew: cheaper for points that
+    need few, as most of :func:`.section_clip.chain_side`'s do); a ``v`` that is not
+    finite walks every segment."""
     if _off_domain(u, v, box, tol):
         return True
     if nloops == 0:
@@ -133,7 +253,12 @@ def outside_binned(seg, seg_deg, seg_loop, nloops, u, v, box, tol, bins, winding
     b = _bin_of(v, vlo, w, nb)
     for r in range(off[b], off[b + 1]):
         s = items[r]
-        wd, on = _segment_winding(seg[s], seg_deg[s], u, v, tol, stack, depths, left, right)
+        if tree is None:
+            wd, on = _segment_winding(seg[s], seg_deg[s], u, v, tol, stack, depths, left,
+                                      right)
+        else:
+            wd, on = _tree_winding(tree, s, seg[s], seg_deg[s], u, v, tol, nodes, stack,
+                                   depths, left, right)
         if on:
             return False      # on the boundary: not outside
         winding[seg_loop[s]] += wd
@@ -167,7 +292,8 @@ def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol,
     _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
                          seg_loop, nloops, iters, stop, band, wide_tol,
                          (bin_, scr, SKL, winding, cstack, depths, left, right, bins,
-                          point_scratch(p, q)))
+                          point_scratch(p, q), winding_tree(seg),
+                          np.empty(TRIM_MAX_DEPTH + 2, np.int64)))
 
 
 @jit
@@ -177,7 +303,7 @@ def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_
     caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch = borrow_all((
         Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch))
-    bin_, scr, SKL, winding, cstack, depths, left, right, bins, sp = scratch
+    bin_, scr, SKL, winding, cstack, depths, left, right, bins, sp, tree, nodes = scratch
     for i in range(a.shape[0]):
         tol = wide_tol if wide[i] else band
         for _ in range(iters):
@@ -188,7 +314,7 @@ def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_
                                         np.sqrt(du * du + dv * dv), box, ftol, 40, bin_,
                                         scr, SKL, sp)
             if outside_binned(seg, seg_deg, seg_loop, nloops, mu, mv, box, tol, bins, winding,
-                              cstack, depths, left, right):
+                              cstack, depths, left, right, tree, nodes):
                 b[i, 0] = mu
                 b[i, 1] = mv
             else:

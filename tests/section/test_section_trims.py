@@ -3,7 +3,9 @@ against the plain one: ``outside_binned`` walks only the trim segments of one bi
 v and must give ``classify_point``'s answer (after the domain test) exactly, for
 points on the trim curves, at and around the band's distances from them, on the bins'
 edges and the segments' grown v-ranges (one ulp either side), and anywhere in the
-domain; with the bins built for the tolerance used and for a larger one."""
+domain; with the bins built for the tolerance used and for a larger one.  With the
+halvings of the trim segments kept from point to point (``winding_tree``, shared by
+every probe, and one with room for 9 nodes that runs out), the same answers."""
 
 from __future__ import annotations
 
@@ -62,16 +64,52 @@ def _check(s, rng):
     p1 = seg.shape[1]
     scratch = (np.empty(max(nloops, 1), np.int64), np.empty((MAX_DEPTH + 2, p1, 3)),
                np.empty(MAX_DEPTH + 2, np.int64), np.empty((p1, 3)), np.empty((p1, 3)))
+    tree = T.winding_tree(seg)
+    small = (np.full(len(seg), -1, np.int64), np.empty((9, p1, 3)), np.empty((9, 8)),
+             np.empty(9, np.int64), np.empty(9, np.int64), np.zeros(1, np.int64))
+    nodes = np.empty(MAX_DEPTH + 2, np.int64)
     n = 0
     for tol, built in ((band, band), (1e-14 * max(u1 - u0, v1 - v0), band), (band, 7 * band)):
         bins = T.trim_bins(seg, deg, built)
         for u, v in _probe_points(s, seg, deg, tol, rng):
             want = bool(T._off_domain(u, v, box, tol)) or (
                 classify_point(seg, deg, lp, nloops, u, v, tol, *scratch) == OUTSIDE)
-            got = T.outside_binned(seg, deg, lp, nloops, u, v, box, tol, bins, *scratch)
-            assert got == want, (s.name, u, v, tol, built)
+            for t in (None, tree, small):
+                got = T.outside_binned(seg, deg, lp, nloops, u, v, box, tol, bins, *scratch,
+                                       t, None if t is None else nodes)
+                assert got == want, (s.name, u, v, tol, built, t is None)
             n += 1
     return n
+
+
+def test_tree_winding_is_segment_winding():
+    """Random rational segments of degrees 2-5 and points on them, near them (1e-15 to
+    1e-1 of their size, either side) and anywhere: ``_tree_winding`` with one tree for
+    all the points gives ``_segment_winding``'s (winding, on) for each, at several
+    tolerances, and the tree runs full on the way (the rest walked as before)."""
+    from geomkit._kernels.trim import _segment_winding
+    rng = np.random.default_rng(7)
+    for deg in (2, 3, 4, 5):
+        seg = np.zeros((6, 6, 3))
+        for k in range(6):
+            seg[k, :deg + 1, :2] = rng.uniform(-1, 1, (deg + 1, 2)).cumsum(axis=0)
+            seg[k, :deg + 1, 2] = rng.uniform(0.3, 3.0, deg + 1)
+            seg[k, :deg + 1, :2] *= seg[k, :deg + 1, 2:3]
+        degs = np.full(6, deg, np.int64)
+        on = _curve_points(seg, degs, rng.random(40))
+        d = 10.0 ** rng.uniform(-15, -1, (len(on), 1)) * rng.choice([-1, 1], (len(on), 2))
+        pts = np.concatenate([on, on + d, rng.uniform(-3, 8, (200, 2))])
+        tree = T.winding_tree(seg)
+        scr = (np.empty((MAX_DEPTH + 2, 6, 3)), np.empty(MAX_DEPTH + 2, np.int64),
+               np.empty((6, 3)), np.empty((6, 3)))
+        nodes = np.empty(MAX_DEPTH + 2, np.int64)
+        for tol in (1e-14, 1e-9, 1e-3):
+            for s in range(6):
+                for x, y in pts:
+                    want = _segment_winding(seg[s], deg, x, y, tol, *scr)
+                    got = T._tree_winding(tree, s, seg[s], deg, x, y, tol, nodes, *scr)
+                    assert tuple(got) == tuple(want), (deg, s, x, y, tol)
+        assert tree[5][0] > T.TREE_NODES - 2
 
 
 def test_outside_binned_on_the_plate_with_hole():
