@@ -165,7 +165,7 @@ def _out(cls, u, v):
     (seg, seg_deg, seg_loop, nloops, _tlo, _thi, band, box, winding, cstack, depths, left,
      right, _near, _fnear, _all, bins) = cls
     return outside_binned(seg, seg_deg, seg_loop, nloops, u, v, box, band, bins, winding,
-                          cstack, depths, left, right)
+                          cstack, depths, left, right, None, None)
 
 
 @jit
