@@ -185,8 +185,11 @@ def clip_to_domain(pieces, domain, rel: float, refit_rel: float = 0.0):
             out.append(c)
             continue
         moves.append(moved)
-        out.append(TrimCurve.create(c.degree, c.knots, Q,
-                                    None if np.all(c.weights == 1) else c.weights))
+        # the clipped points kept as they are (create's ``Q w / w`` would put a
+        # rational piece's clipped point back outside by a unit in the last place);
+        # the knots and weights are the valid piece's
+        Q.setflags(write=False)
+        out.append(TrimCurve(c.degree, c.knots, Q, c.weights))
     return out, moves
 
 
