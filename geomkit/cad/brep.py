@@ -414,23 +414,6 @@ def _chain(srf, loop, size):
     return out
 
 
-_SEGMENT_KNOTS = np.array([0.0, 0.0, 1.0, 1.0])
-_SEGMENT_KNOTS.setflags(write=False)
-_TWO_ONES = np.ones(2)
-_TWO_ONES.setflags(write=False)
-
-
-def _segment(q):
-    """The UV segment between the two (finite) rows of ``q`` as a trim polyline (what
-    ``TrimCurve.polyline`` builds, without its checks: thousands per part); two equal
-    points or a non-finite one are left to it (an error naming them)."""
-    if not ((q[0, 0] != q[1, 0] or q[0, 1] != q[1, 1]) and np.isfinite(q).all()):
-        return TrimCurve.polyline(q)
-    q = np.array(q, dtype=np.float64)
-    q.setflags(write=False)
-    return TrimCurve(1, _SEGMENT_KNOTS, q, _TWO_ONES)
-
-
 def _plane_piece(curve, reverse, srf):
     """An edge's own NURBS ``curve`` mapped onto the plane ``srf`` as a trim piece in
     loop order (one compiled call,
@@ -460,7 +443,7 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
         elif maps is not None and (got := iso_ends(ab, ISO_TOL * max(size, 1.0), maps)):
             # an iso-line's mapped ends (as below) in one compiled call
             iso0, iso1, q = got
-            c = _segment(q) if iso0 or iso1 else _fit(srf, e, ab, fu, fv, tol)
+            c = TrimCurve.polyline(q) if iso0 or iso1 else _fit(srf, e, ab, fu, fv, tol)
         else:
             dev = np.abs(ab - ab[0])
             iso = [float(dev[:, k].max()) <= ISO_TOL * max(size, 1.0) for k in (0, 1)]
@@ -475,7 +458,7 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
                     q[:, 0] = fu(q[:, 0])
                 if fv is not None:
                     q[:, 1] = fv(q[:, 1])
-                c = _segment(q)
+                c = TrimCurve.polyline(q)
             else:
                 c = _fit(srf, e, ab, fu, fv, tol)
         pieces.append(c)

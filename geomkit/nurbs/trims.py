@@ -56,6 +56,13 @@ def clamp_knots(Pw: np.ndarray, p: int, U: np.ndarray) -> tuple[np.ndarray, np.n
     return np.ascontiguousarray(Pw[start: first_b]), newU
 
 
+SEGMENT_KNOTS = np.array([0.0, 0.0, 1.0, 1.0])
+"""The knots of a straight segment as a trim curve (read-only)."""
+SEGMENT_KNOTS.setflags(write=False)
+_TWO_ONES = np.ones(2)
+_TWO_ONES.setflags(write=False)
+
+
 @dataclass(frozen=True, eq=False)
 class TrimCurve:
     """A 2-D NURBS curve in a surface's parameter plane (one piece of a trim loop).
@@ -102,6 +109,12 @@ class TrimCurve:
     @classmethod
     def polyline(cls, points, field="trim") -> "TrimCurve":
         """A polyline (k, 2) as a degree-1 curve with one knot per vertex (chord length)."""
+        if type(points) in (list, tuple, np.ndarray) and len(points) == 2:
+            # a segment (most polylines: bridges, seams): its knots are [0, 0, 1, 1]
+            P = np.array(points, dtype=np.float64)
+            if P.shape == (2, 2) and np.isfinite(P).all() and (P[0] != P[1]).any():
+                P.setflags(write=False)
+                return cls(1, SEGMENT_KNOTS, P, _TWO_ONES)
         P = as_float_array(points, field, shape=(None, 2), error=InvalidTrimError)
         if P.shape[0] < 2:
             raise InvalidTrimError(f"a polyline needs at least 2 points, got {P.shape[0]}", field)

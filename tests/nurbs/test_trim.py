@@ -476,3 +476,29 @@ def test_extreme_weight_rational_trim(w, tol):
     thickness = np.hypot(*(apex - (A + B) / 2))  # of the region, along the axis
     if thickness > 4 * band:
         assert np.count_nonzero(got == INSIDE) > 10
+
+
+def test_segment_polyline_is_the_general_polyline():
+    """A two-point polyline (read without the general route's checks) has the general
+    route's chord-length knots [0, 0, 1, 1], its points copied and read-only; faults
+    are the general route's errors."""
+    import numpy as np
+    from geomkit.errors import InvalidTrimError
+    from geomkit.nurbs.surface import TrimCurve
+
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        P = rng.normal(0, 10, (2, 2)) * 10.0 ** rng.integers(-8, 8)
+        c = TrimCurve.polyline(P)
+        seg = np.hypot(*np.diff(P, axis=0).T)
+        t = np.concatenate([[0.0], np.cumsum(seg)])
+        t /= t[-1]
+        assert np.array_equal(c.knots, np.concatenate([[0.0], t, [1.0]]))
+        assert np.array_equal(c.control_points, P) and not c.control_points.flags.writeable
+        assert np.array_equal(c.weights, [1.0, 1.0])
+        P[0, 0] += 1.0
+        assert c.control_points[0, 0] != P[0, 0]
+    for bad, what in (([[1.0, 2.0], [1.0, 2.0]], "coincide"), ([[0.0, np.nan], [1, 1]],
+                      "non-finite"), ([[0.0, 0, 0], [1, 1, 1]], "shape")):
+        with pytest.raises(InvalidTrimError, match=what):
+            TrimCurve.polyline(bad)
