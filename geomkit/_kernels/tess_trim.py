@@ -165,13 +165,15 @@ def _emit(out, n, t, u, v):
 
 @jit
 def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
-                   U, V, chord_tol, uv_chords, out, counts):
+                   U, V, chord_tol, uv_chords, cross_knots, out, counts):
     """Polylines of many trim pieces on one surface, in one call.
 
     Piece ``c`` has degree ``deg[c]``, control points ``CP[cp_off[c]:cp_off[c+1]]``
     (n, 2) with weights ``W[...]`` and knots ``K[k_off[c]:k_off[c+1]]``.  Each piece
-    keeps as vertices its knots where it is not tangent-continuous
-    (:func:`_smooth_knot`; every knot of a polyline) and is marched between them (see
+    keeps as vertices its knots (with ``cross_knots``, only those where it is not
+    tangent-continuous, :func:`_smooth_knot`, and every knot of a polyline; without,
+    every edge of the polyline lies on one knot span of its piece, which the
+    projector's certificate boxes need) and is marched between them (see
     the module docstring); a segment is tested at its parts' quarter points in every
     knot span it overlaps and at the knots it crosses (:func:`_segment_gap`).  A segment
     ``[ta, tb]`` is accepted when the curve points ``S(C(t))`` and the UV-chord
@@ -242,7 +244,8 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
             # polyline stops at every knot: its corners stay vertices)
             seed += 1
             A = ta
-            while not polyline and i < kend - 1 and _smooth_knot(CP, a0, Uc, pc, i):
+            while (cross_knots and not polyline and i < kend - 1
+                   and _smooth_knot(CP, a0, Uc, pc, i)):
                 i += 1
                 while i < kend and not Uc[i] > Uc[i - 1]:
                     i += 1

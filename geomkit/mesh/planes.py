@@ -48,7 +48,7 @@ def _triangulate(polys: np.ndarray):
     return coords, idx, failed
 
 
-def planar_batch(surfaces, chord_tol: float, sizes=None) -> dict:
+def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = False) -> dict:
     """``{index: (uv (n, 2), faces (m, 3), seconds)}`` for the trimmed surfaces of
     ``surfaces`` that are affine maps of their parameters, their regions triangulated
     together (see the module docstring): faces counter-clockwise in UV, every
@@ -70,7 +70,7 @@ def planar_batch(surfaces, chord_tol: float, sizes=None) -> dict:
             out[i] = False  # not a plane: the face-by-face path need not ask again
             continue
         try:
-            trim = TrimPolylines(s, chord_tol, affine=True)
+            trim = TrimPolylines(s, chord_tol, affine=True, cross_knots=cross_knots)
         except Exception:  # noqa: BLE001 - the face-by-face path reports it
             continue
         r = trim.rings()

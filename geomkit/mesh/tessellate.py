@@ -108,13 +108,14 @@ def _affine_plane(s: Surface, size: float):
 
 
 def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
-                    trim_target: float = TRIM_TARGET):
+                    trim_target: float = TRIM_TARGET, cross_knots: bool = False):
     """A trimmed surface that is an affine map of its domain, meshed without cells
     (:func:`geomkit.mesh.trim_polylines.planar_trimmed`); None for any other surface (or when
     the trimmed region is empty: the general path reports that)."""
     if affine_map(s, size) is None:
         return None
-    uv, F = planar_trimmed(TrimPolylines(s, trim_target * tol, affine=True))
+    uv, F = planar_trimmed(TrimPolylines(s, trim_target * tol, affine=True,
+                                         cross_knots=cross_knots))
     if not len(F):
         return None
     used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
@@ -243,7 +244,7 @@ def _box_grid(s: Surface, box, ub, vb, m: int, k: int, tol: float, size: float,
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET, fallback: str | None = None,
-                    planar=None, size: float | None = None):
+                    planar=None, size: float | None = None, cross_knots: bool = False):
     """One face's part of the mesh, ``(V, F, UV, dev, tri_uv, stats)``: the fast paths
     (planes, grids), then the adaptive cells.  With ``fallback`` (why this route failed
     for the face) the fallback route instead (:func:`geomkit.mesh.fallback.fallback_face`);
@@ -264,7 +265,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                             "seconds": time.perf_counter() - t0},)
     # a plane's normals agree: max_angle holds (planar False: the batch found no plane)
     if s.trim and max_edge is None and planar is None:
-        planar = _planar_trimmed(s, tol, size, t0, trim_target)
+        planar = _planar_trimmed(s, tol, size, t0, trim_target, cross_knots)
         if planar is not None:
             return planar
     # trims that are only the domain rectangle (a STEP face bounded by its surface's
@@ -272,7 +273,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     # cell path drops that loop too, so the untrimmed paths give the same guarantee
     packed = packed_trims(s) if s.trim else None
     whole = not s.trim or domain_rectangle_only(s, trim_target * tol, packed)
-    trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed)
+    trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed,
+                                            cross_knots=cross_knots)
     if trim is not None and not trim.loops:
         whole, trim = True, None
     if whole:
@@ -348,15 +350,17 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
         A single surface that neither route can mesh, or no surface meshed.
     """
     return tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
-                                  TRIM_TARGET)
+                                  TRIM_TARGET, cross_knots=True)
 
 
-def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None):
+def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None,
+               cross_knots: bool = False):
     """Face ``i``'s part of the mesh by the primary route, else by the fallback route
     (a :class:`~geomkit.errors.FaceFailedWarning` says which face and why): ``(part,
     None)``, or ``(None, why)`` when both routes fail."""
     try:
-        return _tessellate_one(s, *args, planar=planar, size=size), None
+        return _tessellate_one(s, *args, planar=planar, size=size,
+                               cross_knots=cross_knots), None
     except Exception as exc:  # noqa: BLE001 - GEOS and numeric failures: the fallback
         why = f"{type(exc).__name__}: {exc}"
     name = f"surface {i}" + (f" ({s.name})" if s.name else "")
@@ -371,10 +375,13 @@ def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None):
 
 
 def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
-                           trim_target) -> Mesh:
+                           trim_target, cross_knots: bool = False) -> Mesh:
     """:func:`tessellate` with the trim polylines' chord error target (a fraction of
     ``tol``) chosen: the projector's candidate mesh asks for finer ones (its bounds
-    carry this error)."""
+    carry this error).  ``cross_knots``: trim polyline edges may run across a trim
+    piece's smooth knots (:class:`~geomkit.mesh.trim_polylines.TrimPolylines`;
+    :func:`tessellate` does); without, each edge lies on one knot span of its piece
+    (the projector's certificate boxes locate an edge on one trim segment)."""
     surfaces = as_surfaces(surfaces)
     try:
         tol = float(tol)
@@ -400,7 +407,7 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
     trim_target = float(trim_target)
     args = (tol, max_angle, max_edge, k, trim_target)
     if len(surfaces) == 1:  # one surface: its arrays as they are, no concatenation
-        part, why = _mesh_face(0, surfaces[0], args)
+        part, why = _mesh_face(0, surfaces[0], args, cross_knots=cross_knots)
         if part is None:
             raise MeshingError(f"the surface could not be triangulated ({why})")
         V, F, UV, dev, tuv, st = part
@@ -409,11 +416,12 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
                     np.ascontiguousarray(tuv))
     # the trimmed planes together: one constrained triangulation
     sizes = [s.size for s in surfaces]  # once a face (the batch and the face path)
-    planes = planar_batch(surfaces, trim_target * tol, sizes) if max_edge is None else {}
+    planes = (planar_batch(surfaces, trim_target * tol, sizes, cross_knots)
+              if max_edge is None else {})
     Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
     offset = 0
     for i, s in enumerate(surfaces):
-        part, why = _mesh_face(i, s, args, planes.get(i), sizes[i])
+        part, why = _mesh_face(i, s, args, planes.get(i), sizes[i], cross_knots)
         if part is None:  # one face never sinks the model: named in the stats
             name = f"surface {i}" + (f" ({s.name})" if s.name else "")
             warnings.warn(f"{name} left out of the mesh: {why}", FaceFailedWarning,

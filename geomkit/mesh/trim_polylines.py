@@ -38,8 +38,9 @@ class TrimPolylines:
     """
 
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
-                 packed=None):
+                 packed=None, cross_knots: bool = False):
         self.surface = surface
+        self.cross_knots = cross_knots  # segments may run across smooth knots
         self.chord_tol = chord_tol
         self.affine = affine  # S maps UV chords to 3-D chords: sample the curve only
         (u0, u1), (v0, v1) = surface.domain
@@ -154,7 +155,7 @@ class TrimPolylines:
         while True:
             n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
                                s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                               chord_tol, not self.affine, buf, counts)
+                               chord_tol, not self.affine, self.cross_knots, buf, counts)
             if n >= 0:
                 break
             buf = np.empty((4 * len(buf), 3))

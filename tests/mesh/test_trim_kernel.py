@@ -4,8 +4,9 @@ its knot span's 1/16 grid) against the exact boundary: for every segment of ever
 piece, the exact boundary curve ``S(C(t))`` and the image of the UV chord, sampled
 at 48 points, lie within ``chord_tol`` of the 3-D chord.  On the curved trimmed faces
 of real parts (NX9: quadratic pieces of 4 spans, FTC-07: lines on cylinders and
-cones, the CATIA swept faces) and a freeform with a circle trim; the pieces' ends and
-a polyline piece's vertices are kept exactly."""
+cones, the CATIA swept faces, Inventor's quintic of 100 spans), with and without
+segments across smooth knots, and a freeform with a circle trim; the pieces' ends and
+a polyline piece's vertices are kept exactly; smooth knots crossed, corners kept."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ M = 48
 DENSE = SEED_SPANS  # the grid rule; -1 checks quarter points only (a failing control)
 
 
-def _kernel(s, pieces, chord_tol, uv_chords=True):
+def _kernel(s, pieces, chord_tol, uv_chords=True, cross_knots=False):
     (u0, u1), (v0, v1) = s.domain
     CP = np.concatenate([c.control_points for c in pieces])
     W = np.concatenate([c.weights for c in pieces])
@@ -39,12 +40,12 @@ def _kernel(s, pieces, chord_tol, uv_chords=True):
     buf = np.empty((4, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
                        s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
-                       buf, counts)
+                       cross_knots, buf, counts)
     assert n == -1  # too small: asks for more
     buf = np.empty((200_000, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
                        s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
-                       buf, counts)
+                       cross_knots, buf, counts)
     assert n == counts.sum()
     return np.split(buf[:n], np.cumsum(counts)[:-1])
 
@@ -80,9 +81,11 @@ def _check_piece(s, c, rows, chord_tol, uv_chords=True):
     return len(rows)
 
 
+@pytest.mark.parametrize("cross_knots", [False, True])
 @pytest.mark.parametrize("part", ["nx9_face_recognition_ap214.stp", "nist_ftc_07_ap242.stp",
-                                  "catia_v5_ventilator_swept_faces.stp"])
-def test_trim_polylines_within_chord_tol_on_real_parts(part):
+                                  "catia_v5_ventilator_swept_faces.stp",
+                                  "inventor2015_cylinder_block_face6.stp"])
+def test_trim_polylines_within_chord_tol_on_real_parts(part, cross_knots):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         S = read_step(DATA / "parts" / part).surfaces
@@ -94,7 +97,7 @@ def test_trim_polylines_within_chord_tol_on_real_parts(part):
             continue
         affine = affine_map(s, s.size) is not None
         pieces = [c for loop in s.trim for c in loop.pieces]
-        for c, rows in zip(pieces, _kernel(s, pieces, chord_tol, not affine)):
+        for c, rows in zip(pieces, _kernel(s, pieces, chord_tol, not affine, cross_knots)):
             checked += _check_piece(s, c, rows, chord_tol, not affine)
     assert checked > 100
 
@@ -333,8 +336,12 @@ def test_smooth_knots_are_crossed_and_corners_kept():
         back = TrimCurve.create(1, [0, 0, 1, 1], [P[-1], P[0]])
         s = Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], flat, trim=[[arc, back]])
         chord_tol = 1e-2
-        rows = _kernel(s, [arc, back], chord_tol, uv_chords=False)
+        rows = _kernel(s, [arc, back], chord_tol, uv_chords=False, cross_knots=True)
         _check_piece(s, arc, rows[0], chord_tol, uv_chords=False)
         assert len(rows[0]) < 20, len(rows[0])
         if kink is not None:
             assert t[kink] in rows[0][:, 0]
+        # without cross_knots every knot is a vertex (the projector's polylines)
+        held = _kernel(s, [arc, back], chord_tol, uv_chords=False)[0]
+        _check_piece(s, arc, held, chord_tol, uv_chords=False)
+        assert np.isin(t, held[:, 0]).all()
