@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .basis import basis_funs, find_span
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
@@ -324,9 +325,15 @@ def _edge_roots_loop(Pw, p, q, U, V, plane, a, b, fa, fb, ttol, out, scratch):
 
 @jit
 def edge_root(Pw, p, q, U, V, plane, au, av, bu, bv, fa, fb, ttol, Nu, Nv, left, right,
-              tmp, X):
+              tmp, X, rows=None, r0=0):
     """The root parameter t of :func:`edge_roots` on one segment ``(au, av) -> (bu, bv)``
-    (``fa * fb < 0``); scratch as for :func:`surface_point`."""
+    (``fa * fb < 0``); scratch as for :func:`surface_point`.
+
+    With ``rows`` (the control-row sums at ``v = av = bv`` from control row ``r0`` on,
+    :func:`.section_refine._u_rows`) the segment is a line of constant v and each
+    iterate is evaluated by :func:`f_u_line` (the u basis and the outer sum alone, the
+    same bits as ``_f_at`` where ``av + t * 0.0`` is ``av``, i.e. ``av`` not zero); the
+    same loop, its other evaluator compiled away (``rows is None``)."""
     lo = 0.0
     hi = 1.0
     flo = fa
@@ -342,8 +349,11 @@ def edge_root(Pw, p, q, U, V, plane, au, av, bu, bv, fa, fb, ttol, Nu, Nv, left,
             t = lo + (hi - lo) * flo / (flo - fhi)
             if not (t > lo and t < hi):
                 t = 0.5 * (lo + hi)
-        ft = _f_at(Pw, p, q, U, V, plane, au + t * (bu - au), av + t * (bv - av), Nu, Nv,
-                   left, right, tmp, X)
+        if rows is None:
+            ft = _f_at(Pw, p, q, U, V, plane, au + t * (bu - au), av + t * (bv - av), Nu, Nv,
+                       left, right, tmp, X)
+        else:
+            ft = f_u_line(Pw, p, U, plane, au + t * (bu - au), rows, r0, Nu, left, right)
         if ft == 0.0:
             lo = t
             hi = t
@@ -361,6 +371,30 @@ def edge_root(Pw, p, q, U, V, plane, au, av, bu, bv, fa, fb, ttol, Nu, Nv, left,
                 flo *= 0.5
             side = 1
     return 0.5 * (lo + hi)
+
+
+@jit
+def f_u_line(Pw, p, U, plane, u, rows, r0, Nu, left, right):
+    """The plane function at ``(u, v)`` from the row sums of
+    :func:`.section_refine._u_rows` at ``v``, as :func:`_f_at` computes it."""
+    nu = Pw.shape[0]
+    su = find_span(nu - 1, p, u, U)
+    basis_funs(su, u, p, U, Nu, left, right)
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    t3 = 0.0
+    for k in range(p + 1):
+        i = su - p + k - r0
+        a = Nu[k]
+        t0 += a * rows[i, 0]
+        t1 += a * rows[i, 1]
+        t2 += a * rows[i, 2]
+        t3 += a * rows[i, 3]
+    x = t0 / t3
+    y = t1 / t3
+    z = t2 / t3
+    return plane[0] * x + plane[1] * y + plane[2] * z + plane[3]
 
 
 @jit

@@ -22,7 +22,7 @@ import numpy as np
 from .basis import basis_funs, find_span
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
-from .section import MONO_U, MONO_V, _f_at, edge_root
+from .section import MONO_U, MONO_V, _f_at, edge_root, f_u_line
 from .section_project import _project_point
 from .surface import D1, _binomial_table, derivs_scratch, surface_point
 
@@ -265,53 +265,25 @@ def _root_on_u_line(Pw, p, q, U, V, plane, lu, hu, v, zsnap, ttol, sp, nd):
     :func:`_midpoint` had them: ``surface_point`` sums each control row over v first
     (``a_k = sum_l N_l(v) P_kl``) and then the rows over u, so on a line of constant v
     the row sums are computed once (:func:`_u_rows`) and each evaluation is the u basis
-    and the outer sum alone.  (``v + t * 0.0`` is ``v`` for ``v`` not zero, the reason
-    zero is left to ``edge_root``.)"""
+    and the outer sum alone (:func:`.section.f_u_line`, in ``edge_root``'s loop given
+    the rows).  (``v + t * 0.0`` is ``v`` for ``v`` not zero, the reason zero is left
+    to ``edge_root``'s own evaluator.)"""
     Nu, Nv, left, right, tmp, X = sp
     rows = nd[3]
     nu = Pw.shape[0]
     r0 = find_span(nu - 1, p, lu, U) - p
     r1 = find_span(nu - 1, p, hu, U)
     _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows)
-    flo = _f_u_line(Pw, p, U, plane, lu, rows, r0, Nu, left, right)
-    fhi = _f_u_line(Pw, p, U, plane, hu, rows, r0, Nu, left, right)
+    flo = f_u_line(Pw, p, U, plane, lu, rows, r0, Nu, left, right)
+    fhi = f_u_line(Pw, p, U, plane, hu, rows, r0, Nu, left, right)
     if abs(flo) <= zsnap:
         flo = 0.0
     if abs(fhi) <= zsnap:
         fhi = 0.0
     if not flo * fhi < 0:
         return -1.0
-    lo = 0.0
-    hi = 1.0
-    side = 0
-    t = 0.5
-    for it in range(200):
-        if hi - lo <= ttol:
-            break
-        if it % 3 == 2:
-            t = 0.5 * (lo + hi)
-        else:
-            t = lo + (hi - lo) * flo / (flo - fhi)
-            if not (t > lo and t < hi):
-                t = 0.5 * (lo + hi)
-        ft = _f_u_line(Pw, p, U, plane, lu + t * (hu - lu), rows, r0, Nu, left, right)
-        if ft == 0.0:
-            lo = t
-            hi = t
-            break
-        if (ft < 0.0) == (flo < 0.0):
-            lo = t
-            flo = ft
-            if side == -1:
-                fhi *= 0.5
-            side = -1
-        else:
-            hi = t
-            fhi = ft
-            if side == 1:
-                flo *= 0.5
-            side = 1
-    return 0.5 * (lo + hi)
+    return edge_root(Pw, p, q, U, V, plane, lu, v, hu, v, flo, fhi, ttol, Nu, Nv, left, right,
+                     tmp, X, rows, r0)
 
 
 @jit
@@ -337,27 +309,3 @@ def _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows):
         rows[row - r0, 1] = a1
         rows[row - r0, 2] = a2
         rows[row - r0, 3] = a3
-
-
-@jit
-def _f_u_line(Pw, p, U, plane, u, rows, r0, Nu, left, right):
-    """The plane function at ``(u, v)`` from the row sums of :func:`_u_rows` at ``v``,
-    as :func:`.section._f_at` computes it."""
-    nu = Pw.shape[0]
-    su = find_span(nu - 1, p, u, U)
-    basis_funs(su, u, p, U, Nu, left, right)
-    t0 = 0.0
-    t1 = 0.0
-    t2 = 0.0
-    t3 = 0.0
-    for k in range(p + 1):
-        i = su - p + k - r0
-        a = Nu[k]
-        t0 += a * rows[i, 0]
-        t1 += a * rows[i, 1]
-        t2 += a * rows[i, 2]
-        t3 += a * rows[i, 3]
-    x = t0 / t3
-    y = t1 / t3
-    z = t2 / t3
-    return plane[0] * x + plane[1] * y + plane[2] * z + plane[3]
