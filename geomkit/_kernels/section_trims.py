@@ -270,13 +270,14 @@ def outside_binned(seg, seg_deg, seg_loop, nloops, u, v, box, tol, bins, winding
 
 
 @jit
-def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol, seg,
-                   seg_deg, seg_loop, nloops, iters, stop):
+def trim_crossings(Pw, p, q, U, V, plane, a, b, box, ftol, band, wide_tol, seg, seg_deg,
+                   seg_loop, nloops, iters, stop):
     """Bisection along the exact curve between inside points ``a`` (n, 2) and outside
     points ``b`` (n, 2), in place: the curve point at the middle (:func:`project` from
     the UV midpoint, the move limited to ``|b - a|``, to ``|f| <= ftol``) replaces
     ``b`` when it is outside the trimmed face (:func:`outside_binned` with the band
-    ``band``, or ``wide_tol`` where ``wide[i]``), else ``a``; until ``|b - a| <= stop`` or
+    ``band``, or ``wide_tol`` where ``a[i]`` itself is outside with ``band``: inside
+    only within the wide band), else ``a``; until ``|b - a| <= stop`` or
     ``iters`` steps.  ``seg``, ``seg_deg``, ``seg_loop``, ``nloops``: the trim loops as
     packed by ``Surface.trim_segments``."""
     bin_ = _binomial_table(D1)
@@ -289,7 +290,7 @@ def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol,
     left = np.empty((p1, 3))
     right = np.empty((p1, 3))
     bins = trim_bins(seg, seg_deg, max(band, wide_tol))
-    _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
+    _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, box, ftol, seg, seg_deg,
                          seg_loop, nloops, iters, stop, band, wide_tol,
                          (bin_, scr, SKL, winding, cstack, depths, left, right, bins,
                           point_scratch(p, q), winding_tree(seg),
@@ -297,15 +298,18 @@ def trim_crossings(Pw, p, q, U, V, plane, a, b, wide, box, ftol, band, wide_tol,
 
 
 @jit
-def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, wide, box, ftol, seg, seg_deg,
+def _trim_crossings_loop(Pw, p, q, U, V, plane, a, b, box, ftol, seg, seg_deg,
                          seg_loop, nloops, iters, stop, band, wide_tol, scratch):
     """The loop of :func:`trim_crossings` over borrowed views of its arrays and the
     caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
-    Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch = borrow_all((
-        Pw, U, V, plane, a, b, wide, box, seg, seg_deg, seg_loop, scratch))
+    Pw, U, V, plane, a, b, box, seg, seg_deg, seg_loop, scratch = borrow_all((
+        Pw, U, V, plane, a, b, box, seg, seg_deg, seg_loop, scratch))
     bin_, scr, SKL, winding, cstack, depths, left, right, bins, sp, tree, nodes = scratch
     for i in range(a.shape[0]):
-        tol = wide_tol if wide[i] else band
+        tol = band
+        if outside_binned(seg, seg_deg, seg_loop, nloops, a[i, 0], a[i, 1], box, band, bins,
+                          winding, cstack, depths, left, right, tree, nodes):
+            tol = wide_tol
         for _ in range(iters):
             du = b[i, 0] - a[i, 0]
             dv = b[i, 1] - a[i, 1]

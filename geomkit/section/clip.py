@@ -166,13 +166,13 @@ def _boundaries(s, ev, a_in, b_out, zsnap, iters=60):
     every midpoint would be outside too and the end would stay at the first inside
     sample, up to ``TRIM_STEP`` of the domain short of the trim corner where that edge
     ends; such ends are bisected with the band ``a_in`` was classified with, and
-    reach the corner within it."""
+    reach the corner within it.  (Both tests in the kernel, as ``classify_uv`` makes
+    them: :func:`geomkit._kernels.section_trims.outside_binned`.)"""
     dom = max(ev.box[1] - ev.box[0], ev.box[3] - ev.box[2])
     band = 1e-14 * dom
-    along = s.classify_uv(a_in, band) == OUTSIDE   # inside only within the wide band
     a = np.array(a_in, dtype=np.float64, order="C")
     b = np.array(b_out, dtype=np.float64, order="C")
-    ev.trim_crossings(a, b, along, 0.25 * zsnap, band, TRIM_TOL * dom, iters, 1e-13)
+    ev.trim_crossings(a, b, 0.25 * zsnap, band, TRIM_TOL * dom, iters, 1e-13)
     return _finite(a)
 
 

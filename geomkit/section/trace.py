@@ -61,13 +61,12 @@ class _Eval:
                   ftol, maxit, out, f)
         return out, f
 
-    def trim_crossings(self, a, b, wide, ftol, band, wide_tol, iters, stop):
+    def trim_crossings(self, a, b, ftol, band, wide_tol, iters, stop):
         """:func:`geomkit._kernels.section_trims.trim_crossings` against the surface's trims:
         ``a``, ``b`` (n, 2) float64 C arrays, bisected in place."""
         seg, deg, lp, nloops = self.s.trim_segments()
-        KT.trim_crossings(*self.args, a, b, np.ascontiguousarray(wide, dtype=np.bool_),
-                         self.box, float(ftol), float(band), float(wide_tol), seg, deg, lp,
-                         nloops, int(iters), float(stop))
+        KT.trim_crossings(*self.args, a, b, self.box, float(ftol), float(band),
+                         float(wide_tol), seg, deg, lp, nloops, int(iters), float(stop))
 
     def densify(self, uv, h, ftol, maxdepth):
         """:func:`geomkit._kernels.section_project.densify` of the polyline ``uv`` (n, 2)."""
