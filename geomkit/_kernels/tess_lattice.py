@@ -1,6 +1,7 @@
 """Lattice triangulation kernels of the tessellation: the hanging-node rings and
 triangles of quadtree cells whose corners are integer lattice points (split out of
-:mod:`geomkit._kernels.tess`)."""
+:mod:`geomkit._kernels.tess`), and the cells' classification against the trim
+polylines (:func:`classify_cells`)."""
 
 from __future__ import annotations
 
@@ -272,3 +273,75 @@ def split_counts(e, eu, ev, target, max_parts, nu, nv):
             fv = max(fv, ft)
         nu[i] = int(min(max(np.ceil(fu), 1.0), max_parts))
         nv[i] = int(min(max(np.ceil(fv), 1.0), max_parts))
+
+
+@jit_inline
+def _segment_meets_box(x1, y1, x2, y2, u0, u1, v0, v1):
+    """Whether the segment (x1, y1)-(x2, y2) meets the closed box ``[u0, u1] x [v0, v1]``
+    (Liang-Barsky clipping; touching counts)."""
+    t0 = 0.0
+    t1 = 1.0
+    dx = x2 - x1
+    dy = y2 - y1
+    for k in range(4):
+        if k == 0:
+            pk, qk = -dx, x1 - u0
+        elif k == 1:
+            pk, qk = dx, u1 - x1
+        elif k == 2:
+            pk, qk = -dy, y1 - v0
+        else:
+            pk, qk = dy, v1 - y1
+        if pk == 0.0:
+            if qk < 0.0:
+                return False
+        else:
+            r = qk / pk
+            if pk < 0.0:
+                if r > t1:
+                    return False
+                if r > t0:
+                    t0 = r
+            else:
+                if r < t0:
+                    return False
+                if r < t1:
+                    t1 = r
+    return True
+
+
+@jit
+def classify_cells(P, starts, n_cut, cells, out):
+    """``out[c]`` for the UV boxes ``cells`` (N, 4) ``u0, u1, v0, v1``: 2 when a segment
+    of the first ``n_cut`` closed polylines ``P[starts[i]:starts[i+1]]`` meets the
+    closed box, else 1 when the box's centre is inside the region the polylines bound
+    by the even-odd rule over all of them, 0 outside."""
+    nl = starts.shape[0] - 1
+    for c in range(cells.shape[0]):
+        u0 = cells[c, 0]
+        u1 = cells[c, 1]
+        v0 = cells[c, 2]
+        v1 = cells[c, 3]
+        state = 0
+        for L in range(n_cut):
+            for i in range(starts[L], starts[L + 1] - 1):
+                if _segment_meets_box(P[i, 0], P[i, 1], P[i + 1, 0], P[i + 1, 1], u0, u1,
+                                      v0, v1):
+                    state = 2
+                    break
+            if state == 2:
+                break
+        if state == 0:
+            cu = 0.5 * (u0 + u1)
+            cv = 0.5 * (v0 + v1)
+            inside = False
+            for L in range(nl):
+                for i in range(starts[L], starts[L + 1] - 1):
+                    y1 = P[i, 1]
+                    y2 = P[i + 1, 1]
+                    if (y1 > cv) != (y2 > cv):
+                        x = P[i, 0] + (cv - y1) * (P[i + 1, 0] - P[i, 0]) / (y2 - y1)
+                        if cu < x:
+                            inside = not inside
+            state = 1 if inside else 0
+        out[c] = state

@@ -2,8 +2,8 @@
 
 * :class:`TrimPolylines` — each trim loop as a UV polyline whose 3-D chords are
   within ``chord_tol`` of the exact boundary curve ``S(C(t))`` (and of the image of
-  the UV chord), the trimmed region as a shapely polygon, and the segments' r-tree
-  for classifying cells.
+  the UV chord), the trimmed region as a shapely polygon, and the cells' classification
+  against them (one compiled call).
 * :func:`affine_map` — whether ``S`` is an affine map of its parameters (a B-spline
   net that is the affine image of its Greville abscissae, equal weights): then every
   UV triangle maps to a flat triangle that *is* part of the surface.
@@ -21,6 +21,7 @@ from itertools import accumulate
 import numpy as np
 
 from geomkit.tolerances import AFFINE_REL
+from geomkit._kernels.tess_lattice import classify_cells
 from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
                                        speed_bound_of, trim_polylines)
 from geomkit.nurbs.surface import Surface
@@ -33,8 +34,7 @@ class TrimPolylines:
     ``packed``: :func:`packed_trims` of the surface, if the caller made it.
     ``loops``: the closed (k, 2) polylines, the domain rectangle left out when a loop
     is just that rectangle (``domain_loop``).  ``region`` (the trimmed region, a
-    prepared shapely geometry inside the domain) and ``tree`` (r-tree of the polyline
-    segments) are built on first use.
+    prepared shapely geometry inside the domain) is built on first use.
     """
 
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
@@ -67,7 +67,7 @@ class TrimPolylines:
                 continue
             self.loops.append(pts)
         self._region = None
-        self._tree = None
+        self._packed_rings = None
 
     @property
     def region(self):
@@ -132,16 +132,6 @@ class TrimPolylines:
             return None
         return float(a0), float(a1), float(b0), float(b1)
 
-    @property
-    def tree(self):
-        if self._tree is None:
-            import shapely
-
-            segs = [shapely.linestrings(np.stack([p[:-1], p[1:]], axis=1)) for p in self.loops]
-            self.segments = np.concatenate(segs) if segs else np.empty(0, dtype=object)
-            self._tree = shapely.STRtree(self.segments)
-        return self._tree
-
     def _loop_polylines(self, chord_tol: float, packed=None) -> list[np.ndarray]:
         """The closed (k, 2) UV polylines of the surface's loops, every piece of every
         loop in one :func:`geomkit._kernels.tess_trim.trim_polylines` call (each piece
@@ -188,19 +178,23 @@ class TrimPolylines:
 
     def classify_uv(self, uv: np.ndarray) -> np.ndarray:
         """:meth:`classify` for cells given by their parameters (N, 4) ``u0, u1, v0,
-        v1``."""
-        import shapely
-
-        tree, region = self.tree, self.region
-        state = np.zeros(uv.shape[0], dtype=np.int8)
-        if len(self.segments):
-            boxes = shapely.box(uv[:, 0], uv[:, 2], uv[:, 1], uv[:, 3])
-            hit = tree.query(boxes, predicate="intersects")[0]
-            state[hit] = 2
-        rest = state != 2
-        cu = 0.5 * (uv[rest, 0] + uv[rest, 1])
-        cv = 0.5 * (uv[rest, 2] + uv[rest, 3])
-        state[rest] = shapely.contains_xy(region, cu, cv).astype(np.int8)
+        v1``: cut when a segment of a loop meets the closed cell, else in or out by
+        its centre and the even-odd rule over the region's rings, in one compiled call
+        (:func:`geomkit._kernels.tess_lattice.classify_cells`)."""
+        if self._packed_rings is None:
+            rings = self.rings()
+            # the loops' segments first (the cut test), then the domain rectangle's
+            n_cut = len(self.loops)
+            if len(rings) > n_cut:  # the domain rectangle leads rings(): move it last
+                rings = rings[1:] + rings[:1]
+            starts = np.zeros(len(rings) + 1, dtype=np.int64)
+            np.cumsum([len(r) for r in rings], out=starts[1:])
+            self._packed_rings = (np.ascontiguousarray(np.concatenate(rings)), starts, n_cut)
+        P, starts, n_cut = self._packed_rings
+        state = np.empty(uv.shape[0], dtype=np.int8)
+        if uv.shape[0]:
+            classify_cells(P, starts, n_cut, np.ascontiguousarray(uv, dtype=np.float64),
+                           state)
         return state
 
 

@@ -345,3 +345,40 @@ def test_smooth_knots_are_crossed_and_corners_kept():
         held = _kernel(s, [arc, back], chord_tol, uv_chords=False)[0]
         _check_piece(s, arc, held, chord_tol, uv_chords=False)
         assert np.isin(t, held[:, 0]).all()
+
+
+def test_classify_cells_matches_shapely():
+    """``classify_cells`` (the cells of a trimmed grid or the adaptive lattice: cut by a
+    loop, else in or out by the centre, even-odd over the rings) against shapely's
+    segment/box intersection and point-in-polygon on random boxes: a wavy outer loop,
+    a hole, and the domain rectangle as a last ring that is no cut (as
+    ``TrimPolylines`` packs a loop that was the domain's)."""
+    import shapely
+
+    from geomkit._kernels.tess_lattice import classify_cells
+
+    rng = np.random.default_rng(11)
+    a = np.linspace(0.0, 2 * np.pi, 90)
+    outer = np.c_[0.5 + (0.35 + 0.05 * np.sin(7 * a)) * np.cos(a),
+                  0.5 + (0.35 + 0.05 * np.sin(7 * a)) * np.sin(a)]
+    hole = np.c_[0.5 + 0.1 * np.cos(-a), 0.45 + 0.08 * np.sin(-a)]
+    outer[-1], hole[-1] = outer[0], hole[0]
+    rect = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], float)
+    lo = rng.uniform(-0.05, 1.0, (4000, 2))
+    wh = rng.uniform(0.0, 0.2, (4000, 2)) ** 2
+    cells = np.ascontiguousarray(np.c_[lo[:, 0], lo[:, 0] + wh[:, 0], lo[:, 1],
+                                       lo[:, 1] + wh[:, 1]])
+    boxes = shapely.box(cells[:, 0], cells[:, 2], cells[:, 1], cells[:, 3])
+    cu, cv = 0.5 * (cells[:, 0] + cells[:, 1]), 0.5 * (cells[:, 2] + cells[:, 3])
+    for rings, n_cut, region in (
+            ([outer, hole], 2, shapely.Polygon(outer, [hole])),
+            ([hole, rect], 1, shapely.Polygon(rect, [hole]))):
+        P = np.ascontiguousarray(np.concatenate(rings))
+        starts = np.cumsum([0] + [len(r) for r in rings]).astype(np.int64)
+        out = np.empty(len(cells), dtype=np.int8)
+        classify_cells(P, starts, n_cut, cells, out)
+        lines = shapely.multilinestrings([shapely.linestrings(r) for r in rings[:n_cut]])
+        want = np.where(shapely.intersects(boxes, lines), 2,
+                        shapely.contains_xy(region, cu, cv).astype(np.int8))
+        assert np.array_equal(out, want), int((out != want).sum())
+        assert set(np.unique(out)) == {0, 1, 2}
