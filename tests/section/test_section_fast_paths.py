@@ -536,3 +536,20 @@ def test_shared_edges_and_point_pieces_on_the_apex_section(monkeypatch):
     geomkit.plane_section(S, [0, 0, 1, -0.5 * (lo[2] + hi[2])], 1e-4 * size,
                           gap=case.edge_gap or 0.0)
     assert len(seen) == 2 and seen[0] > 50
+
+
+def test_eval_points_serial_gives_the_threaded_batch():
+    """``_Eval.points`` evaluates up to ``SERIAL_POINTS`` points in the calling thread:
+    the threaded batch's bits, below, at and above the bound."""
+    from geomkit._kernels.surface import surface_points
+    from geomkit.section import trace as T
+    s = _plate()
+    ev = T._Eval(s, np.array([0.0, 1.0, 0.0, -50.0]))
+    (u0, u1), (v0, v1) = s.domain
+    rng = np.random.default_rng(5)
+    for n in (1, 300, T.SERIAL_POINTS, T.SERIAL_POINTS + 1):
+        uv = np.column_stack([rng.uniform(u0, u1, n), rng.uniform(v0, v1, n)])
+        want = np.empty((n, 3))
+        a = ev.args
+        surface_points(a[0], a[1], a[2], a[3], a[4], uv, want)
+        assert np.array_equal(ev.points(uv), want)
