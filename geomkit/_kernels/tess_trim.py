@@ -12,8 +12,7 @@ span's 1/16 grid inside a part longer than a quarter span); each step is the res
 the run in equal parts of at most the current step estimate, which a failing part
 shrinks by its measured error (chord errors fall with the square of the step) and a
 passing one lets grow.  Curve points are clipped to the domain box (trim curves may
-stray outside it by the validation tolerance).  Also here: the grouped measure of a
-trimmed grid's triangles (:func:`group_deviation`).
+stray outside it by the validation tolerance).
 """
 
 from __future__ import annotations
@@ -22,9 +21,7 @@ import numpy as np
 
 from .numba_ext.policy import jit, jit_inline
 from .basis import basis_funs, find_span
-from .surface import surface_derivs, surface_point
-from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _dist3, _run,
-                   point_triangle_distance)
+from .surface import surface_point
 
 TINY_STEP = 2.0 ** -50
 """A segment this short (a fraction of its knot span) is accepted as it is: the step
@@ -480,134 +477,3 @@ def box_edge_sags(Pw, p, q, U, V, cells, m, bu0, bu1, bv0, bv1, out):
                 worst = max(worst, np.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
             k = 0 if along_u else 1
             out[c, k] = max(out[c, k], worst)
-
-
-@jit_inline
-def _in_group(u, v, TUV, j0, j1):
-    """Whether (u, v) lies in one of the UV triangles ``TUV[j0:j1]`` (edges included)."""
-    for j in range(j0, j1):
-        a0 = TUV[j, 0, 0]
-        a1 = TUV[j, 0, 1]
-        b0 = TUV[j, 1, 0]
-        b1 = TUV[j, 1, 1]
-        c0 = TUV[j, 2, 0]
-        c1 = TUV[j, 2, 1]
-        d1 = (b0 - a0) * (v - a1) - (b1 - a1) * (u - a0)
-        d2 = (c0 - b0) * (v - b1) - (c1 - b1) * (u - b0)
-        d3 = (a0 - c0) * (v - c1) - (a1 - c1) * (u - c0)
-        if (d1 >= 0.0 and d2 >= 0.0 and d3 >= 0.0) or (d1 <= 0.0 and d2 <= 0.0
-                                                       and d3 <= 0.0):
-            return True
-    return False
-
-
-@jit
-def _foot_in_group(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, TUV, j0, j1,
-                   Nu, Nv, left, right, tmp, Q, SKL, bin_, dscr):
-    """:func:`geomkit._kernels.tess._foot_descent` with every foot kept in the UV
-    triangles ``TUV[j0:j1]`` (a step leaving them is halved like one that does not
-    lower the distance): the value returned is ``|X - S(uv')|`` for a ``uv'`` in
-    them, an upper bound of X's distance to the part of the surface they cover."""
-    for it in range(FOOT_STEPS):
-        if d <= d_stop or d <= exact_above:
-            break
-        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
-        r0 = x - SKL[0, 0, 0]
-        r1 = y - SKL[0, 0, 1]
-        r2 = z - SKL[0, 0, 2]
-        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
-        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
-        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
-               + SKL[1, 0, 2] * SKL[0, 1, 2])
-        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
-        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
-        det = a11 * a22 - a12 * a12
-        if not det > 0.0:
-            break
-        du = (a22 * b1 - a12 * b2) / det
-        dv = (a11 * b2 - a12 * b1) / det
-        moved = False
-        dn = d
-        nu_ = uu
-        nv_ = vv
-        for _ in range(FOOT_HALVINGS + 1):
-            nu_ = uu + du
-            nv_ = vv + dv
-            if _in_group(nu_, nv_, TUV, j0, j1):
-                surface_point(Pw, p, q, U, V, nu_, nv_, Nu, Nv, left, right, tmp, Q)
-                dn = _dist3(x, y, z, Q[0], Q[1], Q[2])
-                if dn < d:
-                    moved = True
-                    break
-            du *= 0.5
-            dv *= 0.5
-        if not moved:
-            break
-        d = dn
-        uu = nu_
-        vv = nv_
-    return d
-
-
-@jit
-def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, left,
-                   right, tmp, P, Q, SKL, bin_, dscr):
-    """Deviation of triangle ``t`` (UV ``TUV[t]``, 3-D ``TX[t]``) of the group
-    ``j0:j1`` that tiles one cell's part of the face: at each barycentric sample the
-    parametric gap, or where it exceeds ``exact_above`` the larger of the surface
-    point's distance to the nearest triangle of the group and the triangle point's
-    distance to the surface over the group's UV triangles (:func:`_foot_in_group`)."""
-    worst = 0.0
-    for i in range(k + 1):
-        for j in range(k + 1 - i):
-            if (i == 0 and j == 0) or i == k or j == k:
-                continue  # the corners are exact
-            l1 = i / k
-            l2 = j / k
-            l0 = 1.0 - l1 - l2
-            u = l0 * TUV[t, 0, 0] + l1 * TUV[t, 1, 0] + l2 * TUV[t, 2, 0]
-            v = l0 * TUV[t, 0, 1] + l1 * TUV[t, 1, 1] + l2 * TUV[t, 2, 1]
-            surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
-            x = l0 * TX[t, 0, 0] + l1 * TX[t, 1, 0] + l2 * TX[t, 2, 0]
-            y = l0 * TX[t, 0, 1] + l1 * TX[t, 1, 1] + l2 * TX[t, 2, 1]
-            z = l0 * TX[t, 0, 2] + l1 * TX[t, 1, 2] + l2 * TX[t, 2, 2]
-            gap = _dist3(x, y, z, P[0], P[1], P[2])
-            if gap > exact_above and gap > worst:
-                d_st = point_triangle_distance(P[0], P[1], P[2], TX[t])
-                for g in range(j0, j1):
-                    if d_st <= exact_above:
-                        break
-                    if g != t:
-                        d_st = min(d_st, point_triangle_distance(P[0], P[1], P[2], TX[g]))
-                d_ts = _foot_in_group(Pw, p, q, U, V, x, y, z, u, v, gap, d_st, exact_above,
-                                      TUV, j0, j1, Nu, Nv, left, right, tmp, Q, SKL, bin_,
-                                      dscr)
-                gap = min(gap, max(d_st, d_ts))
-            worst = max(worst, gap)
-    return worst
-
-
-@jit
-def _group_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k,
-                           exact_above, out):
-    Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr = _dev_scratch(p, q)
-    for t in range(i0, i1):
-        g = group[t]
-        out[t] = _group_tri_dev(Pw, p, q, U, V, tri_uv, tri_xyz, t, starts[g],
-                                starts[g + 1], k, exact_above, Nu, Nv, left, right, tmp, P,
-                                Q, SKL, bin_, dscr)
-
-
-def group_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k, exact_above, out):
-    """Measured deviation of triangles that come in groups, each group the mesh of one
-    cell's part of the face (the two triangles of a cell inside the trimmed region, or
-    the clipped triangles of a cut cell): triangle ``t`` belongs to group ``group[t]``,
-    whose triangles are ``starts[g]:starts[g+1]`` (consecutive).  As
-    :func:`geomkit._kernels.tess.triangle_deviation`, except where a sample's gap
-    exceeds ``exact_above``: the surface point is measured against the nearest
-    triangle of its group (all of them are in the mesh, so this bounds its distance to
-    the mesh) and the triangle point's foot is sought only inside the group's UV
-    triangles (inside the face: a point of a clipped triangle that sticks out past the
-    trim is measured to the face, not to the surface beyond it)."""
-    _run(_group_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
-         tri_xyz, group, starts, k, exact_above, out)

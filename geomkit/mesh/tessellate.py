@@ -73,7 +73,7 @@ from geomkit.mesh.cells import (CELL_TARGET, EXACT_ABOVE, adaptive_cells, breakp
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import points, weld, weld_grid
-from geomkit._kernels.tess_trim import group_deviation
+from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
                                          packed_trims, planar_trimmed)
 from geomkit.validate import as_int
@@ -202,7 +202,7 @@ def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
 def _grouped_deviation(s: Surface, tri_uv, group, k: int, tol: float):
     """(n,) measured deviation of UV triangles in consecutive groups ``group`` (n,),
     each group one cell's part of the face
-    (:func:`geomkit._kernels.tess_trim.group_deviation`)."""
+    (:func:`geomkit._kernels.tess_lattice.group_deviation`)."""
     out = np.empty(len(tri_uv))
     if not len(tri_uv):
         return out

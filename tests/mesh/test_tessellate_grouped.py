@@ -1,4 +1,4 @@
-"""The grouped measure of trimmed grids (:func:`geomkit._kernels.tess_trim.group_deviation`).
+"""The grouped measure of trimmed grids (:func:`geomkit._kernels.tess_lattice.group_deviation`).
 
 * against brute force on a flat, non-uniformly parametrized square: a clipped
   triangle's point is measured to the part of the surface its group covers (dense
@@ -13,7 +13,7 @@ import numpy as np
 
 from geomkit import Surface
 from geomkit._kernels.tess import triangle_deviation
-from geomkit._kernels.tess_trim import group_deviation
+from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.tessellate import tessellate
 from geomkit.nurbs.evaluation import evaluate
 
