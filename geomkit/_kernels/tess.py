@@ -291,6 +291,26 @@ FOOT_STEPS = 12
 FOOT_HALVINGS = 8
 
 
+@jit_inline
+def foot_step(SKL, x, y, z):
+    """``(ok, du, dv)``: the Gauss-Newton step from the surface point ``SKL[0, 0]``
+    (with its first derivatives ``SKL[1, 0]``, ``SKL[0, 1]``) toward the foot of
+    ``(x, y, z)``; not ``ok`` when the normal equations are singular."""
+    r0 = x - SKL[0, 0, 0]
+    r1 = y - SKL[0, 0, 1]
+    r2 = z - SKL[0, 0, 2]
+    a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
+    a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
+    a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
+           + SKL[1, 0, 2] * SKL[0, 1, 2])
+    b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
+    b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
+    det = a11 * a22 - a12 * a12
+    if not det > 0.0:
+        return False, 0.0, 0.0
+    return True, (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
+
+
 @jit
 def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin, umax,
                   vmin, vmax, Nu, Nv, left, right, tmp, Q, SKL, bin_, dscr):
@@ -309,20 +329,9 @@ def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin,
         if d <= d_stop or d <= exact_above:
             break
         surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
-        r0 = x - SKL[0, 0, 0]
-        r1 = y - SKL[0, 0, 1]
-        r2 = z - SKL[0, 0, 2]
-        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
-        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
-        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
-               + SKL[1, 0, 2] * SKL[0, 1, 2])
-        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
-        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
-        det = a11 * a22 - a12 * a12
-        if not det > 0.0:
+        ok, du, dv = foot_step(SKL, x, y, z)
+        if not ok:
             break
-        du = (a22 * b1 - a12 * b2) / det
-        dv = (a11 * b2 - a12 * b1) / det
         moved = False
         for _ in range(FOOT_HALVINGS + 1):
             nu_ = min(umax, max(umin, uu + du))

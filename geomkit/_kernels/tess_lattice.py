@@ -12,7 +12,7 @@ from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import surface_derivs, surface_point
 from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _dist3, _run,
-                   point_triangle_distance)
+                   foot_step, point_triangle_distance)
 
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
 
@@ -382,20 +382,9 @@ def _foot_in_group(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, TUV,
         if d <= d_stop or d <= exact_above:
             break
         surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
-        r0 = x - SKL[0, 0, 0]
-        r1 = y - SKL[0, 0, 1]
-        r2 = z - SKL[0, 0, 2]
-        a11 = SKL[1, 0, 0] ** 2 + SKL[1, 0, 1] ** 2 + SKL[1, 0, 2] ** 2
-        a22 = SKL[0, 1, 0] ** 2 + SKL[0, 1, 1] ** 2 + SKL[0, 1, 2] ** 2
-        a12 = (SKL[1, 0, 0] * SKL[0, 1, 0] + SKL[1, 0, 1] * SKL[0, 1, 1]
-               + SKL[1, 0, 2] * SKL[0, 1, 2])
-        b1 = SKL[1, 0, 0] * r0 + SKL[1, 0, 1] * r1 + SKL[1, 0, 2] * r2
-        b2 = SKL[0, 1, 0] * r0 + SKL[0, 1, 1] * r1 + SKL[0, 1, 2] * r2
-        det = a11 * a22 - a12 * a12
-        if not det > 0.0:
+        ok, du, dv = foot_step(SKL, x, y, z)
+        if not ok:
             break
-        du = (a22 * b1 - a12 * b2) / det
-        dv = (a11 * b2 - a12 * b1) / det
         moved = False
         dn = d
         nu_ = uu
