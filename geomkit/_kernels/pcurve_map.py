@@ -129,6 +129,58 @@ def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
 
 
 @jit
+def edge_turn(X, have_x, Pw, p, U, t0, t1, n, rev, wrap0, wrap1, kind, frame, R, r,
+              tan_a):
+    """An edge's ``n`` samples on a surface of revolution with what the seam cut and
+    the loop chain read of them, in one call: the samples ``X`` (:func:`edge_local`'s
+    unless ``have_x``: then the given ones), their :func:`local_points` ``ab, rho``
+    (curve order), the least ``rho`` (``-inf`` when one is NaN), the largest extent
+    of ``X`` along x, y or z (NaN propagates), and ``W`` (n, 2): ``ab`` in loop order
+    (reversed when ``rev``) with coordinate ``c`` unwrapped (:func:`unwrap_angles`)
+    where ``wrap_c``."""
+    if have_x:
+        ab, rho = local_points(X, kind, frame, R, r, tan_a)
+    else:
+        X, ab, rho = edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a)
+    nearest = math.inf
+    for i in range(n):
+        if rho[i] != rho[i]:
+            nearest = -math.inf
+            break
+        if rho[i] < nearest:
+            nearest = rho[i]
+    spread = -math.inf
+    for c in range(3):
+        lo = X[0, c]
+        hi = X[0, c]
+        nan = lo != lo
+        for i in range(1, n):
+            x = X[i, c]
+            if x != x:
+                nan = True
+            elif x < lo:
+                lo = x
+            elif x > hi:
+                hi = x
+        d = math.nan if nan else hi - lo
+        if d != d or spread != spread:
+            spread = math.nan
+        elif d > spread:
+            spread = d
+    W = np.empty((n, 2))
+    for i in range(n):
+        j = n - 1 - i if rev else i
+        W[i, 0] = ab[j, 0]
+        W[i, 1] = ab[j, 1]
+    for c in range(2):
+        if (wrap0 if c == 0 else wrap1):
+            col = unwrap_angles(W[:, c].copy(), TWO_PI)
+            for i in range(n):
+                W[i, c] = col[i]
+    return X, ab, rho, nearest, spread, W
+
+
+@jit
 def iso_ends(ab, tol, maps):
     """Whether an edge's local coordinates ``ab`` (n, 2) keep coordinate 0 / 1 within
     ``tol`` of the first sample's (an iso-line: a circle, a generator), and the UV

@@ -40,7 +40,8 @@ from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
-                                         iso_ends, local_points, plane_piece)
+                                         edge_turn, iso_ends, local_points,
+                                         plane_piece)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -206,6 +207,8 @@ def _linspace(a: float, b: float, n: int) -> np.ndarray:
 
 _S_NS = np.linspace(0.0, 1.0, _NS)
 _S_NS.setflags(write=False)
+_NO_X = np.empty((0, 3))
+"""The samples :meth:`_Edge.turn` passes when the curve is evaluated in the call."""
 
 
 # --------------------------------------------------------------------- edges
@@ -260,6 +263,38 @@ class _Edge:
         if self.reverse:
             return ab[::-1].copy(), rho[::-1]
         return ab.copy(), rho
+
+    def turn(self, srf):
+        """``(nearest, spread, W)`` of the :data:`_NS` samples on the surface of
+        revolution ``srf``: :meth:`nearest_axis`, :meth:`spread` and the local
+        coordinates in loop order with the periodic ones unwrapped (read-only; a
+        seam cut and the face's chain read them), in one compiled call
+        (:func:`~geomkit._kernels.pcurve_map.edge_turn`); the other methods' caches
+        are filled with the same values."""
+        key = (srf, id(self.curve), "turn", self.reverse)
+        v = self._cache.get(key)
+        if v is not None:
+            return v
+        n = _NS
+        pk = (id(self.curve), n)
+        X = self._cache.get(pk)
+        p, U, Pw = self.curve
+        wrap = getattr(srf, "periodic", (False, True))
+        X, ab, rho, nearest, spread, W = edge_turn(
+            _NO_X if X is None else X, X is not None,
+            np.ascontiguousarray(Pw, dtype=np.float64), p,
+            np.asarray(U, dtype=np.float64), self.t0, self.t1, n, bool(self.reverse),
+            bool(wrap[0]), bool(wrap[1]), *srf.inverse)
+        W.setflags(write=False)
+        c = self._cache
+        c.setdefault(pk, X)
+        c[(srf, id(self.curve), n)] = (ab, rho, nearest)
+        c[("spread", id(self.curve), n)] = spread
+        for k in (0, 1):
+            if wrap[k]:
+                c[(srf, id(self.curve), n, self.reverse, k)] = W[:, k]
+        v = c[key] = (nearest, spread, W)
+        return v
 
     def spread(self, n: int) -> float:
         """The largest extent along x, y or z of :meth:`points` (kept)."""
@@ -373,12 +408,15 @@ def _chain(srf, loop, size):
     out, first, prev, prev_pole = [], {}, None, False
     apex = None  # the last edge that starts at a pole from another edge's end
     for e in loop:
-        ab, rho = e.local(srf, _NS)
-        # (the pole flags only when a sample may lie on the axis)
-        pole = rho <= 1e-9 * size if e.nearest_axis(srf, _NS) <= 1e-9 * size else None
-        if pole is not None and pole.all():
-            raise Unsupported("an edge lies on the surface's axis")
-        polar = pole is not None and bool(pole.any())
+        nearest, _, W = e.turn(srf)
+        if nearest > 1e-9 * size:  # no sample on the axis: W as it is
+            ab, pole, polar = W, None, False
+        else:  # (the pole flags only when a sample may lie on the axis)
+            ab, rho = e.local(srf, _NS)
+            pole = rho <= 1e-9 * size
+            if pole.all():
+                raise Unsupported("an edge lies on the surface's axis")
+            polar = bool(pole.any())
         if polar:  # angle undefined on the axis: take the neighbour's
             good = np.nonzero(~pole)[0]
             idx = good[np.clip(np.searchsorted(good, np.arange(len(s))), 0, len(good) - 1)]
@@ -387,7 +425,8 @@ def _chain(srf, loop, size):
         for c in (0, 1):
             if not srf.periodic[c]:
                 continue
-            ab[:, c] = unwrap(ab[:, c]) if polar else e.unwrapped(srf, _NS, c)
+            if ab is not W:
+                ab[:, c] = unwrap(ab[:, c]) if polar else e.unwrapped(srf, _NS, c)
             if prev is None:
                 continue
             if c == 1 and prev_pole and e.key in first:

@@ -105,6 +105,46 @@ def test_edge_samples_and_their_inverse_in_one_call(name):
             np.testing.assert_array_equal(rho, rho2)
 
 
+@pytest.mark.parametrize("name", ["cylinder", "cone", "torus", "spindle torus"])
+def test_edge_turn_against_the_methods_it_replaces(name):
+    """_Edge.turn (one edge_turn call): the same nearest distance to the axis, spread
+    and unwrapped loop-order coordinates as the per-method route (local, np.ptp,
+    np.unwrap), bit for bit, both ways along the edge, from the curve or from samples
+    already taken; a NaN sample gives -inf and NaN as the methods do."""
+    from geomkit.cad.analytic import arc_curve
+    from geomkit.cad.brep import _NS, _Edge
+
+    s = SURFACES[name]
+    # an arc around the axis (crossing the angle branch cut) and a wild cubic
+    arc = arc_curve(s.O + 0.3 * s.A, 3.5 * s.X, 3.5 * s.Y, 1.0, 0.3, 6.0)
+    rng = np.random.default_rng(5)
+    P = rng.normal(size=(7, 3)) * 4
+    cubic = (3, np.array([0, 0, 0, 0, 0.3, 0.5, 0.9, 1, 1, 1, 1.0]),
+             np.column_stack([P, np.ones(7)]))
+    for curve in (arc, cubic):
+        for rev in (False, True):
+            for pre in (False, True):
+                e, ref = _Edge(curve, 1, rev), _Edge(curve, 1, rev)
+                if pre:  # samples already taken (curve_eval's): turn inverts those
+                    e.points(_NS)
+                    ref.points(_NS)
+                nearest, spread, W = e.turn(s)
+                ab, rho = ref.local(s, _NS)
+                assert nearest == float(rho.min())
+                assert spread == float(np.ptp(ref.points(_NS), axis=0).max())
+                for c in (0, 1):
+                    want = np.unwrap(ab[:, c]) if s.periodic[c] else ab[:, c]
+                    np.testing.assert_array_equal(W[:, c], want)
+                assert not W.flags.writeable
+                # the other methods read the cache turn filled: the same values
+                np.testing.assert_array_equal(e.local(s, _NS)[0], ab)
+                assert e.nearest_axis(s, _NS) == nearest and e.spread(_NS) == spread
+    bad = (cubic[0], cubic[1], cubic[2].copy())
+    bad[2][3, 0] = np.nan
+    nearest, spread, _ = _Edge(bad, 2, False).turn(s)
+    assert nearest == -np.inf and np.isnan(spread)
+
+
 def test_iso_ends_against_the_numpy_iso_test_and_angle_maps():
     """iso_ends: the iso flags of the numpy test, the mapped ends of AngleMap (to
     rounding), NaN samples never iso, non-finite ends refused."""
