@@ -20,8 +20,7 @@ import math
 import numpy as np
 
 from .numba_ext.policy import jit_plain as jit
-from .basis import basis_funs, find_span
-from .bezier import curve_derivs
+from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 
 CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
 TWO_PI = 2.0 * math.pi
@@ -116,15 +115,29 @@ def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
     X = np.empty((n, 3))
     ab = np.empty((n, 2))
     rho = np.empty(n)
+    # curve_derivs at order 0 with its scratch allocated once (the same operations in
+    # the same order: the same points)
     dN = np.empty((1, p + 1))
-    row = np.empty((1, 3))
+    ndu, left, right, a = ders_scratch(p)
+    last = Pw.shape[0] - 1
     step = (t1 - t0) / (n - 1)
     for i in range(n):
         t = t1 if i == n - 1 else float(i) * step + t0
-        curve_derivs(Pw, p, U, t, 0, dN, row)
-        X[i, 0], X[i, 1], X[i, 2] = row[0, 0], row[0, 1], row[0, 2]
-        ab[i, 0], ab[i, 1], rho[i] = _local_xyz(row[0, 0], row[0, 1], row[0, 2], kind,
-                                                frame, R, r, tan_a)
+        span = find_span(last, p, t, U)
+        ders_basis_funs(span, t, p, 0, U, dN, ndu, left, right, a)
+        x = y = z = w = 0.0
+        for k in range(p + 1):
+            N = dN[0, k]
+            row = span - p + k
+            x += N * Pw[row, 0]
+            y += N * Pw[row, 1]
+            z += N * Pw[row, 2]
+            w += N * Pw[row, 3]
+        x /= w
+        y /= w
+        z /= w
+        X[i, 0], X[i, 1], X[i, 2] = x, y, z
+        ab[i, 0], ab[i, 1], rho[i] = _local_xyz(x, y, z, kind, frame, R, r, tan_a)
     return X, ab, rho
 
 
