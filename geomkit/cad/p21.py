@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from geomkit.cad.p21_cut import cut
 from geomkit.errors import FileFormatError
 
 __all__ = ["P21", "Ref", "Enum", "Typed", "DERIVED", "read_p21"]
@@ -62,35 +63,7 @@ _VALID = re.compile(r"(?:\s*+(?>'(?:[^']|'')*+'|#\d++|\.[A-Za-z_][A-Za-z_0-9]*+\
 """A record body made of tokens only (atomic groups: no backtracking)."""
 _COORDS = re.compile(r"[A-Za-z_]+\s*\(\s*'[^']*'\s*,\s*\(([-+0-9.EeDd,\s]*)\)\s*\)\s*")
 """``NAME('label', (numbers))``: the common point and direction records."""
-_COMMENT = re.compile(r"'(?:[^']|'')*'|/\*.*?\*/", re.S)
 _ENUMS = {"T": True, "F": False, "U": None}
-
-
-def _strip_comments(text: str) -> str:
-    """Comments ``/* ... */`` outside strings made one space.  Walks the comments
-    (a file has few) keeping the parity of the quotes before each: odd, it is inside
-    a string (``''`` escapes count twice); a text whose strings do not close is
-    left to :data:`_COMMENT`."""
-    if "/*" not in text:
-        return text
-    out, pos, scan, odd = [], 0, 0, False
-    i = text.find("/*")
-    while i >= 0:
-        odd ^= bool(text.count("'", scan, i) % 2)
-        scan = i
-        if odd:  # inside a string
-            i = text.find("/*", i + 2)
-            continue
-        j = text.find("*/", i + 2)
-        if j < 0:
-            break
-        out += [text[pos:i], " "]
-        pos = scan = j + 2
-        i = text.find("/*", pos)
-    if odd ^ bool(text.count("'", scan) % 2):  # a string left open outside comments
-        return _COMMENT.sub(lambda m: m.group(0) if m.group(0)[0] == "'" else " ", text)
-    out.append(text[pos:])
-    return "".join(out)
 
 
 def _unexpected(s: str, where: str):
@@ -379,30 +352,9 @@ class P21:
 
     def __init__(self, text: str, source: str = "STEP file"):
         self.source = source
-        text = _strip_comments(text)
-        if not text.lstrip().upper().startswith("ISO-10303-21"):
-            raise FileFormatError(f"{source}: not a STEP file (it does not begin with "
-                                  "ISO-10303-21;)")
-        head, data = self._sections(text)
+        head, self._raw, self.names, self._by_name, self._ordered = cut(text, source)
         self.schema, self.system = self._header(head)
-        self._raw: dict[int, str] = {}
-        self.names: dict[int, str] = {}
         self._cache: dict[int, tuple] = {}
-        self._by_name: dict | None = None  # entity name -> ids (of_type)
-        self._ordered: bool | None = None  # whether the ids increase through the file
-        self._cut(data)
-
-    def _sections(self, text):
-        up = text.upper()
-        h = up.find("HEADER;")
-        d = up.find("DATA;")
-        if h < 0 or d < 0:
-            raise FileFormatError(f"{self.source}: no HEADER or DATA section")
-        e = up.find("ENDSEC;", d)
-        if e < 0:
-            raise FileFormatError(f"{self.source}: the DATA section does not end "
-                                  "(no ENDSEC;): the file is truncated")
-        return text[h + 7:d], text[d + 5:e]
 
     def _header(self, head):
         schema = system = ""
@@ -415,37 +367,6 @@ class P21:
                 q = re.findall(r"'((?:[^']|'')*)'", r)
                 system = q[5] if len(q) > 5 else ""
         return schema, system
-
-    def _cut(self, data):
-        pieces = data.split(";")
-        buf = ""
-        for piece in pieces:
-            buf = buf + ";" + piece if buf else piece
-            if buf.count("'") % 2:  # a ';' inside a string: keep collecting
-                continue
-            rec, buf = buf.strip(), ""
-            if not rec:
-                continue
-            if rec[0] != "#":
-                raise FileFormatError(f"{self.source}: a record that does not start "
-                                      f"with #id: {rec[:40]!r}")
-            ident, eq, body = rec[1:].partition("=")
-            if not eq:
-                raise FileFormatError(f"{self.source}: record {rec[:30]!r} has no '='")
-            try:
-                i = int(ident)
-            except ValueError:
-                raise FileFormatError(f"{self.source}: bad record id "
-                                      f"#{ident.strip()[:20]!r}") from None
-            if i in self._raw:
-                raise FileFormatError(f"{self.source}: record #{i} is defined twice")
-            body = body.strip()
-            self._raw[i] = body
-            k = body.find("(")
-            self.names[i] = body[:k].strip().upper() if k > 0 else ""
-        if buf.strip():
-            raise FileFormatError(f"{self.source}: the DATA section ends inside a "
-                                  "string (an unmatched quote)")
 
     def __len__(self) -> int:
         return len(self._raw)

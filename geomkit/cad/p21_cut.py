@@ -1,0 +1,186 @@
+"""A STEP physical file (ISO 10303-21) cut into its records, for
+:class:`geomkit.cad.p21.P21`: the HEADER section's text, each record's body (the text
+after ``#id =``) and entity name, and the index of the names.
+
+The DATA section's records end at each ``;`` after an even number of quotes (``''``
+escapes count twice); one pass over the text's bytes
+(:func:`geomkit._kernels.p21_scan.cut_records`) reads their ids, bodies and names.
+A text that pass leaves (a fault to name, a duplicate id, a character outside
+Latin-1, whitespace it does not strip) is cut record by record
+(:func:`cut_records`), the reference route, with the same result or a
+:class:`~geomkit.errors.FileFormatError` naming the fault.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from geomkit._kernels.p21_scan import (BODY0, BODY1, CODE, ID, LOWER, NAME0, NAME1,
+                                       cut_records as scan_records,
+                                       find_upper as find_upper_bytes)
+from geomkit.errors import FileFormatError
+
+__all__ = ["cut", "cut_records", "sections", "strip_comments", "find_upper"]
+
+_COMMENT = re.compile(r"'(?:[^']|'')*'|/\*.*?\*/", re.S)
+_SHARP_S = "\xdf"
+"""The one Latin-1 character whose upper case is longer (``'SS'``)."""
+
+
+def strip_comments(text: str) -> str:
+    """Comments ``/* ... */`` outside strings made one space.  Walks the comments
+    (a file has few) keeping the parity of the quotes before each: odd, it is inside
+    a string (``''`` escapes count twice); a text whose strings do not close is
+    left to :data:`_COMMENT`."""
+    if "/*" not in text:
+        return text
+    out, pos, scan, odd = [], 0, 0, False
+    i = text.find("/*")
+    while i >= 0:
+        odd ^= bool(text.count("'", scan, i) % 2)
+        scan = i
+        if odd:  # inside a string
+            i = text.find("/*", i + 2)
+            continue
+        j = text.find("*/", i + 2)
+        if j < 0:
+            break
+        out += [text[pos:i], " "]
+        pos = scan = j + 2
+        i = text.find("/*", pos)
+    if odd ^ bool(text.count("'", scan) % 2):  # a string left open outside comments
+        return _COMMENT.sub(lambda m: m.group(0) if m.group(0)[0] == "'" else " ", text)
+    out.append(text[pos:])
+    return "".join(out)
+
+
+def find_upper(text: str, b, word: str, start: int) -> int:
+    """``text.upper().find(word, start)`` for a Latin-1 text without a sharp s (whose
+    bytes are ``b``) and an upper-case ``word`` ending in a letter and ``;``: the exact
+    word's first place, unless a word in other case may come first (a ``;`` after that
+    letter in either case before it), then a scan of the bytes."""
+    i = text.find(word, start)
+    stop = b.size if i < 0 else i + len(word) - 1
+    semi = np.flatnonzero(b[start + 1:stop] == 59) + start  # (each ';''s byte before)
+    if ((b[semi] | 32) == ord(word[-2].lower())).any():
+        return find_upper_bytes(b, np.frombuffer(word.encode(), np.uint8), start)
+    return i
+
+
+def _check_sections(source, h, d, e):
+    """Raise unless the HEADER and DATA sections were found (positions, -1 for none)
+    and DATA ends."""
+    if h < 0 or d < 0:
+        raise FileFormatError(f"{source}: no HEADER or DATA section")
+    if e < 0:
+        raise FileFormatError(f"{source}: the DATA section does not end "
+                              "(no ENDSEC;): the file is truncated")
+
+
+def sections(text: str, source: str):
+    """``(HEADER text, DATA text)`` found in the upper-cased text (the reference
+    route)."""
+    up = text.upper()
+    h = up.find("HEADER;")
+    d = up.find("DATA;")
+    e = up.find("ENDSEC;", d) if d >= 0 else -1
+    _check_sections(source, h, d, e)
+    return text[h + 7:d], text[d + 5:e]
+
+
+def cut(text: str, source: str):
+    """``(header, raw, names, by_name, ordered)`` of a STEP file's text: the HEADER
+    section's text, ``{id: body}`` and ``{id: entity name}`` (upper case, ``''`` for a
+    complex record) in file order, ``{name: ids}`` in file order (None: left to
+    :meth:`~geomkit.cad.p21.P21.of_type` to build) and whether the ids increase
+    through the file (None: unknown)."""
+    text = strip_comments(text)
+    lead = len(text) - len(text.lstrip())
+    if not text[lead:lead + 12].upper().startswith("ISO-10303-21"):
+        raise FileFormatError(f"{source}: not a STEP file (it does not begin with "
+                              "ISO-10303-21;)")
+    try:
+        b = np.frombuffer(text.encode("latin-1"), np.uint8)
+    except UnicodeEncodeError:  # (a text not read from a file's bytes)
+        b = None
+    if b is None or _SHARP_S in text:  # (upper-cased to 'SS': other positions)
+        head, data = sections(text, source)
+        return (head,) + cut_records(data, source) + (None, None)
+    h, d = find_upper(text, b, "HEADER;", 0), find_upper(text, b, "DATA;", 0)
+    e = find_upper(text, b, "ENDSEC;", d) if d >= 0 else -1
+    _check_sections(source, h, d, e)
+    return (text[h + 7:d],) + _scan(text, b, d + 5, e, source)
+
+
+def _scan(text, b, start, stop, source):
+    """``(raw, names, by_name, ordered)`` of the DATA section ``text[start:stop]``
+    (``b``: the text's bytes) from one pass over its records, or from
+    :func:`cut_records` for a text that pass leaves."""
+    part = b[start:stop]
+    ends = np.flatnonzero(part == 59)  # ';'
+    quotes = np.flatnonzero(part == 39)
+    if quotes.size % 2:  # the text ends inside a string
+        return cut_records(text[start:stop], source) + (None, None)
+    if quotes.size:  # the ';' after an even number of quotes
+        ends = ends[(np.searchsorted(quotes, ends) & 1) == 0]
+    ends = np.concatenate([[-1], ends, [part.size]]) + start
+    status, recs, firsts, n, m = scan_records(b, ends)
+    if status:
+        return cut_records(text[start:stop], source) + (None, None)
+    recs = recs[:n]
+    ids = recs[:, ID].tolist()
+    raw = dict(zip(ids, [text[a:e] for a, e in zip(recs[:, BODY0].tolist(),
+                                                    recs[:, BODY1].tolist())]))
+    if len(raw) != n:  # an id defined twice: named record by record
+        return cut_records(text[start:stop], source) + (None, None)
+    rows = recs[firsts[:m]]
+    first = [text[a:e] for a, e in zip(rows[:, NAME0].tolist(), rows[:, NAME1].tolist())]
+    codes = recs[:, CODE]
+    names = dict(zip(ids, [first[c] for c in codes.tolist()]))
+    if recs[:, LOWER].any():  # names to upper-case (then of_type builds the index)
+        return raw, {i: v.upper() for i, v in names.items()}, None, None
+    order = np.argsort(codes, kind="stable")
+    ends = np.cumsum(np.bincount(codes, minlength=m)).tolist()
+    ids_by_name = recs[order, ID].tolist()
+    by_name = {first[c]: ids_by_name[a:e]
+               for c, (a, e) in enumerate(zip([0] + ends[:-1], ends))}
+    return raw, names, by_name, bool(np.all(recs[1:, ID] > recs[:-1, ID]))
+
+
+def cut_records(data: str, source: str):
+    """``(raw, names)`` of the DATA section's text, record by record (the reference
+    route: it names the first fault)."""
+    raw: dict[int, str] = {}
+    names: dict[int, str] = {}
+    pieces = data.split(";")
+    buf = ""
+    for piece in pieces:
+        buf = buf + ";" + piece if buf else piece
+        if buf.count("'") % 2:  # a ';' inside a string: keep collecting
+            continue
+        rec, buf = buf.strip(), ""
+        if not rec:
+            continue
+        if rec[0] != "#":
+            raise FileFormatError(f"{source}: a record that does not start "
+                                  f"with #id: {rec[:40]!r}")
+        ident, eq, body = rec[1:].partition("=")
+        if not eq:
+            raise FileFormatError(f"{source}: record {rec[:30]!r} has no '='")
+        try:
+            i = int(ident)
+        except ValueError:
+            raise FileFormatError(f"{source}: bad record id "
+                                  f"#{ident.strip()[:20]!r}") from None
+        if i in raw:
+            raise FileFormatError(f"{source}: record #{i} is defined twice")
+        body = body.strip()
+        raw[i] = body
+        k = body.find("(")
+        names[i] = body[:k].strip().upper() if k > 0 else ""
+    if buf.strip():
+        raise FileFormatError(f"{source}: the DATA section ends inside a "
+                              "string (an unmatched quote)")
+    return raw, names
