@@ -12,7 +12,7 @@ import numpy as np
 
 from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.nurbs.trims import evaluate_trim_curve
+from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack
 from geomkit.cad.uvmap import map_pcurve
 from geomkit._kernels.trim_loops import loop_joins
 
@@ -33,10 +33,12 @@ def _joins(pieces, domain=None):
     control point lies in ``domain`` (closed), in one compiled call."""
     if not pieces:
         return np.zeros(0), True
+    off = [0]
+    for c in pieces:
+        off.append(off[-1] + c.control_points.shape[0])
     Q = np.concatenate([c.control_points for c in pieces])
-    off = np.cumsum([0] + [c.control_points.shape[0] for c in pieces])
     box = _NO_BOX if domain is None else np.array([*domain[0], *domain[1]], dtype=float)
-    return loop_joins(Q, off, box)
+    return loop_joins(Q, np.array(off, dtype=np.int64), box)
 
 
 def join_gaps(pieces) -> np.ndarray:
@@ -289,9 +291,10 @@ def same_point_3d(base, tol3d: float, samples: int = 17):
 
 
 def finish_loop(pieces, base, periods, ftol: float, what: str):
-    """``(pieces, gaps, repairs)``: one trim loop's pieces made a closed loop on
-    ``base``: chained (edge order, seam sides: ``periods`` of the closed directions)
-    when consecutive pieces do not meet, control points just outside the domain
+    """``(loop, gaps, repairs)``: one trim loop's pieces made a closed
+    :class:`~geomkit.nurbs.trims.TrimLoop` on ``base`` (no pieces: an empty list):
+    chained (edge order, seam sides: ``periods`` of the closed directions) when
+    consecutive pieces do not meet, control points just outside the domain
     snapped onto it, what is left outside or open repaired when the face's own
     tolerance ``ftol`` covers it, measured in 3-D (:func:`clip_in_3d`,
     :func:`same_point_3d`), rounding gaps bridged (:func:`close_gaps`).  ``gaps``: the
@@ -299,9 +302,14 @@ def finish_loop(pieces, base, periods, ftol: float, what: str):
     face's ``approx_error`` holds them)."""
     (u0, u1), (v0, v1) = domain = base.domain
     size = max(u1 - u0, v1 - v0)
-    gaps, inside = _joins(pieces, domain)
-    if inside and not bool((gaps > 1e-9 * size).any()):  # closed, in the domain
-        return list(pieces), [], []
+    if pieces:  # packed once: the surface's check of the loop reads the same arrays
+        loop = TrimLoop(tuple(pieces))
+        pk = loop_pack(loop)
+        gaps, inside = loop_joins(pk[0], pk[2], np.array([u0, u1, v0, v1]))
+        if inside and not bool((gaps > 1e-9 * size).any()):  # closed, in the domain
+            return loop, [], []
+    else:
+        return [], [], []
     probe = same_point_3d(base, ftol)  # a gap at a pole is not out of order
     far = np.flatnonzero(gaps > GAP_TOL * size).tolist()
     nxt = pieces[1:] + pieces[:1]
@@ -316,4 +324,4 @@ def finish_loop(pieces, base, periods, ftol: float, what: str):
         gaps = None
     same = same_point_3d(base, ftol)
     pieces, g = close_gaps(pieces, domain, what, same, gaps)
-    return pieces, moved + g, moved3 + same.errors
+    return TrimLoop(tuple(pieces)), moved + g, moved3 + same.errors

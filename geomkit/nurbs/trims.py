@@ -238,19 +238,31 @@ def first_point_outside(curve: TrimCurve, box: np.ndarray, tol: float):
 
 def _packed(pcs):
     """A loop's pieces as :func:`~geomkit._kernels.trim_loops.loop_points` takes them."""
-    Q = np.concatenate([c.control_points for c in pcs])
-    n = np.cumsum([0] + [c.control_points.shape[0] for c in pcs])
-    u = np.cumsum([0] + [c.knots.shape[0] for c in pcs])
-    return (Q, np.concatenate([c.weights for c in pcs]), n,
+    n, u = [0], [0]
+    for c in pcs:
+        n.append(n[-1] + c.control_points.shape[0])
+        u.append(u[-1] + c.knots.shape[0])
+    return (np.concatenate([c.control_points for c in pcs]),
+            np.concatenate([c.weights for c in pcs]), np.array(n, dtype=np.int64),
             np.array([c.degree for c in pcs], dtype=np.int64),
-            np.concatenate([c.knots for c in pcs]), u)
+            np.concatenate([c.knots for c in pcs]), np.array(u, dtype=np.int64))
+
+
+def loop_pack(loop: TrimLoop) -> tuple:
+    """:func:`_packed` of a loop's pieces, kept with the loop (it is immutable): a
+    reader that tests its loops before building the surface packs each once."""
+    pk = loop.__dict__.get("_pack")
+    if pk is None:
+        pk = _packed(loop.pieces)
+        object.__setattr__(loop, "_pack", pk)
+    return pk
 
 
 def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
     """Points along a loop (for validation only: area, domain containment): a
     polyline piece's points, a curved piece at ``per_segment`` parameters a span and
     its end; every piece in one compiled call."""
-    return loop_points(*_packed(loop.pieces), int(per_segment))
+    return loop_points(*loop_pack(loop), int(per_segment))
 
 
 def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
@@ -264,7 +276,7 @@ def check_loop(loop: TrimLoop, domain, close: float, field: str) -> None:
         raise InvalidTrimError("a loop of no pieces", field)
     close = float(close)
     box = np.array([u0 - close, u1 + close, v0 - close, v1 + close])
-    i, gap, inside, area, spread = loop_check(*_packed(pcs), 24, close, box)
+    i, gap, inside, area, spread = loop_check(*loop_pack(loop), 24, close, box)
     if i >= 0:   # the first gap too wide
         c, nxt = pcs[i], pcs[(i + 1) % len(pcs)]
         if len(pcs) == 1:

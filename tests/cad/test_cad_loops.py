@@ -122,3 +122,36 @@ def test_a_clipped_rational_piece_stays_in_the_domain():
         assert got.degree == 2 and np.array_equal(got.knots, c.knots)
         assert np.array_equal(got.weights, c.weights) and len(moves) == 1
     assert back_out > 0  # the case this guards against occurs
+
+
+def test_finish_loop_gives_a_packed_loop_the_surface_still_checks():
+    """A closed loop inside the domain comes back at once as a TrimLoop packed for the
+    surface's check (the arrays of a fresh pack); the surface still refuses it when it
+    is not a valid trim (here: it encloses no area)."""
+    from geomkit.cad.loops import finish_loop
+    from geomkit.errors import InvalidTrimError
+    from geomkit.nurbs.surface import Surface
+    from geomkit.nurbs.trims import TrimLoop, _packed, loop_pack
+
+    P = np.zeros((2, 2, 3))
+    P[1, :, 0] = 1.0
+    P[:, 1, 1] = 1.0
+    base = Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], P)
+    sq = [[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.1, 0.9], [0.1, 0.1]]
+    pieces = [TrimCurve.polyline([p, q]) for p, q in zip(sq, sq[1:])]
+    loop, gaps, repairs = finish_loop(pieces, base, (0.0, 0.0), 1e-9, "face")
+    assert isinstance(loop, TrimLoop) and loop.pieces == tuple(pieces)
+    assert gaps == [] and repairs == []
+    pk = loop_pack(loop)
+    assert loop_pack(loop) is pk
+    for a, b in zip(pk, _packed(pieces)):
+        np.testing.assert_array_equal(a, b)
+    s = base.with_trim([loop])
+    assert s.trim[0] is loop
+    flat = [TrimCurve.polyline([[0.1, 0.5], [0.9, 0.5]]),
+            TrimCurve.polyline([[0.9, 0.5], [0.1, 0.5]])]
+    loop, _, _ = finish_loop(flat, base, (0.0, 0.0), 1e-9, "face")
+    assert isinstance(loop, TrimLoop) and len(loop_pack(loop)) == 6
+    with pytest.raises(InvalidTrimError, match="degenerate loop"):
+        base.with_trim([loop])
+    assert finish_loop([], base, (0.0, 0.0), 1e-9, "face") == ([], [], [])
