@@ -512,12 +512,32 @@ def _pieces(srf, loop, chains, fu, fv, tol, size, bridge=True):
     return out
 
 
+def _distinct(x):
+    """``np.unique`` of a non-decreasing array (its values, without the sort)."""
+    keep = np.empty(len(x), dtype=bool)
+    keep[:1] = True
+    np.not_equal(x[1:], x[:-1], out=keep[1:])
+    return x[keep]
+
+
+def _diagonal(sk):
+    """``TrimCurve.polyline`` of the points ``(sk, sk)`` (the same knots: chord
+    length), its checks made once on ``sk``: increasing and finite, else the
+    polyline's error."""
+    d = np.diff(sk)
+    if not (np.isfinite(sk).all() and (d > 0).all()):
+        return TrimCurve.polyline(np.column_stack([sk, sk]))
+    t = np.concatenate([[0.0], np.cumsum(np.hypot(d, d))])
+    t /= t[-1]
+    return TrimCurve(1, readonly(np.concatenate([[0.0], t, [1.0]])),
+                     readonly(np.column_stack([sk, sk])), readonly(np.ones(len(sk))))
+
+
 def _fit(srf, e, ab, fu, fv, tol):
     """A non-iso edge: piecewise-quintic interpolant of its mapped local coordinates
     (angles on the branch of the chained samples); compiled on the surfaces of
     revolution, :func:`~geomkit.cad.uvmap.map_pcurve` of the closed-form inversion
     otherwise."""
-    s0 = np.linspace(0.0, 1.0, len(ab))
     last = [None, None]  # the parameters of the last call and their local coordinates
 
     def loc(s, k):
@@ -529,7 +549,7 @@ def _fit(srf, e, ab, fu, fv, tol):
             last[:] = s, v
         x = v[:, k]
         if srf.periodic[k]:
-            ref = np.interp(s, s0, ab[:, k])
+            ref = np.interp(s, np.linspace(0.0, 1.0, len(ab)), ab[:, k])
             x = ref + (x - ref + math.pi) % TWO_PI - math.pi
         f = fu if k == 0 else fv
         return x if f is None else f(x)
@@ -537,11 +557,12 @@ def _fit(srf, e, ab, fu, fv, tol):
     # the edge's own knots start the spans (a quintic across a knot of the edge
     # converges slowly)
     p, U, _ = e.curve
-    sk = (np.unique(np.asarray(U, float)[p:len(U) - p]) - e.t0) / (e.t1 - e.t0)
-    sk = np.unique(np.clip(1.0 - sk if e.reverse else sk, 0.0, 1.0))
+    sk = (_distinct(np.asarray(U, float)[p:len(U) - p]) - e.t0) / (e.t1 - e.t0)
+    sk = np.clip(sk, 0.0, 1.0) if not e.reverse else np.clip(1.0 - sk, 0.0, 1.0)[::-1]
+    sk = _distinct(sk) if np.isfinite(sk).all() else np.unique(sk)
     if sk.size < 2:
         sk = np.array([0.0, 1.0])
-    diag = TrimCurve.polyline(np.column_stack([sk, sk]))
+    diag = _diagonal(sk)
     code = KIND_CODE.get(srf.kind)
     if code is not None and all(f is None or isinstance(f, AngleMap) for f in (fu, fv)):
         frame = srf.frame

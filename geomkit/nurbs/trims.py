@@ -8,6 +8,7 @@ loops as rational Bézier segments for the classification and distance kernels.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,9 +113,12 @@ class TrimCurve:
         if type(points) in (list, tuple, np.ndarray) and len(points) == 2:
             # a segment (most polylines: bridges, seams): its knots are [0, 0, 1, 1]
             P = np.array(points, dtype=np.float64)
-            if P.shape == (2, 2) and np.isfinite(P).all() and (P[0] != P[1]).any():
-                P.setflags(write=False)
-                return cls(1, SEGMENT_KNOTS, P, _TWO_ONES)
+            if P.shape == (2, 2):  # (the tests on four floats: numpy's per-call cost
+                a, b, c, d = P.ravel().tolist()  # is most of it on so few)
+                if (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)
+                        and math.isfinite(d) and (a != c or b != d)):
+                    P.setflags(write=False)
+                    return cls(1, SEGMENT_KNOTS, P, _TWO_ONES)
         P = as_float_array(points, field, shape=(None, 2), error=InvalidTrimError)
         if P.shape[0] < 2:
             raise InvalidTrimError(f"a polyline needs at least 2 points, got {P.shape[0]}", field)

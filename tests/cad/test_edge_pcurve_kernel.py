@@ -116,3 +116,30 @@ def test_a_real_part_reads_the_same_by_either_route(monkeypatch):
                 pb = evaluate_trim_curve(cb, np.linspace(cb.knots[0], cb.knots[-1], 101))
                 assert np.abs(pa - pb).max() <= 1e-11 * span
     assert fitted > 100  # the part's fillets and holes take the fitted route
+
+
+def test_fit_start_spans_as_the_polyline_route_builds_them():
+    """_fit's starting spans (the diagonal polyline over the edge's knots, both ways
+    along it) are TrimCurve.polyline's, bit for bit; a knot vector that is not
+    finite is refused by the polyline's check, as before."""
+    from geomkit.errors import InvalidTrimError
+    from geomkit.nurbs.surface import TrimCurve
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        inner = np.sort(rng.choice(rng.uniform(0.1, 0.9, 6), 6))  # repeated knots
+        U = np.concatenate([[0.0] * 4, inner, [1.0] * 4]) * rng.uniform(0.5, 3.0)
+        p, t0, t1 = 3, float(U[3]), float(U[-4])
+        for rev in (False, True):
+            ref = (np.unique(U[p:len(U) - p]) - t0) / (t1 - t0)
+            ref = np.unique(np.clip(1.0 - ref if rev else ref, 0.0, 1.0))
+            sk = (brep._distinct(U[p:len(U) - p]) - t0) / (t1 - t0)
+            sk = np.clip(sk, 0.0, 1.0) if not rev else np.clip(1.0 - sk, 0.0, 1.0)[::-1]
+            sk = brep._distinct(sk)
+            np.testing.assert_array_equal(sk, ref)
+            a, b = brep._diagonal(sk), TrimCurve.polyline(np.column_stack([ref, ref]))
+            np.testing.assert_array_equal(a.knots, b.knots)
+            np.testing.assert_array_equal(a.control_points, b.control_points)
+            np.testing.assert_array_equal(a.weights, b.weights)
+    with pytest.raises(InvalidTrimError):
+        brep._diagonal(np.array([0.0, np.nan, 1.0]))
