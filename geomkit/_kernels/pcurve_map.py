@@ -227,29 +227,55 @@ def iso_ends(ab, tol, maps):
 
 
 @jit
+def _crossings(lo, hi, c):
+    """How many angles ``c + 2 pi k`` lie in ``[lo, hi]``."""
+    return math.floor((hi - c) / TWO_PI) - math.ceil((lo - c) / TWO_PI) + 1
+
+
+@jit
 def seam_margins(paths, starts, spans, cand):
     """Margins of the candidate seam angles ``cand`` (:func:`geomkit.cad.stepseam.
     cut_at_seam`): -1 where a loop around the axis (``paths``, the unwrapped angles of
     all such loops one after another, loop ``k`` from ``starts[k]`` to
     ``starts[k + 1]``) is not crossed exactly once or the angle lies in a span
     ``spans[i] = (lo, hi)`` of another loop; else the distance to the nearest span
-    (at most pi)."""
+    (at most pi).
+
+    Candidates evenly spaced around the turn (as the reader's are) are counted from
+    each path step's few neighbours: a step shorter than the turn crosses only the
+    candidates within its angles, found by their index (two more each side), each
+    counted by the same formula as the others."""
     m = cand.shape[0]
     margin = np.full(m, math.pi)
+    step = (cand[m - 1] - cand[0]) / (m - 1) if m > 1 else TWO_PI
+    even = m > 1 and abs(m * step - TWO_PI) <= 1e-9
     for j in range(m):
-        c = cand[j]
-        for k in range(starts.shape[0] - 1):
-            total = 0.0
-            for i in range(starts[k], starts[k + 1] - 1):
-                lo = min(paths[i], paths[i + 1])
-                hi = max(paths[i], paths[i + 1])
-                n = math.floor((hi - c) / TWO_PI) - math.ceil((lo - c) / TWO_PI) + 1
-                if n > 0:
-                    total += n
-            if total != 1:
+        even = even and abs(cand[j] - (cand[0] + j * step)) <= 1e-3 * step
+    counts = np.zeros(m)
+    for k in range(starts.shape[0] - 1):
+        counts[:] = 0.0
+        for i in range(starts[k], starts[k + 1] - 1):
+            lo = min(paths[i], paths[i + 1])
+            hi = max(paths[i], paths[i + 1])
+            if even and hi - lo < TWO_PI - 8 * step:
+                j0 = math.floor((lo - cand[0]) / step) - 2
+                for jj in range(j0, j0 + int((hi - lo) / step) + 6):
+                    j = jj % m
+                    n = _crossings(lo, hi, cand[j])
+                    if n > 0:
+                        counts[j] += n
+            else:  # (a NaN angle or a long step: every candidate)
+                for j in range(m):
+                    n = _crossings(lo, hi, cand[j])
+                    if n > 0:
+                        counts[j] += n
+        for j in range(m):
+            if counts[j] != 1:
                 margin[j] = -1.0
+    for j in range(m):
         if margin[j] < 0:
             continue
+        c = cand[j]
         for i in range(spans.shape[0]):
             w = spans[i, 1] - spans[i, 0]
             d = (c - spans[i, 0]) % TWO_PI

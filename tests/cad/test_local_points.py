@@ -221,6 +221,35 @@ def test_seam_margins_against_numpy():
         np.testing.assert_array_equal(got, _numpy_margins(paths, spans, _CANDIDATES))
 
 
+def test_seam_margins_at_candidates_long_steps_and_uneven_candidates():
+    """The windowed count (evenly spaced candidates) against numpy where it is
+    tightest: path samples exactly on candidate angles (a turn away too), steps
+    longer than a turn, NaN angles, and candidates that are not evenly spaced (every
+    candidate counted)."""
+    from geomkit.cad.stepseam import _CANDIDATES
+    from geomkit._kernels.pcurve_map import seam_margins
+
+    rng = np.random.default_rng(8)
+    uneven = np.sort(rng.uniform(0, 2 * np.pi, 300))
+    for trial in range(200):
+        cand = uneven if trial % 4 == 3 else _CANDIDATES
+        paths = []
+        for _ in range(rng.integers(1, 3)):
+            n = rng.integers(3, 60)
+            pts = rng.choice(cand, n) + 2 * np.pi * rng.integers(-2, 3, n)
+            if trial % 5 == 0:  # long steps
+                pts[1:] += np.cumsum(rng.uniform(0, 9, n - 1))
+            pts.sort() if trial % 2 else None
+            paths.append(pts)
+        if trial == 7:
+            paths[0][1] = np.nan
+        spans = [tuple(sorted(rng.uniform(-7, 7, 2))) for _ in range(rng.integers(0, 3))]
+        starts = np.cumsum([0] + [len(p) for p in paths])
+        got = seam_margins(np.concatenate(paths), starts,
+                           np.array(spans, dtype=np.float64).reshape(-1, 2), cand)
+        np.testing.assert_array_equal(got, _numpy_margins(paths, spans, cand))
+
+
 def _numpy_plane_piece(curve, reverse, s):
     """The numpy reference of a plane face's piece: the edge's NURBS with its
     control points mapped into the plane's frame, run in loop order."""
