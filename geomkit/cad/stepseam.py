@@ -138,7 +138,9 @@ def cut_at_seam(srf, loops, sweep=False):
             continue
         path = [bs[0]]
         for b in bs[1:]:  # one continuous angle along the loop
-            path.append(b + TWO_PI * np.round((path[-1][-1] - b[0]) / TWO_PI))
+            k = (float(path[-1][-1]) - float(b[0])) / TWO_PI
+            # (round half to even, as np.round, on a Python float: a tenth of its cost)
+            path.append(b + TWO_PI * (round(k) if math.isfinite(k) else k))
         path = np.concatenate(path)
         turns.append(int(round(float(path[-1] - path[0]) / TWO_PI)))
         if turns[-1]:
