@@ -163,3 +163,164 @@ def cut_records(b, ends):
             nfirst += 1
         k += 1
     return 0, recs, firsts, k, nfirst
+
+
+# Python's str.isspace over Latin-1 (what float() and the regex \s skip)
+_WS = np.zeros(256, np.bool_)
+_WS[[9, 10, 11, 12, 13, 28, 29, 30, 31, 32, 133, 160]] = True
+_FWS = _WS.copy()
+_FWS[28:32] = False
+"""What float() strips around a number (not the ASCII separators 0x1c-0x1f)."""
+_P10 = np.array([10.0 ** e for e in range(23)])
+"""The powers of ten a double holds exactly."""
+_W_MAX = 2 ** 53
+
+
+@jit
+def _number(b, a, e):
+    """``(status, value)`` of the text ``b[a:e]`` as ``float`` reads it: 0 when read
+    exactly here (a sign, a significand of at most 2**53 once its trailing zeros are
+    taken into the exponent, a power of ten up to 22: one correctly rounded product or
+    quotient, Clinger's fast path), 3 for ``-0`` (the value 0.0, the caller sets the
+    sign), 2 otherwise (for ``float`` to read or reject)."""
+    while a < e and _FWS[b[a]]:
+        a += 1
+    while e > a and _FWS[b[e - 1]]:
+        e -= 1
+    neg = False
+    if a < e and (b[a] == 43 or b[a] == 45):
+        neg = b[a] == 45
+        a += 1
+    w = 0
+    zeros = 0  # zeros read but not yet taken into w (trailing ones stay out)
+    digits = 0
+    frac = 0
+    point = False
+    while a < e:
+        c = b[a]
+        if 48 <= c <= 57:
+            digits += 1
+            if point:
+                frac += 1
+            if c == 48:
+                zeros += 1
+            else:
+                for _ in range(zeros + 1):
+                    if w > (_W_MAX - 9) // 10:
+                        return 2, 0.0
+                    w *= 10
+                w += c - 48
+                zeros = 0
+        elif c == 46 and not point:
+            point = True
+        else:
+            break
+        a += 1
+    if digits == 0:
+        return 2, 0.0
+    ex = 0
+    if a < e and (b[a] == 69 or b[a] == 101):
+        a += 1
+        eneg = False
+        if a < e and (b[a] == 43 or b[a] == 45):
+            eneg = b[a] == 45
+            a += 1
+        if a == e:
+            return 2, 0.0
+        while a < e:
+            c = b[a]
+            if not 48 <= c <= 57 or ex > 1000:
+                return 2, 0.0
+            ex = ex * 10 + (c - 48)
+            a += 1
+        if eneg:
+            ex = -ex
+    if a != e:
+        return 2, 0.0
+    if w == 0:
+        return (3 if neg else 0), 0.0
+    p = ex - frac + zeros
+    if p > 22 or p < -22:
+        return 2, 0.0
+    v = float(w) * _P10[p] if p >= 0 else float(w) / _P10[-p]
+    return 0, -v if neg else v
+
+
+@jit
+def read_coordinates(b, ends):
+    """``(values, counts, status, negative)`` of the records ``b[ends[r - 1]:ends[r]]`` (``ends[-1]``
+    taken as 0 for the first), each matched as ``NAME('label', (numbers))`` (the
+    readers' plain points and directions, :data:`geomkit.cad.p21._COORDS`): status 0
+    with ``counts[r]`` (at most 3) values read exactly (:func:`_number`), 1 when the
+    record is not of that form, 2 when ``float`` is to read its numbers (or
+    another count); ``negative`` marks the values that are ``-0.0`` (stored as 0.0)."""
+    n = ends.size
+    values = np.zeros((n, 3))
+    counts = np.zeros(n, np.int64)
+    status = np.zeros(n, np.int8)
+    negative = np.zeros((n, 3), np.bool_)
+    for r in range(n):
+        a = ends[r - 1] if r > 0 else 0
+        e = ends[r]
+        i = a
+        while i < e and (65 <= b[i] <= 90 or 97 <= b[i] <= 122 or b[i] == 95):
+            i += 1
+        ok = i > a
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        ok = ok and i < e and b[i] == 40  # '('
+        i += 1
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        ok = ok and i < e and b[i] == 39  # the label's quote
+        i += 1
+        while ok and i < e and b[i] != 39:
+            i += 1
+        ok = ok and i < e
+        i += 1
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        ok = ok and i < e and b[i] == 44  # ','
+        i += 1
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        ok = ok and i < e and b[i] == 40
+        i += 1
+        g0 = i
+        while ok and i < e:
+            c = b[i]
+            if not (48 <= c <= 57 or c == 43 or c == 45 or c == 46 or c == 44
+                    or c == 69 or c == 101 or c == 68 or c == 100 or _WS[c]):
+                break
+            i += 1
+        g1 = i
+        ok = ok and i < e and b[i] == 41  # ')'
+        i += 1
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        ok = ok and i < e and b[i] == 41
+        i += 1
+        while ok and i < e and _WS[b[i]]:
+            i += 1
+        if not ok or i != e:
+            status[r] = 1
+            continue
+        k = 0
+        s = g0
+        for j in range(g0, g1 + 1):
+            if j < g1 and b[j] != 44:
+                continue
+            if k == 3:
+                status[r] = 2
+                break
+            st, v = _number(b, s, j)
+            if st == 3:
+                negative[r, k] = True
+            elif st != 0:
+                status[r] = 2
+                break
+            values[r, k] = v
+            k += 1
+            s = j + 1
+        counts[r] = k
+    return values, counts, status, negative

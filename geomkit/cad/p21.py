@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from geomkit.cad.p21_cut import cut
+from geomkit.cad.p21_numbers import BY_FLOAT, OTHER, CoordinateTable
 from geomkit.errors import FileFormatError
 
 __all__ = ["P21", "Ref", "Enum", "Typed", "DERIVED", "read_p21"]
@@ -355,6 +356,7 @@ class P21:
         head, self._raw, self.names, self._by_name, self._ordered = cut(text, source)
         self.schema, self.system = self._header(head)
         self._cache: dict[int, tuple] = {}
+        self._tables: dict = {}  # entity name -> its CoordinateTable (numbers)
 
     def _header(self, head):
         schema = system = ""
@@ -392,9 +394,25 @@ class P21:
     def numbers(self, i, name: str):
         """The coordinate tuple of a plain ``CARTESIAN_POINT`` / ``DIRECTION`` record
         ``i`` (``NAME('label', (x, y[, z]))``) read at once, or None (then
-        :meth:`get` parses it)."""
-        raw = self._raw.get(int(i))
-        if raw is None or self.names.get(int(i)) != name:
+        :meth:`get` parses it).  Read with every record of that name at the first call
+        (:class:`~geomkit.cad.p21_numbers.CoordinateTable`), or here
+        (:meth:`_numbers_each`)."""
+        i = int(i)
+        t = self._table(name)
+        r = t.row.get(i) if t is not None else None
+        if r is None:
+            return None if t is not None else self._numbers_each(i, name)
+        got = t.numbers(r)
+        if got == OTHER:
+            return None
+        if got == BY_FLOAT:
+            return self._numbers_each(i, name)
+        return got
+
+    def _numbers_each(self, i: int, name: str):
+        """:meth:`numbers` of one record: its regex and ``float``."""
+        raw = self._raw.get(i)
+        if raw is None or self.names.get(i) != name:
             return None
         m = _COORDS.fullmatch(raw)
         if m is None:
@@ -408,6 +426,37 @@ class P21:
         """The coordinates (n, k) of the plain records ``ids`` of entity ``name``, each
         ``NAME('label', (k numbers))`` (:meth:`numbers` for many records at once), or
         None when any is not of that form (then each is read on its own)."""
+        try:
+            keys = list(map(int, ids))
+        except (TypeError, ValueError):  # (what the record-by-record route names)
+            keys = None
+        t = self._table(name) if keys and k >= 1 else None
+        if t is None:
+            return self._coordinates_each(ids, name, k)
+        rows = list(map(t.row.get, keys))
+        if None in rows:  # a record of another name, or none
+            return None
+        return t.coordinates(rows, k, lambda j: self._numbers_each(keys[j], name))
+
+    def _table(self, name: str):
+        """The :class:`~geomkit.cad.p21_numbers.CoordinateTable` of the records named
+        ``name`` (None when their text is not Latin-1)."""
+        try:
+            return self._tables[name]
+        except KeyError:
+            pass
+        ids = self.of_type(name)
+        raw = self._raw
+        try:
+            t = CoordinateTable(ids, [raw[i] for i in ids],
+                                lambda i: self._numbers_each(i, name))
+        except UnicodeEncodeError:
+            t = None
+        self._tables[name] = t
+        return t
+
+    def _coordinates_each(self, ids, name: str, k: int):
+        """:meth:`coordinates` record by record."""
         raw, names, groups = self._raw, self.names, []
         for i in ids:
             i = int(i)

@@ -1,0 +1,85 @@
+"""The numbers of a STEP file's plain point and direction records, read for all the
+records of an entity name at once from their bytes
+(:func:`geomkit._kernels.p21_scan.read_coordinates`), for
+:meth:`geomkit.cad.p21.P21.numbers` and :meth:`~geomkit.cad.p21.P21.coordinates`.
+
+A plain record is ``NAME('label', (x, y[, z]))``.  The kernel reads a number only
+when its value is exact by construction (Clinger's fast path: a significand of at
+most 2**53 (trailing zeros aside) times or over an exact power of ten, one
+correctly rounded operation:
+``float``'s value, bit for bit); a record with any other number (more digits, a
+larger exponent, a number ``float`` may reject) or more than three is read by the
+record-by-record route, which gives ``float``'s values or None.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geomkit._kernels.p21_scan import read_coordinates
+
+__all__ = ["CoordinateTable"]
+
+PLAIN, OTHER, BY_FLOAT = 0, 1, 2
+"""A record's status: read here, not of the plain form, left to ``float``."""
+
+
+class CoordinateTable:
+    """The numbers of the records ``ids`` (one entity name's) with bodies ``bodies``
+    (Latin-1 text); ``each(id)`` reads a record the kernel leaves to ``float`` (its
+    numbers or None), once here.
+
+    Attributes
+    ----------
+    row : dict, record id -> its row.
+    values : (n, 3) float, a row's numbers (``count`` of them) when its status is
+        PLAIN (BY_FLOAT: a record of more than three numbers).
+    count, status : lists of int per row.
+    """
+
+    __slots__ = ("row", "values", "rows", "count", "status", "_status", "_count")
+
+    def __init__(self, ids, bodies, each):
+        buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
+        ends = np.cumsum(np.fromiter(map(len, bodies), np.int64, len(bodies)))
+        values, count, status, negative = read_coordinates(buf, ends)
+        if negative.any():
+            values[negative] = -0.0
+        for r in np.flatnonzero(status == BY_FLOAT).tolist():  # float's turn
+            x = each(ids[r])
+            if x is None:
+                status[r] = OTHER
+            elif len(x) <= 3:
+                values[r, :len(x)] = x
+                count[r], status[r] = len(x), PLAIN
+        self.values, self._count, self._status = values, count, status
+        self.rows = values.tolist()
+        self.count = count.tolist()
+        self.status = status.tolist()
+        self.row = dict(zip(ids, range(len(ids))))
+
+    def numbers(self, r):
+        """Row ``r``'s numbers (a tuple of floats), or the status OTHER / BY_FLOAT."""
+        s = self.status[r]
+        if s != PLAIN:
+            return s
+        return tuple(self.rows[r][:self.count[r]])
+
+    def coordinates(self, rows, k: int, each):
+        """The numbers (n, k) of ``rows``, or None when any is OTHER or has another
+        count than ``k``; ``each(j)`` reads the ``j``-th of ``rows`` when it is left
+        to ``float`` (its numbers or None)."""
+        st = self._status[rows]
+        if (st == OTHER).any():
+            return None
+        plain = st == PLAIN
+        if (self._count[rows][plain] != k).any():
+            return None
+        out = np.ascontiguousarray(self.values[rows, :k])
+        if not plain.all():
+            for j in np.flatnonzero(~plain).tolist():
+                x = each(j)
+                if x is None or len(x) != k:
+                    return None
+                out[j] = x
+        return out
