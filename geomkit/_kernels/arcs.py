@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from .numba_ext.fused import fma
 from .numba_ext.policy import jit_exact as jit
 
 
@@ -62,3 +63,56 @@ def arc_net(C, X, Y, radius, theta0, theta1):
         Pw[j, 3] = w[j]
     return U, Pw
 
+
+
+@jit
+def _dot3(x0, x1, x2, y0, y1, y2):
+    """The dot product as numpy's 1-D ``dot`` of two 3-vectors computes it (OpenBLAS's
+    ``ddot``: the first product, then each next one fused into the sum)."""
+    return fma(x2, y2, fma(x1, y1, x0 * y0))
+
+
+@jit
+def revolve_net(Pw, S, T, theta0, theta1):
+    """``(V, P (n, m, 3), W (n, m))`` of the generatrix with homogeneous control
+    points ``Pw`` (n, 4) turned about the axis through ``S`` along the unit vector
+    ``T`` by ``[theta0, theta1]`` (:func:`geomkit.cad.analytic.revolve`, The NURBS
+    Book A8.1, with its numpy arithmetic: each control point's foot on the axis, its
+    radius and direction, then the arc's points ``O + r (a X + b Y)``); a control
+    point on the axis stays there."""
+    a, b, wa, V = arc_coeffs(theta0, theta1)
+    n = Pw.shape[0]
+    m = a.shape[0]
+    out = np.empty((n, m, 3))
+    W = np.empty((n, m))
+    O = np.empty(3)
+    X = np.empty(3)
+    Y = np.empty(3)
+    for j in range(n):
+        w = Pw[j, 3]
+        p0, p1, p2 = Pw[j, 0] / w, Pw[j, 1] / w, Pw[j, 2] / w
+        h = _dot3(p0 - S[0], p1 - S[1], p2 - S[2], T[0], T[1], T[2])
+        for c in range(3):
+            O[c] = S[c] + h * T[c]
+        X[0], X[1], X[2] = p0 - O[0], p1 - O[1], p2 - O[2]
+        r = math.sqrt(_dot3(X[0], X[1], X[2], X[0], X[1], X[2]))
+        big = abs(p0)
+        for v in (abs(p1), abs(p2)):
+            if v != v or v > big:  # (np.max: a NaN wins)
+                big = v
+        for k in range(m):
+            W[j, k] = w * wa[k]
+        if r <= 1e-15 * (big if big > 1.0 else 1.0):
+            for k in range(m):
+                for c in range(3):
+                    out[j, k, c] = O[c]
+            continue
+        for c in range(3):
+            X[c] = X[c] / r
+        Y[0] = T[1] * X[2] - T[2] * X[1]
+        Y[1] = T[2] * X[0] - T[0] * X[2]
+        Y[2] = T[0] * X[1] - T[1] * X[0]
+        for k in range(m):
+            for c in range(3):
+                out[j, k, c] = O[c] + r * (a[k] * X[c] + b[k] * Y[c])
+    return V, out, W

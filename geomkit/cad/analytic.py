@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from geomkit._kernels.arcs import arc_coeffs, arc_net
+from geomkit._kernels.arcs import arc_net, revolve_net
 from geomkit._kernels.bezier import curve_points
 from geomkit._kernels.pcurve_map import unwrap_angles
 
@@ -182,22 +182,11 @@ def revolve(curve, axis_point, axis_dir, theta0: float, theta1: float):
     T = T / norm3(T)
     if not (theta1 - theta0 > 0 and math.isfinite(theta1 - theta0)):
         raise ValueError(f"arc sweep must be finite and > 0, got {theta1 - theta0!r}")
-    a, b, wa, V = arc_coeffs(float(theta0), float(theta1))
-    wc = Pw[:, 3]
-    P = Pw[:, :3] / wc[:, None]
-    n, m = P.shape[0], a.size
-    out = np.empty((n, m, 3))
-    for j in range(n):
-        O = S + np.dot(P[j] - S, T) * T
-        X = P[j] - O
-        r = norm3(X)
-        if r <= 1e-15 * max(1.0, float(np.abs(P[j]).max())):
-            out[j] = O
-            continue
-        X /= r
-        Y = cross3(T, X)
-        out[j] = O + r * (a[:, None] * X + b[:, None] * Y)
-    W = wc[:, None] * wa[None, :]
+    # (one compiled call with this arithmetic: numpy's, its 3-element dots as OpenBLAS
+    # fuses them)
+    V, out, W = revolve_net(np.ascontiguousarray(Pw, dtype=np.float64),
+                            np.ascontiguousarray(S), np.ascontiguousarray(T),
+                            float(theta0), float(theta1))
     return p, 2, np.asarray(U, float), V, out, W
 
 
