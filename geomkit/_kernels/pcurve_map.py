@@ -107,35 +107,52 @@ def local_points(P, kind, frame, R, r, tan_a):
 
 
 @jit
+def _curve_point(Pw, p, U, t, dN, ndu, left, right, a):
+    """The curve's point at ``t``: :func:`~geomkit._kernels.bezier.curve_derivs` at
+    order 0 with its scratch given (the same operations in the same order: the same
+    point)."""
+    span = find_span(Pw.shape[0] - 1, p, t, U)
+    ders_basis_funs(span, t, p, 0, U, dN, ndu, left, right, a)
+    x = y = z = w = 0.0
+    for k in range(p + 1):
+        N = dN[0, k]
+        row = span - p + k
+        x += N * Pw[row, 0]
+        y += N * Pw[row, 1]
+        z += N * Pw[row, 2]
+        w += N * Pw[row, 3]
+    return x / w, y / w, z / w
+
+
+@jit
+def curve_at(Pw, p, U, t):
+    """The curve's points (m, 3) at the parameters ``t``: those of
+    :func:`geomkit.cad.analytic.curve_eval`, bit for bit, in one call with its scratch
+    allocated once (the readers sample thousands of short edges)."""
+    X = np.empty((t.shape[0], 3))
+    dN = np.empty((1, p + 1))
+    ndu, left, right, a = ders_scratch(p)
+    for i in range(t.shape[0]):
+        X[i, 0], X[i, 1], X[i, 2] = _curve_point(Pw, p, U, t[i], dN, ndu, left, right, a)
+    return X
+
+
+@jit
 def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
     """The curve at ``n`` evenly spaced parameters of ``[t0, t1]`` (``n >= 2``; the
     reader's linspace, bit for bit; the points those of
-    :func:`geomkit.cad.analytic.curve_eval` to rounding: another evaluation order) and
-    their :func:`local_points`: ``(X (n, 3), ab (n, 2), rho (n,))`` in one call."""
+    :func:`geomkit.cad.analytic.curve_eval` to rounding: the parameters are fused
+    here) and their :func:`local_points`: ``(X (n, 3), ab (n, 2), rho (n,))`` in one
+    call."""
     X = np.empty((n, 3))
     ab = np.empty((n, 2))
     rho = np.empty(n)
-    # curve_derivs at order 0 with its scratch allocated once (the same operations in
-    # the same order: the same points)
     dN = np.empty((1, p + 1))
     ndu, left, right, a = ders_scratch(p)
-    last = Pw.shape[0] - 1
     step = (t1 - t0) / (n - 1)
     for i in range(n):
         t = t1 if i == n - 1 else float(i) * step + t0
-        span = find_span(last, p, t, U)
-        ders_basis_funs(span, t, p, 0, U, dN, ndu, left, right, a)
-        x = y = z = w = 0.0
-        for k in range(p + 1):
-            N = dN[0, k]
-            row = span - p + k
-            x += N * Pw[row, 0]
-            y += N * Pw[row, 1]
-            z += N * Pw[row, 2]
-            w += N * Pw[row, 3]
-        x /= w
-        y /= w
-        z /= w
+        x, y, z = _curve_point(Pw, p, U, t, dN, ndu, left, right, a)
         X[i, 0], X[i, 1], X[i, 2] = x, y, z
         ab[i, 0], ab[i, 1], rho[i] = _local_xyz(x, y, z, kind, frame, R, r, tan_a)
     return X, ab, rho

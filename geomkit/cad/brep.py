@@ -40,7 +40,7 @@ from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
-                                         edge_turn, iso_ends, local_points,
+                                         curve_at, edge_turn, iso_ends, local_points,
                                          plane_piece)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
@@ -235,8 +235,11 @@ class _Edge:
                 # parameters bit for bit (the steps differ by a power of two), the
                 # points as edge_local evaluates them (curve_eval's to rounding)
                 X = dense[::(_NS - 1) // (n - 1)]
-            else:
-                X = curve_eval(self.curve, _linspace(self.t0, self.t1, n))
+            else:  # (curve_eval's points, its per-call set-up left out)
+                p, U, Pw = self.curve
+                X = curve_at(np.ascontiguousarray(Pw, dtype=np.float64), int(p),
+                             np.asarray(U, dtype=np.float64),
+                             _linspace(self.t0, self.t1, n))
             self._cache[k] = X
         return X[::-1] if self.reverse else X
 

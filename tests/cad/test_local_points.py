@@ -105,6 +105,26 @@ def test_edge_samples_and_their_inverse_in_one_call(name):
             np.testing.assert_array_equal(rho, rho2)
 
 
+def test_curve_at_is_curve_eval_bit_for_bit():
+    """curve_at (an edge's samples in one call) gives curve_eval's points exactly on
+    random rational curves of degrees 1 to 5, at the reader's parameters and at the
+    knots and ends."""
+    from geomkit.cad.analytic import curve_eval
+    from geomkit.cad.brep import _linspace
+    from geomkit._kernels.pcurve_map import curve_at
+
+    rng = np.random.default_rng(9)
+    for _ in range(200):
+        p = int(rng.integers(1, 6))
+        n = p + 1 + int(rng.integers(0, 6))
+        inner = np.sort(rng.uniform(0.0, 1.0, n - p - 1))
+        U = np.concatenate([[0.0] * (p + 1), inner, [1.0] * (p + 1)]) * 3.0 - 1.0
+        w = rng.uniform(0.2, 3.0, n)
+        Pw = np.column_stack([rng.normal(size=(n, 3)) * w[:, None], w])
+        for t in (_linspace(-1.0, 2.0, int(rng.integers(2, 70))), U.copy()):
+            np.testing.assert_array_equal(curve_at(Pw, p, U, t), curve_eval((p, U, Pw), t))
+
+
 @pytest.mark.parametrize("name", ["cylinder", "cone", "torus", "spindle torus"])
 def test_edge_turn_against_the_methods_it_replaces(name):
     """_Edge.turn (one edge_turn call): the same nearest distance to the axis, spread
