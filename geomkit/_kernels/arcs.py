@@ -1,8 +1,9 @@
-"""Exact rational quadratic arcs: the control nets the CAD readers build thousands of
-(every circle edge), each in one call with the arithmetic of the numpy formulas they
-replace (:func:`geomkit.cad.analytic.arc_curve`, and the arc coefficients of
-:func:`geomkit.cad.analytic.revolve`): the same operations in the same order, none
-contracted, so the same values.
+"""Exact control nets the CAD readers build thousands of: rational quadratic arcs
+(every circle edge), surfaces of revolution and plane patches, each in one call with
+the arithmetic of the numpy formulas they replace (:func:`geomkit.cad.analytic.
+arc_curve`, :func:`~geomkit.cad.analytic.revolve`, :func:`~geomkit.cad.analytic.
+plane_patch`): the same operations in the same order, none contracted unless named
+(:func:`~geomkit._kernels.numba_ext.fused.fma`), so the same values.
 
 An arc ``[theta0, theta1]`` has ``n = ceil(sweep / (pi / 2))`` spans of angle ``d``;
 its knots are the span ends, doubled inside; per span the control points are the span
@@ -116,3 +117,18 @@ def revolve_net(Pw, S, T, theta0, theta1):
             for c in range(3):
                 out[j, k, c] = O[c] + r * (a[k] * X[c] + b[k] * Y[c])
     return V, out, W
+
+
+@jit
+def plane_net(O, X, Y, u0, u1, v0, v1):
+    """The control points (2, 2, 3) of the bilinear patch ``O + u X + v Y`` over
+    ``[u0, u1] x [v0, v1]`` (:func:`geomkit.cad.analytic.plane_patch`'s numpy
+    arithmetic)."""
+    P = np.empty((2, 2, 3))
+    for i in range(2):
+        u = u0 if i == 0 else u1
+        for j in range(2):
+            v = v0 if j == 0 else v1
+            for c in range(3):
+                P[i, j, c] = (O[c] + u * X[c]) + v * Y[c]
+    return P

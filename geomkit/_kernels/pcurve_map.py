@@ -524,7 +524,8 @@ def plane_piece(Pw, p, U, reverse, O, X, Y):
     (affine: exact), in loop order: ``(U, Q, w, plain, ok)`` with ``w`` the weights
     (ones when all the edge's weights are equal: ``plain``), ``Q`` the mapped control
     points (``Q w / w`` when rational, as the Cartesian points are stored), ``ok``
-    whether the knots are clamped and valid (:func:`_clamped_knots_ok`)."""
+    whether the knots are clamped and valid (:func:`_clamped_knots_ok`), ``Q`` finite
+    and the weights (of a rational piece) positive: a trim curve as it stands."""
     n = Pw.shape[0]
     m = U.shape[0]
     U2 = np.empty(m)
@@ -543,10 +544,14 @@ def plane_piece(Pw, p, U, reverse, O, X, Y):
         dz = Pw[k, 2] / wi - O[2]
         Q[i, 0] = dx * X[0] + dy * X[1] + dz * X[2]
         Q[i, 1] = dx * Y[0] + dy * Y[1] + dz * Y[2]
+    good = True
     if plain:
         w[:] = 1.0
     else:
         for i in range(n):
             Q[i, 0] = Q[i, 0] * w[i] / w[i]
             Q[i, 1] = Q[i, 1] * w[i] / w[i]
-    return U2, Q, w, plain, _clamped_knots_ok(U2, p, n)
+            good = good and w[i] > 0.0
+    for i in range(n):
+        good = good and math.isfinite(Q[i, 0]) and math.isfinite(Q[i, 1])
+    return U2, Q, w, plain, good and _clamped_knots_ok(U2, p, n)

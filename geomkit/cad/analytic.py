@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from geomkit._kernels.arcs import arc_net, revolve_net
+from geomkit._kernels.arcs import arc_net, plane_net, revolve_net
 from geomkit._kernels.bezier import curve_points
 from geomkit._kernels.pcurve_map import unwrap_angles
 
@@ -214,9 +214,6 @@ def ruled(c1, c2):
 
 def plane_patch(origin, xaxis, yaxis, u0: float, u1: float, v0: float, v1: float):
     """The bilinear patch ``origin + u X + v Y`` over ``[u0, u1] x [v0, v1]``."""
-    O, X, Y = (np.asarray(v, float) for v in (origin, xaxis, yaxis))
-    P = np.empty((2, 2, 3))
-    for i, u in enumerate((u0, u1)):
-        for j, v in enumerate((v0, v1)):
-            P[i, j] = O + u * X + v * Y
+    O, X, Y = (np.ascontiguousarray(v, dtype=np.float64) for v in (origin, xaxis, yaxis))
+    P = plane_net(O, X, Y, float(u0), float(u1), float(v0), float(v1))
     return 1, 1, np.array([u0, u0, u1, u1]), np.array([v0, v0, v1, v1]), P, np.ones((2, 2))

@@ -466,7 +466,7 @@ def _plane_piece(curve, reverse, srf):
     U2, Q, w, plain, ok = plane_piece(np.ascontiguousarray(Pw, dtype=np.float64), int(p),
                                       np.asarray(U, dtype=np.float64), bool(reverse),
                                       srf.O, srf.X, srf.Y)
-    if not (ok and np.isfinite(Q).all() and (plain or bool((w > 0).all()))):
+    if not ok:
         return TrimCurve.create(p, U2, Q, None if plain else w)
     return TrimCurve(p, readonly(U2), readonly(Q), readonly(w))
 

@@ -320,3 +320,24 @@ def test_plane_piece_against_numpy(seed):
     Pw0[0, 3] = 0.0
     with pytest.raises(InvalidTrimError):
         _plane_piece((p, U, Pw0), False, s)
+
+
+def test_plane_piece_that_is_no_trim_curve_is_named():
+    """A plane face's piece with a non-finite control point or a weight <= 0 is not
+    kept as it stands: TrimCurve.create names the fault."""
+    from geomkit.cad.brep import _plane_piece
+    from geomkit.errors import InvalidTrimError
+
+    s = SURFACES["plane"]
+    U = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
+    Pw = np.array([[1.0, 0, 0, 1], [0.5, 0.5, 0, 0.5], [0, 1.0, 0, 1]])
+    c = _plane_piece((2, U, Pw), False, s)
+    assert np.isfinite(c.control_points).all() and (c.weights > 0).all()
+    bad = Pw.copy()
+    bad[1, 0] = np.inf
+    with pytest.raises(InvalidTrimError):
+        _plane_piece((2, U, bad), True, s)
+    bad = Pw.copy()
+    bad[1] *= -1.0  # weight -0.5
+    with pytest.raises(InvalidTrimError, match="weight"):
+        _plane_piece((2, U, bad), False, s)

@@ -128,3 +128,18 @@ def test_revolve_is_the_numpy_formula(seed):
         np.testing.assert_array_equal(W, W2)
         np.testing.assert_allclose(Q, Q2, rtol=0, atol=4e-16 * np.abs(Q2).max())
         assert (Q[0] == Q[0][0]).all()
+
+
+def test_plane_patch_is_the_numpy_formula_bit_for_bit():
+    from geomkit.cad.analytic import plane_patch
+
+    rng = np.random.default_rng(12)
+    for _ in range(200):
+        O, X, Y = rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-4, 4, (3, 1))
+        u0, u1, v0, v1 = rng.normal(size=4) * 50
+        p, q, U, V, P, W = plane_patch(O, X, Y, u0, u1, v0, v1)
+        ref = np.array([[O + u * X + v * Y for v in (v0, v1)] for u in (u0, u1)])
+        np.testing.assert_array_equal(P, ref)
+        assert (p, q) == (1, 1) and (W == 1).all()
+        np.testing.assert_array_equal(U, [u0, u0, u1, u1])
+        np.testing.assert_array_equal(V, [v0, v0, v1, v1])
