@@ -24,6 +24,8 @@ and geometry (:mod:`geomkit.cad.p21`, :mod:`geomkit.cad.stepgeom`) to trimmed su
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from geomkit.cad.analytic import cross3, curve_eval, extrude, revolve
@@ -193,6 +195,19 @@ class UnreadFaces(FileFormatError):
     """Faces of a sound file that the reader does not convert (listed with why)."""
 
 
+_IDS = r"\(\s*(#\d+(?:\s*,\s*#\d+)*)\s*\)"
+_PLAIN = {
+    "face": re.compile(r"(ADVANCED_FACE|FACE_SURFACE)\s*\(\s*'[^']*'\s*,\s*" + _IDS
+                       + r"\s*,\s*#(\d+)\s*,\s*\.([TF])\.\s*\)"),
+    "bound": re.compile(r"(FACE_OUTER_BOUND|FACE_BOUND)\s*\(\s*'[^']*'\s*,\s*#(\d+)"
+                        r"\s*,\s*\.([TF])\.\s*\)"),
+    "loop": re.compile(r"EDGE_LOOP\s*\(\s*'[^']*'\s*,\s*" + _IDS + r"\s*\)"),
+}
+"""The writers' plain form of a face, its bounds and their edge loops (a label,
+references, a sense), read at once; any other form goes through the parser."""
+_ID = re.compile(r"#(\d+)")
+
+
 class _Faces:
     def __init__(self, p: P21, geom: StepGeometry):
         self.p, self.g = p, geom
@@ -234,14 +249,36 @@ class _Faces:
         _, a = self.g.rec(i, "VERTEX_POINT")
         return self.g.point(a[1])
 
+    def face(self, face):
+        """``(bounds, surface, same_sense)`` of face record ``face``."""
+        m = _PLAIN["face"].fullmatch(self.p.body(face))
+        if m is None:
+            _, a = self.g.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
+            return a[1], a[2], a[3]
+        return [int(x) for x in _ID.findall(m[2])], int(m[3]), m[4] == "T"
+
+    def _bound(self, b):
+        """``(name, loop name, loop params, orientation)`` of bound record ``b`` (an
+        edge loop's params: ``[label, [oriented edges]]``)."""
+        m = _PLAIN["bound"].fullmatch(self.p.body(b))
+        if m is None:
+            bname, ba = self.g.rec(b, "FACE_OUTER_BOUND", "FACE_BOUND")
+            loop, sense = ba[1], ba[2]
+        else:
+            bname, loop, sense = m[1], int(m[2]), m[3] == "T"
+        m = _PLAIN["loop"].fullmatch(self.p.body(loop))
+        if m is None:
+            lname, la = self.g.rec(loop, "EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP")
+        else:
+            lname, la = "EDGE_LOOP", [None, [int(x) for x in _ID.findall(m[1])]]
+        return bname, lname, la, sense
+
     def loops(self, face):
         """The face's bounds as lists of oriented :class:`~geomkit.cad.brep._Edge`,
         outer bound first, and the points of its vertex loops (a pole, an apex)."""
-        _, a = self.g.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
         outer, inner, vertices = [], [], []
-        for b in a[1]:
-            bname, ba = self.g.rec(b, "FACE_OUTER_BOUND", "FACE_BOUND")
-            lname, la = self.g.rec(ba[1], "EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP")
+        for b in self.face(face)[0]:
+            bname, lname, la, sense = self._bound(b)
             if lname != "EDGE_LOOP":
                 if lname == "POLY_LOOP":
                     raise Unsupported(f"face #{int(face)}: a POLY_LOOP bound")
@@ -256,7 +293,7 @@ class _Faces:
                 else:
                     key, rev = f[0], not f[1]
                 edges.append(_Edge(self.edge(key), key, rev, self._samples))
-            if ba[2] is False:
+            if sense is False:
                 edges = [_Edge(e.curve, e.key, not e.reverse, self._samples)
                          for e in edges[::-1]]
             (outer if bname == "FACE_OUTER_BOUND" else inner).append(edges)
@@ -329,15 +366,15 @@ def _swept_base(kind, srf, loops):
 def _face(F, geom, face, name, unc):
     """``(Surface, UV gaps bridged, edge fit error)`` of one face (see the module)."""
     loops, apex = F.loops(face)
-    _, fa = geom.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
-    kind, srf = geom.surface(fa[2])
+    _, surface, same_sense = F.face(face)
+    kind, srf = geom.surface(surface)
     repairs, gaps, fit_error = [], [], 0.0
     if kind in ("extrusion", "revolution"):
         srf = _swept_base(kind, srf, loops)
     if kind == "analytic":
         loops, turns = cut_at_seam(srf, loops)
         if not len(apex) and sum(1 for t in turns if t) == 1:
-            apex = cap_point(srf, sum(turns), fa[3])
+            apex = cap_point(srf, sum(turns), same_sense)
         args, uv_loops, _ = analytic_pieces(srf, loops, PCURVE_TOL, name, apex,
                                             bridge=False)
         base = _bspline_base(args, name)

@@ -322,3 +322,52 @@ def test_cone_sector_from_its_apex(degrees, tmp_path):
     assert float(a.max()) == pytest.approx(opening, abs=1e-6)  # the sector, no more
     # the mesh's area (inscribed: a little less than the sector's)
     assert _area(s) == pytest.approx(opening / 2 * 10.0 * 10.0 * math.sqrt(2), rel=1e-3)
+
+
+def _parsed_face(F, face):
+    """The parser's route to a face, its bounds and their edge loops (the oracle of
+    the plain-record regexes)."""
+    _, a = F.g.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
+    bounds = []
+    for b in a[1]:
+        bname, ba = F.g.rec(b, "FACE_OUTER_BOUND", "FACE_BOUND")
+        lname, la = F.g.rec(ba[1], "EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP")
+        bounds.append((bname, lname, [int(x) for x in la[1]] if lname == "EDGE_LOOP"
+                       else la[1], ba[2]))
+    return [int(b) for b in a[1]], int(a[2]), a[3], bounds
+
+
+def test_plain_face_records_read_as_the_parser_reads_them():
+    """_Faces.face / _bound (a regex on the writers' plain forms) give the parser's
+    fields on every face of the 13 parts, and on faces written otherwise (spaces,
+    a quote in a label: the parser's route), a vertex loop, a missing record."""
+    from geomkit.cad.p21 import read_p21
+    from geomkit.cad.stepbrep import _Faces
+    from geomkit.cad.stepgeom import StepGeometry
+
+    def check(p):
+        F = _Faces.__new__(_Faces)
+        F.p, F.g = p, StepGeometry(p)
+        n = 0
+        for face in p.of_type("ADVANCED_FACE"):
+            bounds, surface, sense = F.face(face)
+            got = [(*F._bound(b)[:2], [int(x) for x in F._bound(b)[2][1]]
+                    if F._bound(b)[1] == "EDGE_LOOP" else F._bound(b)[2][1],
+                    F._bound(b)[3]) for b in bounds]
+            assert ([int(b) for b in bounds], int(surface), sense, got) == _parsed_face(F, face)
+            n += 1
+        return n
+
+    assert sum(check(read_p21(f)) for f in sorted(PARTS.glob("*.st*p"))) > 1000
+    odd = P21(_file(
+        "#1=ADVANCED_FACE ( 'a''b' , ( #2 , #7 ) , #9 , .F. ) ;"
+        "#2=FACE_OUTER_BOUND('',#3,.T.);#3=EDGE_LOOP('l',(#4,#5));"
+        "#7= FACE_BOUND ( '' , #8 , .F. ) ;#8=VERTEX_LOOP('',#6);"
+        "#10=ADVANCED_FACE('',(#11),#9,.T.);#11=FACE_BOUND('',#12,.T.);"))
+    F = _Faces.__new__(_Faces)
+    F.p, F.g = odd, StepGeometry(odd)
+    assert F.face(1)[1:] == (9, False) and [int(b) for b in F.face(1)[0]] == [2, 7]
+    assert F._bound(2) == ("FACE_OUTER_BOUND", "EDGE_LOOP", [None, [4, 5]], True)
+    assert F._bound(7)[:2] == ("FACE_BOUND", "VERTEX_LOOP") and F._bound(7)[3] is False
+    with pytest.raises(FileFormatError, match="#12 is referenced but not defined"):
+        F._bound(11)
