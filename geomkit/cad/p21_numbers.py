@@ -37,7 +37,7 @@ class CoordinateTable:
     count, status : lists of int per row.
     """
 
-    __slots__ = ("row", "values", "rows", "count", "status", "_status", "_count")
+    __slots__ = ("row", "values", "rows", "count", "status", "_status", "_count", "_k")
 
     def __init__(self, ids, bodies, each):
         buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
@@ -53,6 +53,8 @@ class CoordinateTable:
                 values[r, :len(x)] = x
                 count[r], status[r] = len(x), PLAIN
         self.values, self._count, self._status = values, count, status
+        plain = (status == PLAIN).all() and count.size and (count == count[0]).all()
+        self._k = int(count[0]) if plain else None  # every row PLAIN with k numbers
         self.rows = values.tolist()
         self.count = count.tolist()
         self.status = status.tolist()
@@ -69,6 +71,8 @@ class CoordinateTable:
         """The numbers (n, k) of ``rows``, or None when any is OTHER or has another
         count than ``k``; ``each(j)`` reads the ``j``-th of ``rows`` when it is left
         to ``float`` (its numbers or None)."""
+        if k == self._k:
+            return self.values[rows] if k == 3 else np.ascontiguousarray(self.values[rows, :k])
         st = self._status[rows]
         if (st == OTHER).any():
             return None

@@ -90,6 +90,7 @@ def _file(data):
 @pytest.mark.parametrize("data", [
     "#1=CARTESIAN_POINT('',(1.,2.,3.));#2=CARTESIAN_POINT('a',(1.E-05,-2,+3.5E+2));",
     "#1=CARTESIAN_POINT('',(1.,2.));#2=CARTESIAN_POINT('',(1.,2.,3.));",   # 2 and 3
+    "#1=CARTESIAN_POINT('',(1.,2.));#2=CARTESIAN_POINT('',(-0.,4.));",     # all 2
     "#1=CARTESIAN_POINT('',(1.D0,2.,3.));#2=CARTESIAN_POINT('',(1.,2.,3.));",  # 'D'
     "#1=CARTESIAN_POINT('',(1.,,3.));#2=CARTESIAN_POINT('',());#3=CARTESIAN_POINT('',( ));",
     "#1=CARTESIAN_POINT('it''s',(1.,2.,3.));#2=CARTESIAN_POINT('',(1.,2.,3.)) ;",
