@@ -43,9 +43,22 @@ _EDGE_T = np.linspace(0.0, 1.0, 17)  # samples along each domain edge
 
 def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     """Whether ``s`` is closed in u and in v: its opposite domain edges coincide in 3-D
-    within ``1e-10 * size`` at 17 samples each."""
-    (u0, u1), (v0, v1) = s.domain
+    within ``1e-10 * size`` at 17 samples each.  With clamped knots the domain's
+    corners are the net's corners: when ``S(u0, v0)`` is further than that (plus the
+    evaluation's rounding) from both ``S(u1, v0)`` and ``S(u0, v1)``, the first sample
+    of each edge pair fails, so such a surface (open both ways) is answered without
+    sampling (the same answer)."""
     eps = 1e-10 * size
+    p, q = s.degree_u, s.degree_v
+    ku, kv = s.knots_u, s.knots_v
+    if ku[0] == ku[p] and ku[-1] == ku[-p - 1] and kv[0] == kv[q] and kv[-1] == kv[-q - 1]:
+        P = s.control_points
+        c00, c10, c01 = P[0, 0], P[-1, 0], P[0, -1]  # S at (u0,v0), (u1,v0), (u0,v1)
+        margin = 2.0 * eps + 1e-12 * float(np.abs(P).max())
+        if (float(np.abs(c00 - c10).max()) > margin
+                and float(np.abs(c00 - c01).max()) > margin):
+            return False, False
+    (u0, u1), (v0, v1) = s.domain
     v = v0 + (v1 - v0) * _EDGE_T
     u = u0 + (u1 - u0) * _EDGE_T
     uv = np.empty((4, 17, 2))  # the u0, u1, v0, v1 edges, in one evaluation

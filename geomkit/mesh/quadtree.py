@@ -428,5 +428,15 @@ def _has_pole(surface) -> bool:
 
 def _lines(b: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """Breakpoints ``b`` with ``counts[i]`` equal parts in span i (span ends exact)."""
-    parts = [b[i] + (b[i + 1] - b[i]) * (np.arange(c) / c) for i, c in enumerate(counts.tolist())]
-    return np.concatenate(parts + [b[-1:]])
+    n = int(counts.sum())
+    out = np.empty(n + 1)
+    out[n] = b[-1]
+    if n == len(counts):  # one part a span: the spans' starts
+        out[:n] = b[:-1]
+        return out
+    # span i's j-th line b[i] + (b[i+1] - b[i]) * (j / c_i), as the per-span formula
+    span = np.repeat(np.arange(len(counts)), counts)
+    starts = np.cumsum(counts) - counts
+    j = np.arange(n) - starts[span]
+    out[:n] = b[span] + (b[span + 1] - b[span]) * (j / counts[span])
+    return out

@@ -188,11 +188,13 @@ def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
     n = len(tri_uv) // 2
     group = np.repeat(np.arange(n), 2)
     if cuv is not None and len(cuv):
-        order = np.argsort(cown, kind="stable")
-        cuv, cown = cuv[order], cown[order]
-        _, cg = np.unique(cown, return_inverse=True)
+        if not (cown[1:] >= cown[:-1]).all():  # GEOS lists pieces in order: rarely
+            order = np.argsort(cown, kind="stable")
+            cuv, cown = cuv[order], cown[order]
+        cg = np.zeros(len(cown), dtype=np.int64)  # each piece's rank among the pieces
+        np.cumsum(cown[1:] != cown[:-1], out=cg[1:])
         tri_uv = np.concatenate([tri_uv, cuv])
-        group = np.concatenate([group, n + cg.ravel()])
+        group = np.concatenate([group, n + cg])
     dev = _grouped_deviation(s, tri_uv, group, k, tol)
     if not (dev <= tol).all():
         return None, None
@@ -418,7 +420,8 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
     sizes = [s.size for s in surfaces]  # once a face (the batch and the face path)
     planes = (planar_batch(surfaces, trim_target * tol, sizes, cross_knots)
               if max_edge is None else {})
-    Vs, Fs, UVs, vs, fs, ds, fuv, stats = [], [], [], [], [], [], [], []
+    Vs, Fs, UVs, ds, fuv, stats = [], [], [], [], [], []
+    kept, nv, nf = [], [], []  # the faces meshed, their vertex and triangle counts
     offset = 0
     for i, s in enumerate(surfaces):
         part, why = _mesh_face(i, s, args, planes.get(i), sizes[i], cross_knots)
@@ -433,14 +436,16 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
         Vs.append(V)
         Fs.append(F + offset)
         UVs.append(UV)
-        vs.append(np.full(len(V), i, dtype=np.int32))
-        fs.append(np.full(len(F), i, dtype=np.int32))
+        kept.append(i)
+        nv.append(len(V))
+        nf.append(len(F))
         ds.append(dev)
         stats.append(st)
         offset += len(V)
     if not Vs:
         raise MeshingError("no surface could be triangulated: "
                            + "; ".join(st["failed"] for st in stats[:3]))
+    kept = np.array(kept, dtype=np.int32)
     return Mesh(np.concatenate(Vs), np.concatenate(Fs).astype(np.int64), np.concatenate(UVs),
-                np.concatenate(vs), np.concatenate(fs), np.concatenate(ds), tol,
+                np.repeat(kept, nv), np.repeat(kept, nf), np.concatenate(ds), tol,
                 {"surfaces": stats}, np.ascontiguousarray(np.concatenate(fuv)))

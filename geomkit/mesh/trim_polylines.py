@@ -16,8 +16,6 @@
 
 from __future__ import annotations
 
-from itertools import accumulate
-
 import numpy as np
 
 from geomkit.tolerances import AFFINE_REL
@@ -25,6 +23,7 @@ from geomkit._kernels.tess_lattice import classify_cells
 from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
                                        speed_bound_of, trim_polylines)
 from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.trims import loop_pack
 
 
 
@@ -229,20 +228,24 @@ def packed_trims(surface: Surface):
     kernels: ``(CP (n, 2), W (n,), K (k,), deg (m,), cp_off (m+1,), k_off (m+1,),
     loop_first (loops+1,))``, piece ``c``'s control points ``CP[cp_off[c]:cp_off[c+1]]``
     (weights ``W``), its knots ``K[k_off[c]:k_off[c+1]]``, loop ``i``'s pieces
-    ``loop_first[i]:loop_first[i+1]``."""
-    cps, ws, ks, deg, npl = [], [], [], [], []
-    for loop in surface.trim:
-        npl.append(len(loop.pieces))
-        for c in loop.pieces:
-            cps.append(c.control_points)
-            ws.append(c.weights)
-            ks.append(c.knots)
-            deg.append(c.degree)
-    return (np.concatenate(cps), np.concatenate(ws), np.concatenate(ks),
-            np.array(deg, dtype=np.int64),
-            np.array([0, *accumulate(map(len, ws))], dtype=np.int64),
-            np.array([0, *accumulate(map(len, ks))], dtype=np.int64),
-            np.array([0, *accumulate(npl)], dtype=np.int64))
+    ``loop_first[i]:loop_first[i+1]``.  Built from each loop's pack, kept with the
+    loop (:func:`geomkit.nurbs.trims.loop_pack`: the reader has made it when it
+    checked the loop); a single loop's arrays are its pack's own (read only here)."""
+    packs = [loop_pack(loop) for loop in surface.trim]
+    if len(packs) == 1:
+        CP, W, cp_off, deg, K, k_off = packs[0]
+        return CP, W, K, deg, cp_off, k_off, np.array([0, len(deg)], dtype=np.int64)
+    cp_off = [packs[0][2]]
+    k_off = [packs[0][5]]
+    first = [0]
+    for pk in packs:
+        first.append(first[-1] + len(pk[3]))
+    for pk in packs[1:]:
+        cp_off.append(pk[2][1:] + cp_off[-1][-1])
+        k_off.append(pk[5][1:] + k_off[-1][-1])
+    return (np.concatenate([pk[0] for pk in packs]), np.concatenate([pk[1] for pk in packs]),
+            np.concatenate([pk[4] for pk in packs]), np.concatenate([pk[3] for pk in packs]),
+            np.concatenate(cp_off), np.concatenate(k_off), np.array(first, dtype=np.int64))
 
 
 def speed_bound(s: Surface) -> float:

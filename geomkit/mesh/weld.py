@@ -138,12 +138,18 @@ def boundary_pairs(P, bnd, size):
     return bnd[cKDTree(Q).query_pairs(r, output_type="ndarray")]
 
 
+# a grid cell's two triangles' corners as offsets ``a + nv1 * b`` from its first corner,
+# for diagonal 0 and 1 (row-major vertices, ``nv1`` per u line)
+_GRID_OFF = np.array([[[0, 0, 1, 0, 1, 1], [0, 0, 1, 0, 1, 1]],
+                      [[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]]])
+
+
 def weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: float):
     """:func:`weld` (``near_uv=False``) of the triangles of a tensor grid
     (:func:`geomkit.mesh.quadtree.uniform_grid`: lines ``u`` x ``v``, two triangles per cell
     by ``diag``), from the grid's indices: its vertices, sorted by u then v, are the
     sorted unique corners.  None when the lines are not strictly increasing."""
-    if not (np.all(u[1:] > u[:-1]) and np.all(v[1:] > v[:-1])):
+    if not ((u[1:] > u[:-1]).all() and (v[1:] > v[:-1]).all()):
         return None
     nu1, nv1 = len(u), len(v)
     UV = np.empty((nu1, nv1, 2))
@@ -155,7 +161,7 @@ def weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: 
     eps = 1e-12 * max(u1 - u0, v1 - v0)
     on = ((u <= u0 + eps) | (u >= u1 - eps))[:, None] | ((v <= v0 + eps) | (v >= v1 - eps))
     base = (np.arange(nu1 - 1)[:, None] * nv1 + np.arange(nv1 - 1)).ravel()
-    off = np.array([[0, nv1, nv1 + 1, 0, nv1 + 1, 1], [0, nv1, 1, nv1, nv1 + 1, 1]])
+    off = _GRID_OFF[0] + nv1 * _GRID_OFF[1]  # (2, 6) corner offsets of the diagonals
     inv = (base[:, None] + off[diag]).ravel()
     pairs = boundary_pairs(P, np.nonzero(on.ravel())[0], size)
     if not len(pairs):  # distinct grid corners: every face kept
