@@ -39,6 +39,7 @@ from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
+from geomkit._kernels.ranges import col_range, spread
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
                                          curve_at, edge_turn, iso_ends, local_points,
                                          plane_piece)
@@ -609,7 +610,7 @@ def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,
     readers.  ``bridge``: consecutive pieces more than 1e-3 of the range apart are
     joined by a UV segment (else left to the caller)."""
     P = _edge_points(loops)
-    size = float(np.ptp(P, axis=0).max()) or 1.0
+    size = float(spread(P)) or 1.0
     if srf.kind == "plane":  # the pieces are the edges' own NURBS mapped: the range
         # is their control points' (a rational arc's middle control point lies beyond
         # the arc, and trims must stay in the domain; the hull holds every sample)
@@ -617,7 +618,7 @@ def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,
         Q = np.concatenate([e.curve[2][:, :3] / e.curve[2][:, 3:] for lp in loops
                             for e in lp])
         q, _ = srf.local(Q)
-        lo, hi = q.min(axis=0), q.max(axis=0)
+        lo, hi = col_range(q)
     else:
         chains = [_chain(srf, lp, size) for lp in loops]
         outer = np.concatenate(chains[0])
@@ -628,8 +629,7 @@ def analytic_pieces(srf: Analytic, loops, tol_rel: float, what: str, extra=None,
                     k = round((outer[:, c].mean() - m) / TWO_PI)
                     for ab in ch:
                         ab[:, c] += k * TWO_PI
-        allab = np.concatenate([np.concatenate(ch) for ch in chains])
-        lo, hi = allab.min(axis=0), allab.max(axis=0)
+        lo, hi = col_range(np.concatenate([np.concatenate(ch) for ch in chains]))
     if extra is not None and len(extra):
         ab, _ = srf.local(np.asarray(extra, float).reshape(-1, 3))
         for c in (0, 1):

@@ -28,6 +28,7 @@ from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
 from geomkit._kernels.pcurve_map import CYLINDER, seam_crossing, seam_margins
+from geomkit._kernels.ranges import col_range
 
 __all__ = ["cut_at_seam", "cap_point", "merge_winding", "start_inside"]
 
@@ -146,7 +147,8 @@ def cut_at_seam(srf, loops, sweep=False):
         if turns[-1]:
             paths.append(path)
         else:
-            spans.append((float(path.min()), float(path.max())))
+            lo, hi = col_range(path[:, None])
+            spans.append((float(lo[0]), float(hi[0])))
     if not any(turns) and not sweep:
         return loops, turns
     # theta: crossed once by each loop around the axis, as far from the other loops'

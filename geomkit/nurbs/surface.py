@@ -18,6 +18,7 @@ import numpy as np
 from geomkit import tolerances as tols
 from geomkit._kernels import surface as K
 from geomkit._kernels.bezier import decompose
+from geomkit._kernels.ranges import col_range
 from geomkit._kernels.trim import BOUNDARY, INSIDE, OUTSIDE, classify_points
 from geomkit.validate import (as_float_array, as_int, as_points, check_knots,
                               clamped_knots_ok)
@@ -342,8 +343,7 @@ class Surface:
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) axis-aligned box of the control net; contains the surface."""
-        P = self.control_points.reshape(-1, 3)
-        return np.array([P.min(axis=0), P.max(axis=0)])
+        return np.array(col_range(self.control_points.reshape(-1, 3)))
 
     @property
     def size(self) -> float:
