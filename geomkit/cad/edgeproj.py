@@ -23,12 +23,12 @@ from geomkit.cad.analytic import curve_eval, unwrap
 from geomkit.nurbs.evaluation import evaluate
 from geomkit.query.projection_part import project_points
 
-__all__ = ["edge_uv", "EDGE_TOL"]
+__all__ = ["edge_uv", "EDGE_TOL", "SurfaceInverse"]
 
 _MAX_POINTS = 4097
 
 
-class _Inverse:
+class SurfaceInverse:
     """Parameters of points on (within ``tol`` of) a surface: Gauss-Newton from the
     nearest of a grid of its points (several per knot span); a point it does not bring
     within ``tol`` is projected exactly (:func:`geomkit.project_points`)."""
@@ -43,7 +43,10 @@ class _Inverse:
         self.grid = np.column_stack([uu.ravel(), vv.ravel()])
         self.tree = cKDTree(base.evaluate(self.grid))
 
-    def __call__(self, X, tol):
+    def newton(self, X):
+        """``(uv, dist)``: the Gauss-Newton parameters of the points ``X`` and their
+        distances from the surface points there (a local minimum: an upper bound of
+        the distance to the surface)."""
         (u0, u1), (v0, v1) = self.dom
         uv = np.ascontiguousarray(self.grid[self.tree.query(X)[1]])
         b = self.base
@@ -52,6 +55,10 @@ class _Inverse:
             invert_points(b.homogeneous, b.degree_u, b.degree_v, b.knots_u, b.knots_v,
                           np.ascontiguousarray(X, float), uv, u0, u1, v0, v1,
                           1e-14 * max(u1 - u0, v1 - v0), dist)
+        return uv, dist
+
+    def __call__(self, X, tol):
+        uv, dist = self.newton(X)
         far = ~(dist <= tol)
         if far.any():
             pr = project_points([self.base], X[far])
@@ -80,7 +87,7 @@ def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
 
     # the edges of the loop are refined together: each round projects the new points
     # of every edge in one call (the per-call cost of the inversion dominates)
-    inverse = _Inverse(base)
+    inverse = SurfaceInverse(base)
     n0 = 17
     S = [np.linspace(0.0, 1.0, n0) for _ in edges]
     raw0, dist0 = inverse(np.concatenate([e.points(n0) for e in edges]), tol)

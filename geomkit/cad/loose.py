@@ -12,14 +12,19 @@ need one boundary leave the duplicates out.
 A loose face duplicates the solid when every one of its sample points (a UV grid
 inside its trim, and the ends of its outer loop's pieces) lies within ``tol`` of the
 solid's faces.  Only the solid faces whose control nets' boxes (which hold their
-surfaces) come within ``tol`` of a loose face's samples are projected onto.
+surfaces) come within ``tol`` of a loose face's samples are looked at: first by
+Gauss-Newton on each of them from the nearest of a grid of its points, which shows a
+sample within ``tol`` by a point of the face (inside its trim) that near; what that
+does not show is projected exactly (:func:`geomkit.project_points`), which also
+decides that a face is no duplicate.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from geomkit.nurbs.trimming import INSIDE
+from geomkit.cad.edgeproj import SurfaceInverse
+from geomkit.nurbs.trimming import BOUNDARY, INSIDE
 from geomkit.query.projection_part import project_points
 
 __all__ = ["duplicate_faces", "GRID"]
@@ -66,9 +71,34 @@ def duplicate_faces(surfaces, loose, tol) -> dict:
         cand = np.nonzero(near)[0]
         if not cand.size:
             continue
-        pr = project_points([surfaces[solid[k]] for k in cand], X,
-                            max_distance=10.0 * tol)
+        faces = [surfaces[solid[k]] for k in cand]
+        on = _shown_on(faces, X, tol)
+        if on is not None:
+            out[i] = sorted({solid[int(cand[k])] for k in on})
+            continue
+        pr = project_points(faces, X, max_distance=10.0 * tol)
         d = pr.distance
         if np.all(np.isfinite(d)) and float(d.max()) <= tol:
             out[i] = sorted({solid[int(cand[k])] for k in np.unique(pr.surface) if k >= 0})
     return out
+
+
+def _shown_on(faces, X, tol):
+    """The positions in ``faces`` of the faces that hold, each, a point within ``tol``
+    of some of the points ``X``, every point being so shown (a Gauss-Newton foot
+    inside the face's trim: its distance bounds the true one from above), else None
+    (the exact projection decides)."""
+    left = np.arange(len(X))
+    on = []
+    for k, s in enumerate(faces):
+        uv, d = SurfaceInverse(s).newton(X[left])
+        near = d <= tol
+        if s.trim and near.any():
+            cls = np.asarray(s.classify_uv(uv[near]))
+            near[np.flatnonzero(near)[(cls != INSIDE) & (cls != BOUNDARY)]] = False
+        if near.any():
+            on.append(k)
+            left = left[~near]
+            if not left.size:
+                return on
+    return None

@@ -53,3 +53,29 @@ def test_info_names_the_duplicate(capsys):
     assert main(["info", f]) == 0
     assert "face208: a loose face lying on the solid's face(s) face2" in \
         capsys.readouterr().out
+
+
+def test_duplicate_shown_by_newton_without_the_projection(monkeypatch):
+    """CTC-05's duplicate is shown by Gauss-Newton feet inside face 2's trim alone (the
+    exact projection is not needed); points off the face, and a face lying only partly
+    on the solid, are left to the projection."""
+    import numpy as np
+
+    import geomkit.cad.loose as loose
+
+    r = geomkit.read_step(PARTS / "nist_ctc_05_ap203.stp")
+    S = r.surfaces
+    tol = 1e-6 * max(s.size for s in S)
+    calls = []
+    real = loose.project_points
+    monkeypatch.setattr(loose, "project_points",
+                        lambda *a, **k: calls.append(1) or real(*a, **k))
+    assert duplicate_faces(S, [208], tol) == {208: [2]} and not calls
+    s = S[208]
+    X = s.evaluate([[-1.2, 0.0]])
+    assert loose._shown_on([S[2]], X, tol) == [0]
+    assert loose._shown_on([S[2]], X + 1e3 * tol, tol) is None
+    # half of the face lifted off the solid: some samples shown, not all
+    half = loose._samples(s)
+    half[::2] += 50 * tol * np.array([1.0, 0.0, 0.0])
+    assert loose._shown_on([S[k] for k in range(len(S)) if k != 208], half, tol) is None
