@@ -107,6 +107,39 @@ def local_points(P, kind, frame, R, r, tan_a):
 
 
 @jit
+def residuals(P, kind, frame, R, r, alpha):
+    """The largest distance of the points ``P`` (n >= 1, 3) from the analytic surface
+    (:meth:`geomkit.cad.brep.Analytic.residual`'s closed forms: a cone's two nappes, a
+    spindle torus's inner part; NaN when a point's is)."""
+    ca, ta = math.cos(alpha), math.tan(alpha)
+    worst = 0.0
+    for i in range(P.shape[0]):
+        dx = P[i, 0] - frame[0]
+        dy = P[i, 1] - frame[1]
+        dz = P[i, 2] - frame[2]
+        h = dx * frame[9] + dy * frame[10] + dz * frame[11]
+        ex, ey, ez = dx - h * frame[9], dy - h * frame[10], dz - h * frame[11]
+        rho = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if kind == PLANE:
+            d = abs(h)
+        elif kind == CYLINDER:
+            d = abs(rho - R)
+        elif kind == CONE:
+            d = abs(rho - abs(R + h * ta)) * ca
+        elif kind == SPHERE:
+            d = abs(math.hypot(rho, h) - R)
+        else:
+            d = abs(math.hypot(rho - R, h) - r)
+            if r > R:
+                d = min(d, abs(math.hypot(rho + R, h) - r))
+        if d != d:
+            return math.nan
+        if d > worst:
+            worst = d
+    return worst
+
+
+@jit
 def _curve_point(Pw, p, U, t, dN, ndu, left, right, a):
     """The curve's point at ``t``: :func:`~geomkit._kernels.bezier.curve_derivs` at
     order 0 with its scratch given (the same operations in the same order: the same

@@ -42,7 +42,7 @@ from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.ranges import col_range, spread
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, PLANE, SPHERE, TORUS, edge_local,
                                          curve_at, edge_turn, iso_ends, local_points,
-                                         plane_piece)
+                                         plane_piece, residuals)
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
            "face_surface", "analytic_pieces"]
@@ -90,6 +90,13 @@ class Analytic:
         (:func:`~geomkit._kernels.pcurve_map.local_points`, as the pcurve kernels
         invert)."""
         return local_points(np.ascontiguousarray(P, dtype=np.float64), *self.inverse)
+
+    def worst_residual(self, P) -> float:
+        """The largest :meth:`residual` of the points ``P`` (n >= 1, 3), NaN when one
+        is: one compiled call (the reader's every face)."""
+        return float(residuals(np.ascontiguousarray(P, dtype=np.float64),
+                               _LOCAL_CODE[self.kind], self.frame, float(self.R),
+                               float(self.r), float(self.alpha)))
 
     def residual(self, P):
         """Distance of points from the surface (closed form)."""

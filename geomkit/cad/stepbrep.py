@@ -408,7 +408,7 @@ def _face(F, geom, face, name, unc):
     if kind == "analytic":
         X = np.concatenate([e.points(9) for lp in loops for e in lp]) if loops \
             else np.empty((0, 3))
-        off = float(srf.residual(X).max()) if len(X) else 0.0
+        off = srf.worst_residual(X) if len(X) else 0.0
     else:
         off = fit_error
     keys = {e.key for lp in loops for e in lp}

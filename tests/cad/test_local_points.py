@@ -341,3 +341,18 @@ def test_plane_piece_that_is_no_trim_curve_is_named():
     bad[1] *= -1.0  # weight -0.5
     with pytest.raises(InvalidTrimError, match="weight"):
         _plane_piece((2, U, bad), False, s)
+
+
+@pytest.mark.parametrize("name", SURFACES)
+def test_worst_residual_is_the_largest_numpy_residual(name):
+    """Analytic.worst_residual (one compiled call) against the numpy closed forms'
+    largest value, to rounding, on random points all around (a cone's other nappe, a
+    spindle torus's inner part), jittered at several scales; NaN when a point is."""
+    s = SURFACES[name]
+    rng = np.random.default_rng(2)
+    for scale in (1e-9, 1e-3, 1.0, 10.0):
+        P = rng.normal(size=(60, 3)) * 6.0 + scale * rng.normal(size=(60, 3))
+        ref = float(s.residual(P).max())
+        assert s.worst_residual(P) == pytest.approx(ref, rel=1e-12, abs=1e-13)
+    P[7, 1] = np.nan
+    assert np.isnan(s.worst_residual(P))
