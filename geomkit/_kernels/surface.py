@@ -504,3 +504,26 @@ def surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL):
     SKL[0, 2, 0] = (a02x - 2.0 * a01w * s01x - a02w * s00x) * iw
     SKL[0, 2, 1] = (a02y - 2.0 * a01w * s01y - a02w * s00y) * iw
     SKL[0, 2, 2] = (a02z - 2.0 * a01w * s01z - a02w * s00z) * iw
+
+
+@jit
+def homogeneous_net(P, W, rational):
+    """``(Pw, ok, unit)`` of a control net ``P`` (nu, nv, 3) and its weights ``W``
+    (nu, nv; read only when ``rational``): the homogeneous points ``(w x, w y, w z,
+    w)``, whether they are finite and the weights positive, and whether every weight
+    is 1 (numpy's ``P * W[..., None]``: the same products)."""
+    nu, nv = P.shape[0], P.shape[1]
+    Pw = np.empty((nu, nv, 4))
+    ok = True
+    unit = True
+    for i in range(nu):
+        for j in range(nv):
+            w = W[i, j] if rational else 1.0
+            for c in range(3):
+                x = P[i, j, c] * w
+                Pw[i, j, c] = x
+                ok = ok and x - x == 0.0
+            Pw[i, j, 3] = w
+            ok = ok and w - w == 0.0 and w > 0.0
+            unit = unit and w == 1.0
+    return Pw, ok, unit

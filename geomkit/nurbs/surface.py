@@ -99,6 +99,10 @@ def _knots(a):
     return a
 
 
+_NO_WEIGHTS = np.ones((1, 1))
+"""What :meth:`Surface.of_arrays` passes as the weights of a non-rational net."""
+
+
 class Surface:
     """A B-spline or NURBS surface, optionally trimmed.
 
@@ -212,15 +216,12 @@ class Surface:
                 and (not rational or (isinstance(W, np.ndarray) and W.dtype == np.float64
                                       and W.shape == (nu, nv)))):
             return cls(p, q, U, V, P, W, name=name)
-        w = W if rational else np.ones((nu, nv))
-        Pw = np.empty((nu, nv, 4))
-        Pw[..., :3] = P * w[..., None]
-        Pw[..., 3] = w
         # finite products: finite points and weights (an overflow is left to the
         # constructor, which names it)
-        if not (np.isfinite(Pw).all() and (not rational or (W > 0).all())):
+        Pw, ok, unit = K.homogeneous_net(P, W if rational else _NO_WEIGHTS, rational)
+        if not ok:
             return cls(p, q, U, V, P, W, name=name)
-        rational = rational and not bool((W == 1.0).all())
+        rational = rational and not unit
         s = object.__new__(cls)
         s.degree_u, s.degree_v = p, q
         s.knots_u, s.knots_v = readonly(np.array(U)), readonly(np.array(V))
