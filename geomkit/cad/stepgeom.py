@@ -59,7 +59,8 @@ class Curve:
         self.kind = kind
         self.__dict__.update(kw)
         self.period = TWO_PI if kind in ("circle", "ellipse") else None
-        self._ends = None  # a B-spline's Cartesian control points and 1e-6 x extent
+        self._ends = None  # a B-spline's Cartesian control points, 1e-6 x extent and
+        # clamped ends (index, parameter, end tangent step, whether it is not zero)
 
     def param(self, X) -> float:
         X = np.asarray(X, float)
@@ -74,7 +75,6 @@ class Curve:
         """Nearest parameter of a B-spline / polyline: the nearest of dense samples,
         then Newton on ``(C - X) . C'``."""
         p, U, Pw = self.spline
-        lo, hi = float(U[p]), float(U[-p - 1])
         # a vertex is most often at a clamped end (its control point): that end's
         # parameter when the vertex is that point, or lies within 1e-6 of the curve's
         # extent of it on the outer side of the end's tangent (the end is then the
@@ -82,16 +82,17 @@ class Curve:
         # (the nearer end of a closed curve)
         if self._ends is None:  # (kept: each of an edge's two vertices asks)
             P = Pw[:, :3] / Pw[:, 3:]
-            self._ends = P, 1e-6 * float(np.ptp(P, axis=0).max())
-        P, near = self._ends
+            lo, hi = float(U[p]), float(U[-p - 1])
+            clamped = [(k, t, step, bool(step.any())) for k, t, ends, step in (
+                (0, lo, U[:p + 1], P[1] - P[0]), (-1, hi, U[-p - 1:], P[-2] - P[-1]))
+                if np.all(ends == t)]
+            self._ends = P, 1e-6 * float(np.ptp(P, axis=0).max()), clamped
+        P, near, clamped = self._ends
         best = None
-        for k, t, ends, step in ((0, lo, U[:p + 1], P[1] - P[0]),
-                                 (-1, hi, U[-p - 1:], P[-2] - P[-1])):
-            if not np.all(ends == t):
-                continue
+        for k, t, step, moves in clamped:
             d = P[k] - X
             dd = float(d @ d)
-            if dd == 0.0 or (dd <= near * near and step.any() and float(d @ step) >= 0.0):
+            if dd == 0.0 or (dd <= near * near and moves and float(d @ step) >= 0.0):
                 if best is None or dd < best[1]:
                     best = (t, dd)
         if best is not None:
