@@ -275,18 +275,17 @@ class _Edge:
             return ab[::-1].copy(), rho[::-1]
         return ab.copy(), rho
 
-    def turn(self, srf):
-        """``(nearest, spread, W)`` of the :data:`_NS` samples on the surface of
+    def turn(self, srf, n: int = _NS):
+        """``(nearest, spread, W)`` of the ``n`` samples on the surface of
         revolution ``srf``: :meth:`nearest_axis`, :meth:`spread` and the local
         coordinates in loop order with the periodic ones unwrapped (read-only; a
         seam cut and the face's chain read them), in one compiled call
         (:func:`~geomkit._kernels.pcurve_map.edge_turn`); the other methods' caches
         are filled with the same values."""
-        key = (srf, id(self.curve), "turn", self.reverse)
+        key = (srf, id(self.curve), "turn", self.reverse, n)
         v = self._cache.get(key)
         if v is not None:
             return v
-        n = _NS
         pk = (id(self.curve), n)
         X = self._cache.get(pk)
         p, U, Pw = self.curve

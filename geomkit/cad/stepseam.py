@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from geomkit.cad.analytic import unwrap
-from geomkit.cad.brep import _NS, KIND_CODE, _Edge
+from geomkit.cad.brep import KIND_CODE, _Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
@@ -55,12 +55,9 @@ def _angles(srf, e, n=65, full=False):
     """Unwrapped angles about the axis along edge ``e``; None when it reaches the
     axis (a pole or an apex), unless ``full``: then the angle there is the
     neighbour's."""
-    if n == _NS:
-        nearest, spread, W = e.turn(srf)
-        if nearest > 1e-9 * max(1.0, spread):
-            return W[:, 1]
-    elif e.nearest_axis(srf, n) > 1e-9 * max(1.0, e.spread(n)):  # (first: the samples
-        return e.unwrapped(srf, n, 1)  # and their inverse in one call)
+    nearest, spread, W = e.turn(srf, n)  # (the samples, their inverse, unwrapped)
+    if nearest > 1e-9 * max(1.0, spread):
+        return W[:, 1]
     ab, rho = e.local(srf, n)
     X = e.points(n)
     b = ab[:, 1]
