@@ -16,10 +16,16 @@ from geomkit._kernels.tess import cell_deviation, cell_errors
 from geomkit._kernels.tess_lattice import edge_counts, fill_rings
 from geomkit._kernels.tess_lattice import split_counts as split_counts_kernel
 from geomkit._kernels.tess_trim import box_edge_sags
+from geomkit._kernels.tess_grid import GRID_FAILED, GRID_OK, GRID_REFUSED, small_grid
 
 LEVELS = 24
 UNIT = 1 << LEVELS
 KEY = 1 << 31  # key = major * KEY + minor, both < 2**31
+SMALL_GRID = 64
+"""A whole-domain grid of at most this many cells is tried in one compiled call
+(:func:`geomkit._kernels.tess_grid.small_grid`, in the calling thread: the numpy and
+kernel calls per face cost more than such a grid's arithmetic); larger ones, and any
+grid whose first try fails, by the steps of :func:`uniform_grid` (the same grid)."""
 
 
 class Lattice:
@@ -363,17 +369,31 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     nsu, nsv = len(ub) - 1, len(vb) - 1
     if nsu * nsv > max_cells:
         return None
-    roots = _tensor_cells(ub, vb)
     Pw, p, q, U, V = (surface.homogeneous, surface.degree_u, surface.degree_v,
                       surface.knots_u, surface.knots_v)
-    E = np.empty((len(roots), 5))
-    cell_errors(Pw, p, q, U, V, roots, m, E)
+    roots = _tensor_cells(ub, vb)
+    start = 0
     if box is None:
         (u0, u1), (v0, v1) = surface.domain
+        # the first grid in one compiled call (the same grid): kept when it is small and
+        # passes; else the steps below go on from its estimates (and its measurement)
+        status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
+            Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
+            int(max_cells), SMALL_GRID, u0, u1, v0, v1, bool(pair))
+        if status == GRID_REFUSED:
+            return None
+        if status == GRID_OK:
+            return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
+        if status == GRID_FAILED:  # as the loop below after its first grid
+            grow = (cu, cv, min(np.sqrt(worst / target), 2.0) if np.isfinite(worst) else 2.0)
+            target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+            start = 1
     else:
         u0, u1, v0, v1 = box
+        E = np.empty((len(roots), 5))
+        cell_errors(Pw, p, q, U, V, roots, m, E)
         box_errors(surface, roots, m, box, E)
-    for attempt in range(3):  # the target scaled by the excess measured
+    for attempt in range(start, 3):  # the target scaled by the excess measured
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
                               max_parts=max_cells)
         cu = nu.reshape(nsu, nsv).max(axis=1)
@@ -412,10 +432,16 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
     else:
         return None
+    return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
+
+
+def _grid_triangles(cells, dev, diag):
+    """``(tri_uv (2N, 3, 2), dev (2N,))``: each cell's two triangles by its diagonal,
+    counter-clockwise in UV, and their cell's deviation."""
     tri = np.empty((len(cells), 6, 2))
-    tri[:, :, 0] = cells[rows[:, None], _CORNER_U[diag]]
+    tri[:, :, 0] = cells[np.arange(len(cells))[:, None], _CORNER_U[diag]]
     tri[:, :, 1] = cells[:, _CORNER_V]
-    return tri.reshape(-1, 3, 2), np.repeat(dev, 2), cells, (u, v, diag)
+    return tri.reshape(-1, 3, 2), np.repeat(dev, 2)
 
 
 def _has_pole(surface) -> bool:

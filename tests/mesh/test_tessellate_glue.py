@@ -121,3 +121,37 @@ def test_grid_lines_match_the_span_by_span_formula():
         want = _lines_by_span(b, counts)
         assert got.dtype == want.dtype and np.array_equal(got.view(np.int64),
                                                           want.view(np.int64)), trial
+
+
+def _grid_both_ways(s, tol, pair, monkeypatch):
+    ub = C.breakpoints(s.knots_u, s.degree_u)
+    vb = C.breakpoints(s.knots_v, s.degree_v)
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    args = (s, ub, vb, m, 6, tol, C.CELL_TARGET * tol, C.EXACT_ABOVE * tol, 4096)
+    got = Q.uniform_grid(*args, pair=pair)
+    with monkeypatch.context() as mp:
+        mp.setattr(Q, "SMALL_GRID", -1)  # every grid by the Python steps
+        want = Q.uniform_grid(*args, pair=pair)
+    return got, want
+
+
+def test_small_grid_kernel_matches_the_python_steps(monkeypatch):
+    """The first grid in one compiled call (kept, failed and retried by the Python
+    steps, or too big) against the Python steps alone, bit for bit."""
+    kinds = set()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        part = read_step(DATA / "parts" / "euclid_screw_ap214.step").surfaces
+    cases = [(s, t) for n in samples.names() for s in samples.load(n)
+             for t in (1e-1, 1e-2, 1e-3)] + [(s, t) for s in part for t in (0.05, 0.01)]
+    for s, tol in cases:
+        for pair in (False, True):
+            got, want = _grid_both_ways(s, tol, pair, monkeypatch)
+            assert (got is None) == (want is None)
+            if got is None:
+                kinds.add("refused")
+                continue
+            kinds.add("small" if len(got[2]) <= Q.SMALL_GRID else "big")
+            for a, b in zip(got[:3] + got[3], want[:3] + want[3]):
+                assert a.dtype == b.dtype and np.array_equal(a, b)
+    assert kinds == {"refused", "small", "big"}

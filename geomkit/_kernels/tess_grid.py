@@ -1,0 +1,145 @@
+"""A small uniform grid of cells in one compiled call (the first try of
+:func:`geomkit.mesh.quadtree.uniform_grid` on a whole domain).
+
+The Python route makes a dozen numpy and kernel calls per face (root estimates,
+children counts, grid lines, cells, their estimates, the measurement, the better
+diagonal, the triangles): on the small grids of most cylinders and cones of real parts
+that glue costs more than the arithmetic.  :func:`small_grid` does the same steps with
+the same kernels (:func:`.tess._cell_errors_range`, :func:`.tess_lattice.split_counts`,
+:func:`.tess._cell_deviation_range`, each over its whole range in this thread, as the
+Python route runs a range of at most one chunk) and the glue's formulas without
+contraction (each ``a * b + c`` rounded twice, as numpy): the same grid, bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .numba_ext.policy import jit_exact as jit
+from .tess import _cell_deviation_range, _cell_errors_range
+from .tess_lattice import split_counts
+
+GRID_OK = 0
+"""The grid's cells all measure within ``tol``."""
+GRID_REFUSED = 1
+"""More cells than ``max_cells``: the Python route refuses the grid too."""
+GRID_BIG = 2
+"""More cells than ``max_small``: the Python route measures them (its threads)."""
+GRID_FAILED = 3
+"""A cell above ``tol`` (or NaN): the Python route tries its next grid."""
+
+
+@jit
+def _tensor(u, v):
+    """:func:`geomkit.mesh.quadtree._tensor_cells`: row-major cells ``u0, u1, v0, v1``."""
+    nu = u.shape[0] - 1
+    nv = v.shape[0] - 1
+    c = np.empty((nu * nv, 4))
+    for i in range(nu):
+        for j in range(nv):
+            r = i * nv + j
+            c[r, 0] = u[i]
+            c[r, 1] = u[i + 1]
+            c[r, 2] = v[j]
+            c[r, 3] = v[j + 1]
+    return c
+
+
+@jit
+def _lines(b, counts):
+    """:func:`geomkit.mesh.quadtree._lines`: ``b[i] + (b[i+1] - b[i]) * (j / c_i)``."""
+    n = 0
+    for c in counts:
+        n += c
+    out = np.empty(n + 1)
+    r = 0
+    for i in range(counts.shape[0]):
+        c = counts[i]
+        d = b[i + 1] - b[i]
+        for j in range(c):
+            out[r] = b[i] + d * (j / c)
+            r += 1
+    out[n] = b[b.shape[0] - 1]
+    return out
+
+
+@jit
+def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells,
+               max_small, u0, u1, v0, v1, pair):
+    """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (no ``box``):
+    ``(status, u, v, cells, dev, diag, E, cu, cv, worst)``: status :data:`GRID_OK` with
+    the grid lines, cells (N, 4), each cell's measured deviation and better diagonal;
+    :data:`GRID_FAILED` with the same and the largest deviation ``worst`` (NaN if one
+    is); :data:`GRID_BIG` or :data:`GRID_REFUSED` with empty ones.  Always (but for a
+    refusal before them) the root spans' estimates ``E`` and the children counts per
+    span row ``cu`` and column ``cv``, for the Python route to go on from."""
+    nsu = ub.shape[0] - 1
+    nsv = vb.shape[0] - 1
+    empty1 = np.empty(0)
+    empty2 = np.empty((0, 4))
+    empty5 = np.empty((0, 5))
+    noint = np.empty(0, dtype=np.int64)
+    if nsu * nsv > max_cells:
+        return (GRID_REFUSED, empty1, empty1, empty2, empty1, noint, empty5, noint, noint,
+                np.nan)
+    roots = _tensor(ub, vb)
+    nr = roots.shape[0]
+    E = np.empty((nr, 5))
+    _cell_errors_range(0, nr, Pw, p, q, U, V, roots, m, E)
+    e = np.empty(nr)
+    for i in range(nr):
+        e[i] = min(E[i, 0], E[i, 1]) if not (np.isnan(E[i, 0]) or np.isnan(E[i, 1])) \
+            else np.nan
+    nu = np.empty(nr, dtype=np.int64)
+    nv = np.empty(nr, dtype=np.int64)
+    split_counts(e, np.ascontiguousarray(E[:, 2]), np.ascontiguousarray(E[:, 3]), target,
+                 max_cells, nu, nv)
+    cu = np.zeros(nsu, dtype=np.int64)
+    cv = np.zeros(nsv, dtype=np.int64)
+    for i in range(nsu):
+        for j in range(nsv):
+            cu[i] = max(cu[i], nu[i * nsv + j])
+            cv[j] = max(cv[j], nv[i * nsv + j])
+    su = 0
+    sv = 0
+    for c in cu:
+        su += c
+    for c in cv:
+        sv += c
+    if su * sv > max_cells:
+        return GRID_REFUSED, empty1, empty1, empty2, empty1, noint, E, cu, cv, np.nan
+    if su * sv > max_small:
+        return GRID_BIG, empty1, empty1, empty2, empty1, noint, E, cu, cv, np.nan
+    if su == nsu and sv == nsv:  # every count 1: the root spans themselves
+        u = ub
+        v = vb
+        cells = roots
+        Ec = E
+    else:
+        u = _lines(ub, cu)
+        v = _lines(vb, cv)
+        cells = _tensor(u, v)
+        Ec = np.empty((cells.shape[0], 5))
+        _cell_errors_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, Ec)
+    n = cells.shape[0]
+    first = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        first[i] = 1 if Ec[i, 1] < Ec[i, 0] else 0
+    M = np.empty((n, 2))
+    _cell_deviation_range(0, n, Pw, p, q, U, V, cells, first, k, u0, u1, v0, v1,
+                          exact_above, tol, pair, M)
+    dev = np.empty(n)
+    diag = np.empty(n, dtype=np.int64)
+    worst = -np.inf
+    for i in range(n):
+        a = M[i, 0]
+        b = M[i, 1]
+        d = 0 if (np.isnan(a) or (not np.isnan(b) and not b < a)) else 1  # np.argmin
+        diag[i] = d
+        dev[i] = M[i, d]
+        if np.isnan(dev[i]) or np.isnan(worst):  # np.max: NaN if one is
+            worst = np.nan
+        else:
+            worst = max(worst, dev[i])
+    status = GRID_OK if worst <= tol else GRID_FAILED
+    return status, u, v, cells, dev, diag, E, cu, cv, worst
