@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit_exact as jit
+from .surface import surface_points_range
 from .tess import _cell_deviation_range, _cell_errors_range
 from .tess_lattice import split_counts
 
@@ -143,3 +144,118 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
             worst = max(worst, dev[i])
     status = GRID_OK if worst <= tol else GRID_FAILED
     return status, u, v, cells, dev, diag, E, cu, cv, worst
+
+
+@jit
+def grid_vertices(Pw, p, q, U, V, u, v, diag, u0, u1, v0, v1, eps, r):
+    """:func:`geomkit.mesh.weld.weld_grid`'s arrays in one call: ``(ok, P, UV, inv, bnd,
+    near)``: the grid's vertices ``S(UV)`` (row-major, ``UV[i * len(v) + j] = (u[i],
+    v[j])``), the corners ``inv`` (6 per cell by its diagonal), the vertices on the
+    domain's edges ``bnd`` (within ``eps``) and whether two of them may lie within
+    ``r`` in 3-D (their projections on an oblique unit direction, sorted, have a gap
+    below ``2 r`` plus rounding: :func:`geomkit.mesh.weld.boundary_pairs` decides); ``ok``
+    False (and empty arrays) when the lines are not strictly increasing."""
+    nu1 = u.shape[0]
+    nv1 = v.shape[0]
+    ok = True
+    for i in range(nu1 - 1):
+        if not u[i + 1] > u[i]:
+            ok = False
+    for j in range(nv1 - 1):
+        if not v[j + 1] > v[j]:
+            ok = False
+    if not ok:
+        return (False, np.empty((0, 3)), np.empty((0, 2)), np.empty(0, dtype=np.int64),
+                np.empty(0, dtype=np.int64), False)
+    n = nu1 * nv1
+    UV = np.empty((n, 2))
+    for i in range(nu1):
+        for j in range(nv1):
+            UV[i * nv1 + j, 0] = u[i]
+            UV[i * nv1 + j, 1] = v[j]
+    P = np.empty((n, 3))
+    surface_points_range(0, n, Pw, p, q, U, V, UV, P)
+    nb = 0
+    flag = np.empty(n, dtype=np.bool_)
+    for i in range(nu1):
+        on_u = u[i] <= u0 + eps or u[i] >= u1 - eps
+        for j in range(nv1):
+            f = on_u or v[j] <= v0 + eps or v[j] >= v1 - eps
+            flag[i * nv1 + j] = f
+            if f:
+                nb += 1
+    bnd = np.empty(nb, dtype=np.int64)
+    nb = 0
+    for i in range(n):
+        if flag[i]:
+            bnd[nb] = i
+            nb += 1
+    inv = np.empty(6 * (nu1 - 1) * (nv1 - 1), dtype=np.int64)
+    r6 = 0
+    for i in range(nu1 - 1):
+        for j in range(nv1 - 1):
+            b = i * nv1 + j
+            if diag[i * (nv1 - 1) + j] == 0:  # (u0,v0)-(u1,v1): ABC, ACD
+                inv[r6] = b
+                inv[r6 + 1] = b + nv1
+                inv[r6 + 2] = b + nv1 + 1
+                inv[r6 + 3] = b
+                inv[r6 + 4] = b + nv1 + 1
+                inv[r6 + 5] = b + 1
+            else:  # (u1,v0)-(u0,v1): ABD, BCD
+                inv[r6] = b
+                inv[r6 + 1] = b + nv1
+                inv[r6 + 2] = b + 1
+                inv[r6 + 3] = b + nv1
+                inv[r6 + 4] = b + nv1 + 1
+                inv[r6 + 5] = b + 1
+            r6 += 6
+    near = False
+    if nb >= 2:
+        proj = np.empty(nb)
+        big = 0.0
+        for a in range(nb):
+            x = P[bnd[a], 0]
+            y = P[bnd[a], 1]
+            z = P[bnd[a], 2]
+            proj[a] = x * 0.35 + y * 0.48 + z * 0.8  # weld._WELD_DIRECTION
+            big = max(big, abs(x), abs(y), abs(z))
+        proj.sort()
+        lim = 2.0 * r + 1e-14 * big
+        for a in range(nb - 1):
+            if not proj[a + 1] - proj[a] > lim:
+                near = True
+                break
+    return True, P, UV, inv, bnd, near
+
+
+@jit
+def edge_gaps(Pw, p, q, U, V, u0, u1, v0, v1, t):
+    """:func:`geomkit.mesh.cells.closed_directions`' measure in one call: the largest
+    coordinate difference between ``S(u0, v)`` and ``S(u1, v)``, and between
+    ``S(u, v0)`` and ``S(u, v1)``, at ``v = v0 + (v1 - v0) t`` (``u`` alike); NaN if
+    one is (as numpy's max)."""
+    m = t.shape[0]
+    uv = np.empty((4 * m, 2))
+    for i in range(m):
+        v = v0 + (v1 - v0) * t[i]
+        u = u0 + (u1 - u0) * t[i]
+        uv[i, 0] = u0
+        uv[i, 1] = v
+        uv[m + i, 0] = u1
+        uv[m + i, 1] = v
+        uv[2 * m + i, 0] = u
+        uv[2 * m + i, 1] = v0
+        uv[3 * m + i, 0] = u
+        uv[3 * m + i, 1] = v1
+    P = np.empty((4 * m, 3))
+    surface_points_range(0, 4 * m, Pw, p, q, U, V, uv, P)
+    cu = 0.0
+    cv = 0.0
+    for i in range(m):
+        for c in range(3):
+            a = abs(P[i, c] - P[m + i, c])
+            b = abs(P[2 * m + i, c] - P[3 * m + i, c])
+            cu = np.nan if (np.isnan(a) or np.isnan(cu)) else max(cu, a)
+            cv = np.nan if (np.isnan(b) or np.isnan(cv)) else max(cv, b)
+    return cu, cv

@@ -21,6 +21,7 @@ import numpy as np
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.weld import points, weld
 from geomkit._kernels.tess import triangle_deviation
+from geomkit._kernels.tess_grid import edge_gaps
 from geomkit._kernels.tess_lattice import cell_triangles
 from geomkit.errors import ToleranceNotMetWarning
 from geomkit.nurbs.surface import Surface
@@ -59,14 +60,8 @@ def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
                 and float(np.abs(c00 - c01).max()) > margin):
             return False, False
     (u0, u1), (v0, v1) = s.domain
-    v = v0 + (v1 - v0) * _EDGE_T
-    u = u0 + (u1 - u0) * _EDGE_T
-    uv = np.empty((4, 17, 2))  # the u0, u1, v0, v1 edges, in one evaluation
-    uv[0, :, 0], uv[1, :, 0], uv[:2, :, 1] = u0, u1, v
-    uv[2, :, 1], uv[3, :, 1], uv[2:, :, 0] = v0, v1, u
-    P = points(s, uv.reshape(-1, 2)).reshape(4, 17, 3)
-    cu = np.abs(P[0] - P[1]).max()
-    cv = np.abs(P[2] - P[3]).max()
+    # the u0, u1, v0, v1 edges' samples and their largest differences in one call
+    cu, cv = edge_gaps(s.homogeneous, p, q, ku, kv, u0, u1, v0, v1, _EDGE_T)
     return bool(cu <= eps), bool(cv <= eps)
 
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from geomkit.tolerances import WELD_REL
 from geomkit._kernels.surface import surface_points_range, surface_points
+from geomkit._kernels.tess_grid import grid_vertices
 from geomkit.nurbs.surface import Surface
 
 SERIAL_POINTS = 2048
@@ -138,33 +139,23 @@ def boundary_pairs(P, bnd, size):
     return bnd[cKDTree(Q).query_pairs(r, output_type="ndarray")]
 
 
-# a grid cell's two triangles' corners as offsets ``a + nv1 * b`` from its first corner,
-# for diagonal 0 and 1 (row-major vertices, ``nv1`` per u line)
-_GRID_OFF = np.array([[[0, 0, 1, 0, 1, 1], [0, 0, 1, 0, 1, 1]],
-                      [[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]]])
-
-
 def weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: float):
     """:func:`weld` (``near_uv=False``) of the triangles of a tensor grid
     (:func:`geomkit.mesh.quadtree.uniform_grid`: lines ``u`` x ``v``, two triangles per cell
     by ``diag``), from the grid's indices: its vertices, sorted by u then v, are the
-    sorted unique corners.  None when the lines are not strictly increasing."""
-    if not ((u[1:] > u[:-1]).all() and (v[1:] > v[:-1]).all()):
-        return None
-    nu1, nv1 = len(u), len(v)
-    UV = np.empty((nu1, nv1, 2))
-    UV[..., 0] = u[:, None]
-    UV[..., 1] = v
-    UV = UV.reshape(-1, 2)
-    P = points(s, UV)
+    sorted unique corners.  The vertices, corners, domain-edge vertices and the
+    boundary pairs' pre-test in one compiled call
+    (:func:`geomkit._kernels.tess_grid.grid_vertices`).  None when the lines are not
+    strictly increasing."""
     (u0, u1), (v0, v1) = s.domain
     eps = 1e-12 * max(u1 - u0, v1 - v0)
-    on = ((u <= u0 + eps) | (u >= u1 - eps))[:, None] | ((v <= v0 + eps) | (v >= v1 - eps))
-    base = (np.arange(nu1 - 1)[:, None] * nv1 + np.arange(nv1 - 1)).ravel()
-    off = _GRID_OFF[0] + nv1 * _GRID_OFF[1]  # (2, 6) corner offsets of the diagonals
-    inv = (base[:, None] + off[diag]).ravel()
-    pairs = boundary_pairs(P, np.nonzero(on.ravel())[0], size)
+    ok, P, UV, inv, bnd, near = grid_vertices(
+        s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+        np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64),
+        np.ascontiguousarray(diag, dtype=np.int64), u0, u1, v0, v1, eps, WELD_REL * size)
+    if not ok:
+        return None
+    pairs = boundary_pairs(P, bnd, size) if near else ()
     if not len(pairs):  # distinct grid corners: every face kept
         return P, inv.reshape(-1, 3), UV, np.ones(len(inv) // 3, dtype=bool)
     return merge(P, UV, inv, pairs)
-
