@@ -132,3 +132,85 @@ def plane_net(O, X, Y, u0, u1, v0, v1):
             for c in range(3):
                 P[i, j, c] = (O[c] + u * X[c]) + v * Y[c]
     return P
+
+
+@jit
+def line_edges(O, D, X1, X2, same):
+    """Line edges ``O[k] + t D[k]`` between the vertices ``X1[k]``, ``X2[k]``, as the
+    STEP reader builds them one by one (numpy's arithmetic, its dots OpenBLAS's):
+    ``(ok, U (n, 4), Pw (n, 2, 4))``, each edge's segment over its vertices'
+    parameters (swapped when ``same[k]`` is False, then the curve run backwards), ok
+    False where the parameters are not increasing."""
+    n = O.shape[0]
+    ok = np.zeros(n, dtype=np.bool_)
+    U = np.empty((n, 4))
+    Pw = np.ones((n, 2, 4))
+    for k in range(n):
+        d0, d1, d2 = D[k, 0], D[k, 1], D[k, 2]
+        dd = _dot3(d0, d1, d2, d0, d1, d2)
+        t1 = _dot3(X1[k, 0] - O[k, 0], X1[k, 1] - O[k, 1], X1[k, 2] - O[k, 2],
+                   d0, d1, d2) / dd
+        t2 = _dot3(X2[k, 0] - O[k, 0], X2[k, 1] - O[k, 1], X2[k, 2] - O[k, 2],
+                   d0, d1, d2) / dd
+        if not same[k]:
+            t1, t2 = t2, t1
+        if not t2 > t1:
+            continue
+        ok[k] = True
+        for c in range(3):
+            Pw[k, 0, c] = O[k, c] + t1 * D[k, c]
+            Pw[k, 1, c] = O[k, c] + t2 * D[k, c]
+        U[k, 0] = U[k, 1] = t1
+        U[k, 2] = U[k, 3] = t2
+        if not same[k]:  # stepgeom.reverse_curve: (U[0] + U[-1]) - U[::-1], rows reversed
+            s = t1 + t2
+            U[k, 0] = U[k, 1] = s - t2
+            U[k, 2] = U[k, 3] = s - t1
+            for c in range(3):
+                a = Pw[k, 0, c]
+                Pw[k, 0, c] = Pw[k, 1, c]
+                Pw[k, 1, c] = a
+    return ok, U, Pw
+
+
+@jit
+def circle_frames(Z, Xd, C, r, X1, X2, same, closed):
+    """Circle edges as the STEP reader builds them one by one (numpy's arithmetic, its
+    dots OpenBLAS's): per edge ``(ok, x (n, 3), y (n, 3), t (n, 2))``, the circle's
+    in-plane axes (``x`` made orthogonal to the unit normal ``Z[k]`` and unit, ``y =
+    z x x``) and its vertices' angles, swapped when ``same[k]`` is False, the end a
+    turn or less after the start (a whole turn when ``closed[k]`` or the two meet);
+    ok False where ``x`` is (nearly) along ``z`` or an angle is NaN."""
+    n = Z.shape[0]
+    ok = np.zeros(n, dtype=np.bool_)
+    x = np.empty((n, 3))
+    y = np.empty((n, 3))
+    t = np.empty((n, 2))
+    two_pi = 2.0 * math.pi
+    for k in range(n):
+        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+        xz = _dot3(Xd[k, 0], Xd[k, 1], Xd[k, 2], z0, z1, z2)
+        if abs(xz) > 1 - 1e-12:
+            continue
+        ok[k] = True
+        a0, a1, a2 = Xd[k, 0] - xz * z0, Xd[k, 1] - xz * z1, Xd[k, 2] - xz * z2
+        m = math.sqrt(_dot3(a0, a1, a2, a0, a1, a2))
+        a0, a1, a2 = a0 / m, a1 / m, a2 / m
+        b0, b1, b2 = z1 * a2 - z2 * a1, z2 * a0 - z0 * a2, z0 * a1 - z1 * a0
+        x[k, 0], x[k, 1], x[k, 2] = a0, a1, a2
+        y[k, 0], y[k, 1], y[k, 2] = b0, b1, b2
+        rk = r[k]
+        for j in range(2):
+            P = X1 if j == 0 else X2
+            d0, d1, d2 = P[k, 0] - C[k, 0], P[k, 1] - C[k, 1], P[k, 2] - C[k, 2]
+            t[k, j] = math.atan2(_dot3(d0, d1, d2, b0, b1, b2) / rk,
+                                 _dot3(d0, d1, d2, a0, a1, a2) / rk) % two_pi
+        t1, t2 = t[k, 0], t[k, 1]
+        if not same[k]:
+            t1, t2 = t2, t1
+        t2 = t1 + (t2 - t1) % two_pi
+        if closed[k] or t2 - t1 <= 1e-12:
+            t2 = t1 + two_pi
+        t[k, 0], t[k, 1] = t1, t2
+        ok[k] = t2 > t1  # (a NaN angle: no edge)
+    return ok, x, y, t

@@ -16,18 +16,16 @@ route, which reads it or names the fault.
 
 from __future__ import annotations
 
-import math
 import re
 
 import numpy as np
 
-from geomkit.cad.analytic import arc_curve, cross3, line_curve, norm3
+from geomkit.cad.analytic import arc_curve, norm3
 from geomkit.cad.p21 import DERIVED, P21, Ref
 from geomkit.cad.stepgeom import reverse_curve
+from geomkit._kernels.arcs import circle_frames, line_edges
 
 __all__ = ["line_and_circle_edges", "fields", "fields_of"]
-
-TWO_PI = 2.0 * math.pi
 
 
 _NUM = r"([-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?)"
@@ -172,16 +170,6 @@ def _vertices(p, edges):
     return (None, None) if X1 is None or X2 is None else (X1, X2)
 
 
-def _finish(out, i, curve, t1, t2, same):
-    """The edge's curve (``t1``, ``t2``: its vertices' parameters, swapped when the
-    sense is ``.F.``) unless its vertices are in reverse order (left to the edge-by-edge
-    route, which names it)."""
-    if not t2 > t1:
-        return
-    c = curve(t1, t2)
-    out[i] = c if same else reverse_curve(c)
-
-
 def _with_record(p, edges, slot: int, name: str):
     """The edges whose curve's field ``slot`` is a plain ``name`` record, with that
     record's fields."""
@@ -204,18 +192,11 @@ def _lines(p, edges):
     mag = np.array([v[1] for v in vecs])
     ok &= np.isfinite(mag) & (mag != 0)
     D = U * mag[:, None]
-    for k, e in enumerate(edges):
-        if not ok[k]:
-            continue
-        o, d = O[k], D[k]
-        dd = d @ d
-        t1 = float((X1[k] - o) @ d / dd)
-        t2 = float((X2[k] - o) @ d / dd)
-        same = e[5]
-        if not same:
-            t1, t2 = t2, t1
-        _finish(out, e[0], lambda a, b: line_curve(o + a * d, o + b * d, a, b), t1, t2,
-                same)
+    # every edge's segment in one call (the arithmetic of line_curve and
+    # reverse_curve edge by edge)
+    keep, Uk, Pw = line_edges(O, D, X1, X2, np.array([e[5] for e in edges], dtype=bool))
+    for k in np.flatnonzero(ok & keep).tolist():
+        out[edges[k][0]] = (1, Uk[k].copy(), Pw[k].copy())
     return out
 
 
@@ -234,28 +215,13 @@ def _circles(p, edges):
     Xd, okx = _units(Xr)
     r = np.array([e[4][1] for e in edges])
     ok = okz & okx & np.isfinite(r) & (r > 0)
-    for k, e in enumerate(edges):
-        if not ok[k]:
-            continue
-        z, x = Z[k], Xd[k]
-        xz = x @ z
-        if abs(float(xz)) > 1 - 1e-12:  # the edge-by-edge route's default X
-            continue
-        x = x - xz * z
-        x = x / norm3(x)
-        y = cross3(z, x)
-        c, rk = C[k], float(r[k])
-        t = []
-        for P in (X1[k], X2[k]):
-            d = P - c
-            t.append(math.atan2((d @ y) / rk, (d @ x) / rk) % TWO_PI)
-        t1, t2 = t
-        same = e[5]
-        if not same:
-            t1, t2 = t2, t1
-        t2 = t1 + (t2 - t1) % TWO_PI
-        if e[6] or t2 - t1 <= 1e-12:
-            t2 = t1 + TWO_PI
-        _finish(out, e[0], lambda a, b: arc_curve(c, rk * x, rk * y, 1.0, a, b), t1, t2,
-                same)
+    # every circle's frame and its vertices' angles in one call (the edge-by-edge
+    # route's arithmetic)
+    keep, x, y, t = circle_frames(Z, Xd, C, r, X1, X2,
+                                  np.array([e[5] for e in edges], dtype=bool),
+                                  np.array([e[6] for e in edges], dtype=bool))
+    for k in np.flatnonzero(ok & keep).tolist():
+        e, rk = edges[k], float(r[k])
+        c = arc_curve(C[k], rk * x[k], rk * y[k], 1.0, float(t[k, 0]), float(t[k, 1]))
+        out[e[0]] = c if e[5] else reverse_curve(c)
     return out
