@@ -12,7 +12,7 @@ import numpy as np
 
 from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.nurbs.surface import TrimCurve
-from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack
+from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack, readonly
 from geomkit.cad.uvmap import map_pcurve
 from geomkit._kernels.trim_loops import loop_joins
 
@@ -55,9 +55,19 @@ def reverse(c: TrimCurve) -> TrimCurve:
 
 
 def shift(c: TrimCurve, d) -> TrimCurve:
-    """The trim curve translated by ``d`` in UV (one period of a closed direction)."""
-    return TrimCurve.create(c.degree, c.knots, np.asarray(c.control_points) + d,
-                            None if np.all(c.weights == 1) else c.weights)
+    """The trim curve translated by ``d`` in UV (one period of a closed direction):
+    ``TrimCurve.create`` of the moved points with ``c``'s knots and weights, which
+    were checked when ``c`` was made (its points ``Q w / w`` when rational, as create
+    stores them); a point that is not finite goes through create, which names it."""
+    Q = np.asarray(c.control_points) + d
+    w = c.weights
+    unit = bool((w == 1).all())
+    if not (Q.dtype == np.float64 and Q.shape == c.control_points.shape
+            and np.isfinite(Q).all()):
+        return TrimCurve.create(c.degree, c.knots, Q, None if unit else w)
+    if not unit:
+        Q = Q * w[:, None] / w[:, None]
+    return TrimCurve(c.degree, c.knots, readonly(Q), w)
 
 
 def chain(pieces, size, periods=(0.0, 0.0), domain=None):

@@ -155,3 +155,27 @@ def test_finish_loop_gives_a_packed_loop_the_surface_still_checks():
     with pytest.raises(InvalidTrimError, match="degenerate loop"):
         base.with_trim([loop])
     assert finish_loop([], base, (0.0, 0.0), 1e-9, "face") == ([], [], [])
+
+
+def test_shift_is_create_of_the_moved_points():
+    """loops.shift keeps the piece's checked knots and weights: the same curve as
+    TrimCurve.create of the moved points, bit for bit (a rational arc's points as
+    Q w / w), and a point moved to infinity is named by create."""
+    from geomkit.cad.loops import shift
+    from geomkit.errors import InvalidTrimError
+
+    rng = np.random.default_rng(3)
+    arc = TrimCurve.create(2, [0, 0, 0, 0.4, 0.4, 1, 1, 1], rng.uniform(0, 1, (5, 2)),
+                           [1.0, 0.7071, 1.0, 0.3, 1.0])
+    seg = TrimCurve.polyline([[0.1, 0.2], [0.4, 0.9], [0.3, 0.1]])
+    for c in (arc, seg):
+        for d in (np.array([TWO_PI, 0.0]), np.array([0.0, -TWO_PI]), [0.3, 1e-9]):
+            got = shift(c, d)
+            ref = TrimCurve.create(c.degree, c.knots, np.asarray(c.control_points) + d,
+                                   None if np.all(c.weights == 1) else c.weights)
+            for a, b in ((got.knots, ref.knots), (got.control_points, ref.control_points),
+                         (got.weights, ref.weights)):
+                np.testing.assert_array_equal(a, b)
+            assert got.degree == ref.degree and not got.control_points.flags.writeable
+    with pytest.raises(InvalidTrimError):
+        shift(arc, np.array([np.inf, 0.0]))
