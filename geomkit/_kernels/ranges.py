@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .numba_ext.policy import jit_exact as jit
+from .numba_ext.policy import jit
 
 
 @jit

@@ -103,7 +103,7 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     cc.output_dir = str(out_dir)
     cc.verbose = verbose
     cc.target_cpu = "host"
-    entries, flags = [], None
+    entries, flags, jit_only = [], None, []
     for k, (mod, qual, sig) in enumerate(rows):
         obj = import_module(mod)
         for part in qual.split("."):
@@ -111,8 +111,11 @@ def build(out_dir, exports=None, verbose=False) -> dict:
         disp = getattr(obj, "dispatcher", obj)
         f = _flags_for(disp)
         flags = flags or f
-        if f != flags:
-            raise RuntimeError(f"{mod}.{qual}: compile flags differ from the other exports")
+        if f != flags:  # pycc compiles a module with one set of flags: the first
+            # export's (the JIT's default); a kernel compiled otherwise (jit_exact: no
+            # contraction) stays on the JIT, which compiles it with its own flags
+            jit_only.append(f"{mod}.{qual}")
+            continue
         sym = _aot.export_symbol(mod, qual, k)
         cc.export(sym, tuple(_aot.parse_type(s) for s in sig))(disp.py_func)
         entries.append([mod, qual, k, sig])
@@ -143,6 +146,7 @@ def build(out_dir, exports=None, verbose=False) -> dict:
          codegen.AOTCPUCodegen._customize_tm_features) = saved
     manifest = {"stamp": policy._kernels_stamp().hex(), "numba": numba.__version__,
                 "cpu": list(_aot.host_cpu()), "exports": entries,
+                "jit_only": sorted(set(jit_only)),
                 "built_seconds": round(time.time() - t0, 1)}
     (out_dir / _aot.MANIFEST.name).write_text(json.dumps(manifest, indent=1) + "\n")
     return manifest
