@@ -21,6 +21,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_plain as jit
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
+from .ranges import spread
 
 CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
 TWO_PI = 2.0 * math.pi
@@ -212,24 +213,6 @@ def edge_turn(X, have_x, Pw, p, U, t0, t1, n, rev, wrap0, wrap1, kind, frame, R,
             break
         if rho[i] < nearest:
             nearest = rho[i]
-    spread = -math.inf
-    for c in range(3):
-        lo = X[0, c]
-        hi = X[0, c]
-        nan = lo != lo
-        for i in range(1, n):
-            x = X[i, c]
-            if x != x:
-                nan = True
-            elif x < lo:
-                lo = x
-            elif x > hi:
-                hi = x
-        d = math.nan if nan else hi - lo
-        if d != d or spread != spread:
-            spread = math.nan
-        elif d > spread:
-            spread = d
     W = np.empty((n, 2))
     for i in range(n):
         j = n - 1 - i if rev else i
@@ -240,7 +223,7 @@ def edge_turn(X, have_x, Pw, p, U, t0, t1, n, rev, wrap0, wrap1, kind, frame, R,
             col = unwrap_angles(W[:, c].copy(), TWO_PI)
             for i in range(n):
                 W[i, c] = col[i]
-    return X, ab, rho, nearest, spread, W
+    return X, ab, rho, nearest, spread(X), W
 
 
 @jit
