@@ -110,7 +110,7 @@ def local_points(P, kind, frame, R, r, tan_a):
 @jit
 def residuals(P, kind, frame, R, r, alpha):
     """The largest distance of the points ``P`` (n >= 1, 3) from the analytic surface
-    (:meth:`geomkit.cad.brep.Analytic.residual`'s closed forms: a cone's two nappes, a
+    (the closed forms of each kind's distance: a cone's two nappes, a
     spindle torus's inner part; NaN when a point's is)."""
     ca, ta = math.cos(alpha), math.tan(alpha)
     worst = 0.0

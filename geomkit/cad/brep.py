@@ -92,30 +92,12 @@ class Analytic:
         return local_points(np.ascontiguousarray(P, dtype=np.float64), *self.inverse)
 
     def worst_residual(self, P) -> float:
-        """The largest :meth:`residual` of the points ``P`` (n >= 1, 3), NaN when one
-        is: one compiled call (the reader's every face)."""
+        """The largest distance of the points ``P`` (n >= 1, 3) from the surface (its
+        closed form: a cone's two nappes, a spindle torus's inner part), NaN when one
+        is: one compiled call (:func:`~geomkit._kernels.pcurve_map.residuals`)."""
         return float(residuals(np.ascontiguousarray(P, dtype=np.float64),
                                _LOCAL_CODE[self.kind], self.frame, float(self.R),
                                float(self.r), float(self.alpha)))
-
-    def residual(self, P):
-        """Distance of points from the surface (closed form)."""
-        d = np.asarray(P, float) - self.O
-        h = d @ self.A
-        rho = np.linalg.norm(d - h[:, None] * self.A, axis=1)
-        if self.kind == "plane":
-            return np.abs(h)
-        if self.kind == "cylinder":
-            return np.abs(rho - self.R)
-        if self.kind == "cone":  # both nappes
-            return np.abs(rho - np.abs(self.R + h * math.tan(self.alpha))) * \
-                math.cos(self.alpha)
-        if self.kind == "sphere":
-            return np.abs(np.hypot(rho, h) - self.R)
-        out = np.abs(np.hypot(rho - self.R, h) - self.r)
-        if self.r > self.R:  # a spindle torus's inner part
-            out = np.minimum(out, np.abs(np.hypot(rho + self.R, h) - self.r))
-        return out
 
     def offset(self, d):
         """The surface offset by ``d`` along the radial / normal direction (exact: the
@@ -597,7 +579,7 @@ def face_surface(rd, srf_de: int, loops, tol_rel: float):
         base = analytic(rd, i_(r[5]))
         P = _edge_points(loops)
         cands = [base.offset(f_(r[4])), base.offset(-f_(r[4]))]
-        srf = min(cands, key=lambda c: float(c.residual(P).max()))
+        srf = min(cands, key=lambda c: c.worst_residual(P))
     else:
         srf = analytic(rd, srf_de)
     return analytic_pieces(srf, loops, tol_rel, f"surface DE {srf_de}")

@@ -213,6 +213,7 @@ class _Faces:
         self.p, self.g = p, geom
         self._edges: dict = line_and_circle_edges(p)  # id -> its curve (see edge)
         self._samples: dict = {}  # (id(edge curve), n) -> its points
+        self._face_recs: dict = {}  # face id -> (bounds, surface, same sense)
         ids = p.of_type("ORIENTED_EDGE")  # id -> (edge id, same sense), plain ones
         self._oriented = dict(zip(ids, fields_of(p, ids, "ORIENTED_EDGE")))
 
@@ -250,12 +251,18 @@ class _Faces:
         return self.g.point(a[1])
 
     def face(self, face):
-        """``(bounds, surface, same_sense)`` of face record ``face``."""
-        m = _PLAIN["face"].fullmatch(self.p.body(face))
-        if m is None:
-            _, a = self.g.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
-            return a[1], a[2], a[3]
-        return [int(x) for x in _ID.findall(m[2])], int(m[3]), m[4] == "T"
+        """``(bounds, surface, same_sense)`` of face record ``face`` (read once: the
+        face's loops and its surface both ask)."""
+        got = self._face_recs.get(int(face))
+        if got is None:
+            m = _PLAIN["face"].fullmatch(self.p.body(face))
+            if m is None:
+                _, a = self.g.rec(face, "ADVANCED_FACE", "FACE_SURFACE")
+                got = a[1], a[2], a[3]
+            else:
+                got = [int(x) for x in _ID.findall(m[2])], int(m[3]), m[4] == "T"
+            self._face_recs[int(face)] = got
+        return got
 
     def _bound(self, b):
         """``(name, loop name, loop params, orientation)`` of bound record ``b`` (an

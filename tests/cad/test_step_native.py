@@ -347,7 +347,7 @@ def test_plain_face_records_read_as_the_parser_reads_them():
 
     def check(p):
         F = _Faces.__new__(_Faces)
-        F.p, F.g = p, StepGeometry(p)
+        F.p, F.g, F._face_recs = p, StepGeometry(p), {}
         n = 0
         for face in p.of_type("ADVANCED_FACE"):
             bounds, surface, sense = F.face(face)
@@ -365,7 +365,7 @@ def test_plain_face_records_read_as_the_parser_reads_them():
         "#7= FACE_BOUND ( '' , #8 , .F. ) ;#8=VERTEX_LOOP('',#6);"
         "#10=ADVANCED_FACE('',(#11),#9,.T.);#11=FACE_BOUND('',#12,.T.);"))
     F = _Faces.__new__(_Faces)
-    F.p, F.g = odd, StepGeometry(odd)
+    F.p, F.g, F._face_recs = odd, StepGeometry(odd), {}
     assert F.face(1)[1:] == (9, False) and [int(b) for b in F.face(1)[0]] == [2, 7]
     assert F._bound(2) == ("FACE_OUTER_BOUND", "EDGE_LOOP", [None, [4, 5]], True)
     assert F._bound(7)[:2] == ("FACE_BOUND", "VERTEX_LOOP") and F._bound(7)[3] is False
