@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .numba_ext.policy import jit_plain as jit
+from .numba_ext.policy import jit_plain as jit, jit_inline
 from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
 from .ranges import spread
 
@@ -27,20 +27,35 @@ CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
 TWO_PI = 2.0 * math.pi
 
 
-@jit
-def _angle_param(th, th0, th1):
-    """The arc parameter at angle ``th`` of the arc ``[th0, th1]`` (its quarter-turn
-    spans; :func:`geomkit.cad.analytic.angle_to_param`)."""
+@jit_inline
+def arc_consts(th0, th1):
+    """``(n, d, tan(d / 4))`` of the arc ``[th0, th1]``: its count of quarter-turn
+    spans, their angle, and the tangent :func:`angle_param_at` divides by."""
     n = max(1, int(math.ceil((th1 - th0) / (0.5 * math.pi) - 1e-12)))
     d = (th1 - th0) / n
+    return n, d, math.tan(d / 4)
+
+
+@jit_inline
+def angle_param_at(th, th0, th1, n, d, td):
+    """The arc parameter at angle ``th`` of the arc ``[th0, th1]`` (its quarter-turn
+    spans; :func:`geomkit.cad.analytic.angle_to_param`), given the arc's
+    :func:`arc_consts` (a fit maps thousands of angles on one arc)."""
     k = math.floor((th - th0) / d)
     k = min(max(k, 0.0), n - 1.0)
     mid = th0 + (k + 0.5) * d
-    r = 0.5 * (math.tan(0.5 * (th - mid)) / math.tan(d / 4) + 1.0)
+    r = 0.5 * (math.tan(0.5 * (th - mid)) / td + 1.0)
     return min(max(th0 + (k + r) * d, th0), th1)
 
 
 @jit
+def _angle_param(th, th0, th1):
+    """:func:`angle_param_at` of one angle."""
+    n, d, td = arc_consts(th0, th1)
+    return angle_param_at(th, th0, th1, n, d, td)
+
+
+@jit_inline
 def _interp(x, xs, ys):
     """``np.interp`` at one point (``xs`` increasing)."""
     n = xs.shape[0]
@@ -319,7 +334,7 @@ def seam_margins(paths, starts, spans, cand):
     return margin
 
 
-@jit
+@jit_inline
 def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
     revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length
@@ -337,10 +352,11 @@ def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     return a, th
 
 
-@jit
+@jit_inline
 def _mapped(t, Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, sref, ref, periodic,
-            maps, T, S, N, left, right):
-    """The mapped UV point ``(u, v)`` at the pcurve parameter ``t``."""
+            maps, T, S, N, left, right, arc):
+    """The mapped UV point ``(u, v)`` at the pcurve parameter ``t``; ``arc`` (2, 3):
+    the :func:`arc_consts` of each mapped coordinate."""
     t = min(max(t, T[0]), T[T.shape[0] - 1])
     s = min(max(_interp(t, T, S), 0.0), 1.0)
     te = e0 + ((1.0 - s) if rev else s) * (e1 - e0)
@@ -351,7 +367,8 @@ def _mapped(t, Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, sref, ref, perio
             rf = _interp(s, sref, ref[:, c])
             v = rf + ((v - rf + math.pi) % TWO_PI) - math.pi
         if maps[c, 0] > 0:
-            v = _angle_param(v, maps[c, 1], maps[c, 2])
+            v = angle_param_at(v, maps[c, 1], maps[c, 2], int(arc[c, 0]), arc[c, 1],
+                               arc[c, 2])
         if c == 0:
             out0 = v
         else:
@@ -412,6 +429,10 @@ def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, period
     N = np.empty(p + 1)
     left = np.empty(p + 1)
     right = np.empty(p + 1)
+    arc = np.zeros((2, 3))
+    for c in range(2):
+        if maps[c, 0] > 0:
+            arc[c, 0], arc[c, 1], arc[c, 2] = arc_consts(maps[c, 1], maps[c, 2])
     a = T[:-1].copy()
     b = T[1:].copy()
     hmin = 1e-9 * (T[T.shape[0] - 1] - T[0])
@@ -433,11 +454,11 @@ def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, period
             for j in range(nb):
                 X[j, 0], X[j, 1] = _mapped(a[i] + h * (j / (nb - 1)), Pw, p, U, e0, e1, rev,
                                            kind, frame, R, r, tan_a, sref, ref, periodic,
-                                           maps, T, S, N, left, right)
+                                           maps, T, S, N, left, right, arc)
             for j in range(nc):
                 C[j, 0], C[j, 1] = _mapped(a[i] + h * check[j], Pw, p, U, e0, e1, rev, kind,
                                            frame, R, r, tan_a, sref, ref, periodic, maps,
-                                           T, S, N, left, right)
+                                           T, S, N, left, right, arc)
             for j in range(nb):
                 for c in range(2):
                     acc = 0.0
