@@ -50,6 +50,22 @@ def _knots(mults, knots):
     return np.repeat(np.asarray(knots, float), np.asarray(mults, int))
 
 
+def _clamped_ends(p, U, Pw) -> list:
+    """``[(parameter, end point, step to the next control point, whether that step
+    is not zero)]`` of a B-spline's clamped ends (start, end), Cartesian."""
+    E = Pw[[0, -1, 1, -2]]
+    E = E[:, :3] / E[:, 3:]
+    S = E[2:] - E[:2]
+    moves = S.any(axis=1).tolist()
+    lo, hi = float(U[p]), float(U[-p - 1])
+    out = []
+    if all(u == lo for u in U[:p + 1].tolist()):
+        out.append((lo, E[0], S[0], moves[0]))
+    if all(u == hi for u in U[-p - 1:].tolist()):
+        out.append((hi, E[1], S[1], moves[1]))
+    return out
+
+
 class Curve:
     """A 3-D curve: ``kind`` (line, circle, ellipse, bspline, polyline), its closed
     form, :meth:`param` (the parameter of the nearest point) and :meth:`nurbs` (the
@@ -59,8 +75,8 @@ class Curve:
         self.kind = kind
         self.__dict__.update(kw)
         self.period = TWO_PI if kind in ("circle", "ellipse") else None
-        self._ends = None  # a B-spline's Cartesian control points, 1e-6 x extent and
-        # clamped ends (index, parameter, end tangent step, whether it is not zero)
+        self._ends = None  # a B-spline's clamped ends (_clamped_ends)
+        self._extent = None  # (_near)
 
     def param(self, X) -> float:
         X = np.asarray(X, float)
@@ -81,25 +97,34 @@ class Curve:
         # local minimum Newton would reach, clamped)
         # (the nearer end of a closed curve)
         if self._ends is None:  # (kept: each of an edge's two vertices asks)
-            P = Pw[:, :3] / Pw[:, 3:]
-            lo, hi = float(U[p]), float(U[-p - 1])
-            clamped = [(k, t, step, bool(step.any())) for k, t, ends, step in (
-                (0, lo, U[:p + 1], P[1] - P[0]), (-1, hi, U[-p - 1:], P[-2] - P[-1]))
-                if np.all(ends == t)]
-            self._ends = P, 1e-6 * float(np.ptp(P, axis=0).max()), clamped
-        P, near, clamped = self._ends
-        best = None
-        for k, t, step, moves in clamped:
-            d = P[k] - X
+            self._ends = _clamped_ends(p, U, Pw)
+        near = []
+        for t, E, step, moves in self._ends:
+            d = E - X
             dd = float(d @ d)
-            if dd == 0.0 or (dd <= near * near and moves and float(d @ step) >= 0.0):
-                if best is None or dd < best[1]:
-                    best = (t, dd)
+            if dd == 0.0:
+                return t
+            if moves:
+                near.append((dd, t, d, step))
+        best = None
+        for dd, t, d, step in near:  # (the nearer end of a closed curve)
+            if (best is None or dd < best[0]) and float(d @ step) >= 0.0 \
+                    and dd <= self._near():
+                best = (dd, t)
         if best is not None:
-            return best[0]
+            return best[1]
         return float(curve_nearest_param(np.ascontiguousarray(Pw, float), int(p),
                                          np.asarray(U, float), np.ascontiguousarray(X, float),
                                          max(65, 8 * (len(U) - p))))
+
+    def _near(self) -> float:
+        """The square of 1e-6 x the curve's extent (the largest range of its control
+        points' coordinates), computed once."""
+        if self._extent is None:
+            Pw = self.spline[2]
+            near = 1e-6 * float(np.ptp(Pw[:, :3] / Pw[:, 3:], axis=0).max())
+            self._extent = near * near
+        return self._extent
 
     @property
     def bounds(self):

@@ -77,3 +77,16 @@ def test_points_near_the_ends():
     c = Curve("polyline", spline=spline)
     for X in ([0, 0, 0], [1e-9, 0, 0], [0.5, 0.5, 0]):
         assert c.param(X) == _oracle(spline, X)
+
+
+def test_two_control_points_and_flat_steps():
+    """A two-point line (its ends' steps are each other's reverse) and a curve whose
+    end control points repeat (a zero step: never the near rule)."""
+    line = (1, np.array([0.0, 0, 2, 2]), np.array([[0.0, 0, 0, 1], [2, 0, 0, 1]]))
+    flat = (2, np.array([0.0, 0, 0, 1, 1, 1]),
+            np.array([[0.0, 0, 0, 1], [0, 0, 0, 1], [1, 1, 0, 1]]))
+    for spline in (line, flat):
+        c = Curve("bspline", spline=spline)
+        for X in ([0, 0, 0], [-1e-7, 0, 0], [2 + 1e-7, 0, 0], [2, 0, 0], [1, 1e-7, 0],
+                  [1, 1, 0], [1 + 1e-7, 1, 0], [0, -1e-7, 0]):
+            assert c.param(X) == _oracle(spline, X)
