@@ -145,6 +145,58 @@ def insert_knot(Pw, p, U, u, r):
 
 
 @jit
+def _snap(U, t, eps):
+    """``t``, or the first knot of ``U`` nearest it when within ``eps``."""
+    k = 0
+    best = abs(U[0] - t)
+    for i in range(U.shape[0]):
+        d = abs(U[i] - t)
+        if d != d:  # (numpy's argmin stops at the first NaN)
+            k, best = i, d
+            break
+        if d < best:
+            k, best = i, d
+    return U[k] if best <= eps else t
+
+
+@jit
+def _first_and_count(U, t):
+    """Index of the first knot equal to ``t`` (-1: none) and how many are."""
+    first, s = -1, 0
+    for i in range(U.shape[0]):
+        if U[i] == t:
+            if first < 0:
+                first = i
+            s += 1
+    return first, s
+
+
+@jit
+def restrict_curve(p, U, Pw, t0, t1, eps):
+    """The curve ``(p, U, Pw)`` restricted to ``[t0, t1]`` (within its domain) by knot
+    insertion (A5.1): ``(whole, U', Pw')``, ``whole`` when an end within ``eps`` of a
+    knot is moved onto it and the range is then the whole domain (``U'``, ``Pw'``
+    empty).  Each end is inserted to multiplicity ``p``; ``U'`` is clamped at the
+    ends."""
+    n = Pw.shape[0]
+    t0 = _snap(U, t0, eps)
+    t1 = _snap(U, t1, eps)
+    if t0 <= U[p] and t1 >= U[n]:
+        return True, U[:0].copy(), Pw[:0].copy()
+    for t in (t0, t1):
+        _, s = _first_and_count(U, t)
+        if s < p:
+            Pw, U = insert_knot(Pw, p, U, t, p - s)
+    first_a, s_a = _first_and_count(U, t0)
+    start = first_a + s_a - 1 - p
+    first_b, _ = _first_and_count(U, t1)
+    newU = U[start: first_b + p + 1].copy()
+    newU[: p + 1] = t0
+    newU[newU.shape[0] - p - 1:] = t1
+    return False, newU, Pw[start: first_b].copy()
+
+
+@jit
 def de_casteljau_split(Q, t, left, right):
     """Split the Bézier segment ``Q`` (p+1, dim) at ``t`` into ``left`` and ``right``."""
     p = Q.shape[0] - 1

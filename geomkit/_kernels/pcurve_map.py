@@ -274,68 +274,8 @@ def iso_ends(ab, tol, maps):
     return iso0, iso1, q
 
 
-@jit
-def _crossings(lo, hi, c):
-    """How many angles ``c + 2 pi k`` lie in ``[lo, hi]``."""
-    return math.floor((hi - c) / TWO_PI) - math.ceil((lo - c) / TWO_PI) + 1
-
-
-@jit
-def seam_margins(paths, starts, spans, cand):
-    """Margins of the candidate seam angles ``cand`` (:func:`geomkit.cad.stepseam.
-    cut_at_seam`): -1 where a loop around the axis (``paths``, the unwrapped angles of
-    all such loops one after another, loop ``k`` from ``starts[k]`` to
-    ``starts[k + 1]``) is not crossed exactly once or the angle lies in a span
-    ``spans[i] = (lo, hi)`` of another loop; else the distance to the nearest span
-    (at most pi).
-
-    Candidates evenly spaced around the turn (as the reader's are) are counted from
-    each path step's few neighbours: a step shorter than the turn crosses only the
-    candidates within its angles, found by their index (two more each side), each
-    counted by the same formula as the others."""
-    m = cand.shape[0]
-    margin = np.full(m, math.pi)
-    step = (cand[m - 1] - cand[0]) / (m - 1) if m > 1 else TWO_PI
-    even = m > 1 and abs(m * step - TWO_PI) <= 1e-9
-    for j in range(m):
-        even = even and abs(cand[j] - (cand[0] + j * step)) <= 1e-3 * step
-    counts = np.zeros(m)
-    for k in range(starts.shape[0] - 1):
-        counts[:] = 0.0
-        for i in range(starts[k], starts[k + 1] - 1):
-            lo = min(paths[i], paths[i + 1])
-            hi = max(paths[i], paths[i + 1])
-            if even and hi - lo < TWO_PI - 8 * step:
-                j0 = math.floor((lo - cand[0]) / step) - 2
-                for jj in range(j0, j0 + int((hi - lo) / step) + 6):
-                    j = jj % m
-                    n = _crossings(lo, hi, cand[j])
-                    if n > 0:
-                        counts[j] += n
-            else:  # (a NaN angle or a long step: every candidate)
-                for j in range(m):
-                    n = _crossings(lo, hi, cand[j])
-                    if n > 0:
-                        counts[j] += n
-        for j in range(m):
-            if counts[j] != 1:
-                margin[j] = -1.0
-    for j in range(m):
-        if margin[j] < 0:
-            continue
-        c = cand[j]
-        for i in range(spans.shape[0]):
-            w = spans[i, 1] - spans[i, 0]
-            d = (c - spans[i, 0]) % TWO_PI
-            if d <= w:
-                margin[j] = -1.0
-                break
-            margin[j] = min(margin[j], min(d - w, TWO_PI - d))
-    return margin
-
-
 @jit_inline
-def _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
+def local_at(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
     revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length
     p + 1."""
@@ -360,7 +300,7 @@ def _mapped(t, Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, sref, ref, perio
     t = min(max(t, T[0]), T[T.shape[0] - 1])
     s = min(max(_interp(t, T, S), 0.0), 1.0)
     te = e0 + ((1.0 - s) if rev else s) * (e1 - e0)
-    out0, out1 = _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right)
+    out0, out1 = local_at(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right)
     for c in range(2):
         v = out0 if c == 0 else out1
         if periodic[c]:
@@ -374,34 +314,6 @@ def _mapped(t, Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, sref, ref, perio
         else:
             out1 = v
     return out0, out1
-
-
-@jit
-def seam_crossing(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, lo, hi, b_lo, level, up):
-    """The loop parameter in ``[lo, hi]`` where the edge's angle about the axis crosses
-    ``level``, bracketed to 1e-17 by 31 samples a round (each round narrows the bracket
-    32 times, at most 12 rounds).  ``b_lo``: the (unwrapped) angle at ``lo``, the
-    branch the samples are taken on; ``up``: whether the angle increases across the
-    bracket.  Arguments as :func:`fit_edge_pcurve`'s."""
-    N = np.empty(p + 1)
-    left = np.empty(p + 1)
-    right = np.empty(p + 1)
-    for _ in range(12):
-        if not hi - lo > 1e-17:
-            break
-        step = (hi - lo) / 32.0
-        nlo, nhi = lo, hi
-        for j in range(1, 32):
-            sm = lo + j * step
-            te = e0 + ((1.0 - sm) if rev else sm) * (e1 - e0)
-            _, b = _local(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right)
-            b = b_lo + ((b - b_lo + math.pi) % TWO_PI - math.pi)
-            if (b < level) != up:  # past the level: the bracket ends here
-                nhi = sm
-                break
-            nlo = sm
-        lo, hi = nlo, nhi
-    return 0.5 * (lo + hi)
 
 
 @jit

@@ -27,7 +27,8 @@ from geomkit.cad.brep import KIND_CODE, _Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
-from geomkit._kernels.pcurve_map import CYLINDER, seam_crossing, seam_margins
+from geomkit._kernels.pcurve_map import CYLINDER
+from geomkit._kernels.seam import level_crossing, seam_crossing, seam_margins
 from geomkit._kernels.ranges import col_range
 
 __all__ = ["cut_at_seam", "cap_point", "merge_winding", "start_inside"]
@@ -82,32 +83,25 @@ def _split_edge(srf, e, target):
     b = _angles(srf, e, n, full=True)
     if b is None:
         return None
-    # the level crossed: target + 2 pi m between consecutive samples
-    m = np.round((b - target) / TWO_PI)
-    lev = target + TWO_PI * m
-    f = b - lev
-    tiny = 1e-12 * TWO_PI
-    on = np.flatnonzero(np.abs(f) <= tiny)
-    if on.size:
-        return float(on[0]) / (n - 1) if on[0] in (0, n - 1) else _cut(srf, e, on[0] / (n - 1))
-    s = np.linspace(0.0, 1.0, n)
-    # the first pair of consecutive samples with a level strictly between them
-    lo_b, hi_b = np.minimum(b[:-1], b[1:]), np.maximum(b[:-1], b[1:])
-    levels = target + TWO_PI * np.floor((lo_b - target) / TWO_PI + 1)
-    crossed = np.flatnonzero((lo_b < levels) & (levels < hi_b))
-    for j in crossed[:1].tolist():
-        # the crossing bracketed on the loop's parameter s, 32 samples a round (each
-        # round narrows it 32 times: as fine as bisection's 60 halvings in 12 rounds)
-        p, U, Pw = e.curve
-        code = CYLINDER if srf.kind == "revolution" else KIND_CODE[srf.kind]
-        frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
-        R, r, alpha = (getattr(srf, k, 0.0) for k in ("R", "r", "alpha"))
-        sc = seam_crossing(np.ascontiguousarray(Pw, float), int(p), np.asarray(U, float),
-                           e.t0, e.t1, bool(e.reverse), code, frame, float(R), float(r),
-                           math.tan(alpha), float(s[j]), float(s[j + 1]), float(b[j]),
-                           float(levels[j]), bool(b[j + 1] > b[j]))
-        return _cut(srf, e, sc)
-    return None
+    # a sample on a level target + 2 pi m, else the first pair of consecutive
+    # samples with a level strictly between them (their loop parameters j / (n - 1),
+    # exact for n - 1 a power of two)
+    code, j, level = level_crossing(b, float(target))
+    if code == 1:
+        return float(j) / (n - 1) if j in (0, n - 1) else _cut(srf, e, j / (n - 1))
+    if code == 0:
+        return None
+    # the crossing bracketed on the loop's parameter s, 32 samples a round (each round
+    # narrows it 32 times: as fine as bisection's 60 halvings in 12 rounds)
+    p, U, Pw = e.curve
+    code = CYLINDER if srf.kind == "revolution" else KIND_CODE[srf.kind]
+    frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
+    R, r, alpha = (getattr(srf, k, 0.0) for k in ("R", "r", "alpha"))
+    sc = seam_crossing(np.ascontiguousarray(Pw, float), int(p), np.asarray(U, float),
+                       e.t0, e.t1, bool(e.reverse), code, frame, float(R), float(r),
+                       math.tan(alpha), j / (n - 1), (j + 1) / (n - 1), float(b[j]),
+                       level, bool(b[j + 1] > b[j]))
+    return _cut(srf, e, sc)
 
 
 def _cut(srf, e, sc):

@@ -221,7 +221,7 @@ def test_seam_margins_against_numpy():
     """Loops going once (or twice, or back) around the axis, other loops' spans: the
     compiled margins are numpy's bit for bit."""
     from geomkit.cad.stepseam import _CANDIDATES
-    from geomkit._kernels.pcurve_map import seam_margins
+    from geomkit._kernels.seam import seam_margins
 
     rng = np.random.default_rng(5)
     for _ in range(300):
@@ -247,7 +247,7 @@ def test_seam_margins_at_candidates_long_steps_and_uneven_candidates():
     longer than a turn, NaN angles, and candidates that are not evenly spaced (every
     candidate counted)."""
     from geomkit.cad.stepseam import _CANDIDATES
-    from geomkit._kernels.pcurve_map import seam_margins
+    from geomkit._kernels.seam import seam_margins
 
     rng = np.random.default_rng(8)
     uneven = np.sort(rng.uniform(0, 2 * np.pi, 300))

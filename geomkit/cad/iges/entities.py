@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from geomkit.tolerances import JOIN_TOL, RULED_ARC_TOL
-from geomkit._kernels.bezier import insert_knot
+from geomkit._kernels.bezier import insert_knot, restrict_curve
 from geomkit.cad.analytic import (angle_to_param, arc_curve, curve_derivs, extrude, line_curve,
                                   revolve, ruled, transform_curve, turn_into)
 from geomkit.cad.conic import conic_arc
@@ -60,28 +60,10 @@ def restrict(p, U, Pw, t0, t1):
         return U, Pw
     t0 = max(t0, lo)
     t1 = min(t1, hi) if t1 > t0 else hi
-    eps = 1e-12 * (hi - lo)
     # an end within rounding of a knot is that knot (no sliver span of ~1e-17)
-    ends = []
-    for t in (t0, t1):
-        d = np.abs(U - t)
-        k = int(d.argmin())
-        ends.append(float(U[k]) if d[k] <= eps else t)
-    t0, t1 = ends
-    if t0 <= lo and t1 >= hi:
-        return U, Pw
-    Pw = np.ascontiguousarray(Pw, float)
-    for t in (t0, t1):
-        s = int(np.count_nonzero(U == t))
-        if s < p:
-            Pw, U = insert_knot(Pw, p, U, t, p - s)
-    first_a = int(np.nonzero(U == t0)[0][0])
-    start = first_a + int(np.count_nonzero(U == t0)) - 1 - p
-    first_b = int(np.nonzero(U == t1)[0][0])
-    newU = U[start: first_b + p + 1].copy()
-    newU[: p + 1] = t0
-    newU[-(p + 1):] = t1
-    return newU, Pw[start: first_b]
+    whole, newU, newPw = restrict_curve(p, U, np.ascontiguousarray(Pw, float), t0, t1,
+                                        1e-12 * (hi - lo))
+    return (U, Pw) if whole else (newU, newPw)
 
 
 def bspline126(r) -> tuple:
