@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit
+from .numba_ext.policy import jit, jit_inline
 
 
 @jit
@@ -108,3 +108,12 @@ def ders_basis_funs(i, u, p, n, U, ders, ndu, left, right, a):
         for j in range(p + 1):
             ders[k, j] *= r
         r *= p - k
+
+
+# The same functions inlined at numba's IR level into the kernel that calls them: a
+# call with array arguments pays their reference counting (~20 ns), as much as the
+# basis itself at low degree; for kernels that evaluate one point at a time in long
+# loops (the readers' edge samples).
+find_span_inline = jit_inline(find_span.py_func)
+basis_funs_inline = jit_inline(basis_funs.py_func)
+ders_basis_funs_inline = jit_inline(ders_basis_funs.py_func)

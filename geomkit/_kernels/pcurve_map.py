@@ -20,7 +20,8 @@ import math
 import numpy as np
 
 from .numba_ext.policy import jit_plain as jit, jit_inline
-from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
+from .basis import (basis_funs_inline, ders_basis_funs_inline, ders_scratch,
+                    find_span_inline)
 from .ranges import spread
 
 CYLINDER, CONE, SPHERE, TORUS, PLANE = 0, 1, 2, 3, 4
@@ -75,7 +76,7 @@ def _interp(x, xs, ys):
     return ys[lo] + (x - xs[lo]) * (ys[hi] - ys[lo]) / (xs[hi] - xs[lo])
 
 
-@jit
+@jit_inline
 def _local_xyz(px, py, pz, kind, frame, R, r, tan_a):
     """Local coordinates ``(a, b)`` of the model point ``(px, py, pz)`` and its distance
     from the axis (closed form, :meth:`geomkit.cad.brep.Analytic.local`): PLANE
@@ -155,13 +156,13 @@ def residuals(P, kind, frame, R, r, alpha):
     return worst
 
 
-@jit
+@jit_inline
 def _curve_point(Pw, p, U, t, dN, ndu, left, right, a):
     """The curve's point at ``t``: :func:`~geomkit._kernels.bezier.curve_derivs` at
     order 0 with its scratch given (the same operations in the same order: the same
     point)."""
-    span = find_span(Pw.shape[0] - 1, p, t, U)
-    ders_basis_funs(span, t, p, 0, U, dN, ndu, left, right, a)
+    span = find_span_inline(Pw.shape[0] - 1, p, t, U)
+    ders_basis_funs_inline(span, t, p, 0, U, dN, ndu, left, right, a)
     x = y = z = w = 0.0
     for k in range(p + 1):
         N = dN[0, k]
@@ -279,8 +280,8 @@ def local_at(te, Pw, p, U, kind, frame, R, r, tan_a, N, left, right):
     """Local coordinates ``(a, angle)`` of the curve point at ``te`` about a surface of
     revolution (:func:`_local_xyz`).  ``N``, ``left``, ``right``: scratch of length
     p + 1."""
-    span = find_span(Pw.shape[0] - 1, p, te, U)
-    basis_funs(span, te, p, U, N, left, right)
+    span = find_span_inline(Pw.shape[0] - 1, p, te, U)
+    basis_funs_inline(span, te, p, U, N, left, right)
     wx = wy = wz = w = 0.0
     for j in range(p + 1):
         q = span - p + j
