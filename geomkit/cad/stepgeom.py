@@ -321,10 +321,15 @@ class StepGeometry:
             U = _knots(kn[0], kn[1])
         else:
             U = _implied_knots(sub, p, n)
-        if p < 1 or U.size != n + p + 1 or np.any(np.diff(U) < 0):
+        if p < 1 or U.size != n + p + 1 or (U[1:] < U[:-1]).any():
             raise self._bad(i, f"a B-spline curve of degree {p} with {n} control points "
                                f"and {U.size} knots")
-        W = np.ones(n) if weights is None else weights
+        if weights is None:  # (P * 1, 1)
+            Pw = np.empty((n, 4))
+            Pw[:, :3] = P
+            Pw[:, 3] = 1.0
+            return p, U, Pw
+        W = weights
         if W.size != n or not (W > 0).all():
             raise self._bad(i, "B-spline curve weights: wrong count or not positive")
         return p, U, np.column_stack([P * W[:, None], W])
