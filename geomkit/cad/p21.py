@@ -304,8 +304,48 @@ def _flat(s: str):
     return name.upper(), out
 
 
+_TOK = (r"(?:#[0-9]+|[$*]|\.[A-Za-z_][A-Za-z_0-9]*\.|[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)"
+        r"(?:[Ee][-+]?\d+)?)")
+_PLAIN = re.compile(r"([A-Za-z_][A-Za-z_0-9\-]*)\s*\(\s*(?:'([^']*)'((?:\s*,\s*" + _TOK
+                    + r")*)|(" + _TOK + r"(?:\s*,\s*" + _TOK + r")*))?\s*\)")
+"""``NAME('label', token, ...)`` or ``NAME(token, ...)`` of simple tokens (references,
+``$``, ``*``, enumerations, numbers): what writers give most records."""
+
+
+def _plain(s: str):
+    """``(NAME, params)`` of a body of :data:`_PLAIN`'s form, else None (the values
+    :func:`_atom` gives its tokens)."""
+    m = _PLAIN.fullmatch(s)
+    if m is None:
+        return None
+    if m[2] is not None:  # a label, then ',' before each token
+        out = [m[2]]
+        tokens = m[3].split(",")[1:]
+    else:
+        out = []
+        tokens = m[4].split(",") if m[4] else ()
+    for t in tokens:
+        t = t.strip()
+        c = t[0]
+        if c == "#":
+            out.append(Ref(t[1:]))
+        elif c == "." and t[-1] == ".":  # (a number may begin with '.', not end so)
+            e = t[1:-1].upper()
+            out.append(_ENUMS[e] if e in _ENUMS else Enum(e))
+        elif c == "$":
+            out.append(None)
+        elif c == "*":
+            out.append(DERIVED)
+        else:
+            out.append(float(t) if ("." in t or "e" in t or "E" in t) else int(t))
+    return m[1].upper(), out
+
+
 def _parse(s: str, where: str):
     """The parameters of one record body ``NAME(...)`` or ``(A(...) B(...))``."""
+    flat = _plain(s)
+    if flat is not None:
+        return flat
     flat = _flat(s)
     if flat is not None:
         return flat

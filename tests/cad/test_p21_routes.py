@@ -1,4 +1,5 @@
-"""The Part 21 parser's three routes read a record alike: the flat route (no nested
+"""The Part 21 parser's four routes read a record alike: the plain route (one regex:
+a label and simple tokens), the flat route (no nested
 list, at most a leading string: split at commas), the fast route (cut at strings and
 punctuation) and the exact token-by-token route, which alone names a fault.  Checked
 on every record of the real parts and on records mutated at random: a route that
@@ -21,14 +22,14 @@ PARTS = sorted((DATA / "parts").glob("*.st*p"))
 
 def _exact(body):
     """The record read by the token-by-token route alone (or its error)."""
-    saved = p21._flat, p21._items_fast
-    p21._flat = p21._items_fast = lambda s: None
+    saved = p21._plain, p21._flat, p21._items_fast
+    p21._plain = p21._flat = p21._items_fast = lambda s: None
     try:
         return p21._parse(body, "x")
     except FileFormatError as exc:
         return exc
     finally:
-        p21._flat, p21._items_fast = saved
+        p21._plain, p21._flat, p21._items_fast = saved
 
 
 def _shape(v):
@@ -52,12 +53,17 @@ def _bodies():
 
 def test_every_record_of_the_parts_reads_alike_by_every_route():
     bodies = _bodies()
-    flat = 0
+    flat = plain = 0
     for b in bodies:
         got = p21._parse(b, "x")
-        assert _shape(got) == _shape(_exact(b)), b
-        flat += p21._flat(b) is not None
+        ref = _shape(_exact(b))
+        assert _shape(got) == ref, b
+        f = p21._flat(b)
+        flat += f is not None
+        assert f is None or _shape(f) == ref, b
+        plain += p21._plain(b) is not None
     assert len(bodies) > 50_000 and flat > 20_000   # the flat route is taken
+    assert plain > 20_000
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -81,15 +87,34 @@ def test_mutated_records_read_alike_or_are_refused_alike(seed):
                     s[k] = rng.choice(alphabet)
         m = "".join(s)
         ref = _exact(m)
-        f = p21._flat(m)
+        f, g = p21._flat(m), p21._plain(m)
         if isinstance(ref, FileFormatError):
-            assert f is None, m
+            assert f is None and g is None, m
             with pytest.raises(FileFormatError):
                 p21._parse(m, "x")
         else:
-            if f is not None:
-                assert _shape(f) == _shape(ref), m
+            for h in (f, g):
+                if h is not None:
+                    assert _shape(h) == _shape(ref), m
             assert _shape(p21._parse(m, "x")) == _shape(ref), m
+
+
+@pytest.mark.parametrize("body", [
+    "A('',#1,#2)", "A ( 'x' , #1 , .T. , $ , * , -1.E-3 , 7 )", "A(#1,2.,.F.)", "A()",
+    "A('')", "A( )", "a_b-c('q',.u.,.Foo_1.,+.5,5.,1E5,-0)", "A('',#1,)", "A('',,#1)",
+    "A(#1 #2)", "A('',#1x)", "A('it''s',#1)", "A('',#\u0661)", "A('',1.5\n,\t#2)",
+    "A('',(#1,#2))", "A('','b')", "A('',.T)", "A('',1.e)", "A('' ,#1)", "A(#1,'x')",
+    "A('a\x00b',#1)", "(A(#1)B(2))", "A('',.5,.5E2,.E.,.5.)",
+    "A(.13634,#1)"])
+def test_plain_route_reads_as_the_exact_route(body):
+    ref = _exact(body)
+    got = p21._plain(body)
+    if isinstance(ref, FileFormatError):
+        assert got is None
+    elif got is not None:
+        assert _shape(got) == _shape(ref)
+    if body in ("A('',#1,#2)", "A(#1,2.,.F.)", "A()", "A( )", "A('')"):
+        assert got is not None
 
 
 def test_of_type_from_its_index_is_the_scan():
