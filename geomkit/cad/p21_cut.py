@@ -34,7 +34,7 @@ def strip_comments(text: str) -> str:
     (a file has few) keeping the parity of the quotes before each: odd, it is inside
     a string (``''`` escapes count twice); a text whose strings do not close is
     left to :data:`_COMMENT`."""
-    if "/*" not in text:
+    if not _has_comment(text):
         return text
     out, pos, scan, odd = [], 0, 0, False
     i = text.find("/*")
@@ -56,14 +56,36 @@ def strip_comments(text: str) -> str:
     return "".join(out)
 
 
-def find_upper(text: str, b, word: str, start: int) -> int:
+def _has_comment(text: str) -> bool:
+    """``"/*" in text``, from the text's slashes (a file has few; ``str``'s search for
+    two characters is slow where the second, ``*``, is common) while they are few."""
+    i = text.find("/")
+    for _ in range(64):
+        if i < 0:
+            return False
+        if text.startswith("*", i + 1):
+            return True
+        i = text.find("/", i + 1)
+    return "/*" in text
+
+
+def _semicolons(b, lo: int, hi: int, semis=None):
+    """Positions of the ``;`` bytes of ``b[lo:hi]`` (in ``b``), from ``semis`` (those of
+    all ``b``) when given."""
+    if semis is None:
+        return np.flatnonzero(b[lo:hi] == 59) + lo
+    return semis[np.searchsorted(semis, lo):np.searchsorted(semis, hi)]
+
+
+def find_upper(text: str, b, word: str, start: int, semis=None) -> int:
     """``text.upper().find(word, start)`` for a Latin-1 text without a sharp s (whose
-    bytes are ``b``) and an upper-case ``word`` ending in a letter and ``;``: the exact
-    word's first place, unless a word in other case may come first (a ``;`` after that
-    letter in either case before it), then a scan of the bytes."""
+    bytes are ``b``; ``semis``: the positions of its ``;``, optional) and an
+    upper-case ``word`` ending in a letter and ``;``: the exact word's first place,
+    unless a word in other case may come first (a ``;`` after that letter in either
+    case before it), then a scan of the bytes."""
     i = text.find(word, start)
     stop = b.size if i < 0 else i + len(word) - 1
-    semi = np.flatnonzero(b[start + 1:stop] == 59) + start  # (each ';''s byte before)
+    semi = _semicolons(b, start + 1, stop, semis) - 1  # (each ';''s byte before)
     if ((b[semi] | 32) == ord(word[-2].lower())).any():
         return find_upper_bytes(b, np.frombuffer(word.encode(), np.uint8), start)
     return i
@@ -108,24 +130,26 @@ def cut(text: str, source: str):
     if b is None or _SHARP_S in text:  # (upper-cased to 'SS': other positions)
         head, data = sections(text, source)
         return (head,) + cut_records(data, source) + (None, None)
-    h, d = find_upper(text, b, "HEADER;", 0), find_upper(text, b, "DATA;", 0)
-    e = find_upper(text, b, "ENDSEC;", d) if d >= 0 else -1
+    semis = np.flatnonzero(b == 59)  # (every ';', found once)
+    h = find_upper(text, b, "HEADER;", 0, semis)
+    d = find_upper(text, b, "DATA;", 0, semis)
+    e = find_upper(text, b, "ENDSEC;", d, semis) if d >= 0 else -1
     _check_sections(source, h, d, e)
-    return (text[h + 7:d],) + _scan(text, b, d + 5, e, source)
+    return (text[h + 7:d],) + _scan(text, b, d + 5, e, source, semis)
 
 
-def _scan(text, b, start, stop, source):
+def _scan(text, b, start, stop, source, semis=None):
     """``(raw, names, by_name, ordered)`` of the DATA section ``text[start:stop]``
-    (``b``: the text's bytes) from one pass over its records, or from
-    :func:`cut_records` for a text that pass leaves."""
+    (``b``: the text's bytes, ``semis``: the places of its ``;``, optional) from one
+    pass over its records, or from :func:`cut_records` for a text that pass leaves."""
     part = b[start:stop]
-    ends = np.flatnonzero(part == 59)  # ';'
-    quotes = np.flatnonzero(part == 39)
+    ends = _semicolons(b, start, stop, semis)
+    quotes = np.flatnonzero(part == 39) + start
     if quotes.size % 2:  # the text ends inside a string
         return cut_records(text[start:stop], source) + (None, None)
     if quotes.size:  # the ';' after an even number of quotes
         ends = ends[(np.searchsorted(quotes, ends) & 1) == 0]
-    ends = np.concatenate([[-1], ends, [part.size]]) + start
+    ends = np.concatenate([[start - 1], ends, [stop]])
     status, recs, firsts, n, m = scan_records(b, ends)
     if status:
         return cut_records(text[start:stop], source) + (None, None)

@@ -129,3 +129,16 @@ def test_find_upper(word):
         b = np.frombuffer(text.encode("latin-1"), np.uint8)
         for start in range(0, len(text) + 1, 4):
             assert p21_cut.find_upper(text, b, word, start) == text.upper().find(word, start)
+            semis = np.flatnonzero(b == 59)  # (the places of every ';' given)
+            assert p21_cut.find_upper(text, b, word, start, semis) == \
+                text.upper().find(word, start)
+
+
+def test_has_comment():
+    rng = np.random.default_rng(6)
+    for _ in range(2000):
+        text = "".join(rng.choice(["/", "*", "x", "'", "/*", "*/"], rng.integers(0, 200),
+                                  p=[0.4, 0.2, 0.25, 0.05, 0.05, 0.05]))
+        assert p21_cut._has_comment(text) == ("/*" in text)
+    for text in ("/" * 100 + "x/*", "/" * 100, "a/*", "/*", "/", "", "*/"):
+        assert p21_cut._has_comment(text) == ("/*" in text)
