@@ -8,6 +8,8 @@ all of a loop's checks in one call (its joins, its control points in the domain)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .numba_ext.policy import jit_plain as jit
@@ -157,3 +159,43 @@ def loop_check(Q, W, off, deg, U, uoff, per, close, box):
             break
     area, spread = loop_area_spread(loop_points(Q, W, off, deg, U, uoff, per), close)
     return first, gap, inside, area, spread
+
+
+@jit
+def polyline_knots(P):
+    """A polyline's vertices ``P`` (n, 2) as a degree-1 trim curve: ``(status, Q,
+    U)`` with ``Q`` the vertices without repeats (a vertex equal to the one before
+    it is dropped) and ``U`` (m + 2,) the clamped chord-length knots ``[0, t, 1]``,
+    ``t`` the cumulative segment lengths over the total.  ``status`` 1: a
+    non-finite coordinate; 2: fewer than two distinct vertices (``Q``, ``U``
+    empty).  The values of numpy's ``hypot`` / ``cumsum`` / division route, in one
+    call (a reader builds hundreds of short polylines)."""
+    n = P.shape[0]
+    empty = np.empty((0, 2))
+    for i in range(n):
+        if not (math.isfinite(P[i, 0]) and math.isfinite(P[i, 1])):
+            return 1, empty, np.empty(0)
+    idx = np.empty(n, np.int64)
+    m = 0
+    for i in range(n):
+        if i == 0 or math.hypot(P[i, 0] - P[i - 1, 0], P[i, 1] - P[i - 1, 1]) > 0:
+            idx[m] = i
+            m += 1
+    if m < 2:
+        return 2, empty, np.empty(0)
+    Q = np.empty((m, 2))
+    for k in range(m):
+        Q[k, 0] = P[idx[k], 0]
+        Q[k, 1] = P[idx[k], 1]
+    t = np.empty(m)
+    t[0] = 0.0
+    acc = 0.0
+    for k in range(1, m):
+        acc += math.hypot(Q[k, 0] - Q[k - 1, 0], Q[k, 1] - Q[k - 1, 1])
+        t[k] = acc
+    U = np.empty(m + 2)
+    U[0] = 0.0
+    for k in range(m):
+        U[k + 1] = t[k] / t[m - 1]
+    U[m + 1] = 1.0
+    return 0, Q, U

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geomkit._kernels.bezier import curve_points, de_casteljau_split, decompose, insert_knot
-from geomkit._kernels.trim_loops import loop_check, loop_points
+from geomkit._kernels.trim_loops import loop_check, loop_points, polyline_knots
 from geomkit.validate import as_float_array, as_int, check_knots
 from geomkit.errors import InvalidInputError, InvalidTrimError
 
@@ -119,17 +119,16 @@ class TrimCurve:
                         and math.isfinite(d) and (a != c or b != d)):
                     P.setflags(write=False)
                     return cls(1, SEGMENT_KNOTS, P, _TWO_ONES)
-        P = as_float_array(points, field, shape=(None, 2), error=InvalidTrimError)
+        P = points if type(points) is np.ndarray and points.dtype == np.float64 else None
+        if P is None or P.ndim != 2 or P.shape[1] != 2:  # the checks with their messages
+            P = as_float_array(points, field, shape=(None, 2), error=InvalidTrimError)
         if P.shape[0] < 2:
             raise InvalidTrimError(f"a polyline needs at least 2 points, got {P.shape[0]}", field)
-        seg = np.hypot(*np.diff(P, axis=0).T)
-        keep = np.concatenate([[True], seg > 0])  # drop repeated vertices
-        P = P[keep]
-        if P.shape[0] < 2:
+        status, P, U = polyline_knots(P)
+        if status == 1:
+            as_float_array(points, field, error=InvalidTrimError)  # names the value
+        if status:
             raise InvalidTrimError("degenerate polyline: all points coincide", field)
-        t = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(P, axis=0).T))])
-        t /= t[-1]
-        U = np.concatenate([[0.0], t, [1.0]])
         return cls(1, readonly(U), readonly(P), readonly(np.ones(P.shape[0])))
 
     @property
