@@ -1,4 +1,4 @@
-"""Column ranges of small point arrays in one call: numpy's ``X.min(axis=0)`` /
+"""Reductions over small point arrays in one call.  Column ranges: numpy's ``X.min(axis=0)`` /
 ``X.max(axis=0)`` (a NaN in a column gives NaN there) cost a few microseconds each on
 the dozens of points per face the readers take the range of, thousands of times per
 part."""
@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .numba_ext.policy import jit
+from .numba_ext.policy import jit, jit_exact
 
 
 @jit
@@ -50,4 +50,26 @@ def spread(X):
             out = math.nan
         elif d > out:
             out = d
+    return out
+
+
+@jit_exact
+def nearest_rows(G, X):
+    """For each row of ``X`` (m, 3) the index of its nearest row of ``G`` (n >= 1, 3)
+    by brute force (the first of equally near ones; squared distances summed over
+    x, y, z in turn, without contraction, as a k-d tree's are): for the few dozen
+    points a reader seeds per face, cheaper than building a tree.  A row with a NaN
+    gets index 0."""
+    out = np.zeros(X.shape[0], np.int64)
+    for i in range(X.shape[0]):
+        x0, x1, x2 = X[i, 0], X[i, 1], X[i, 2]
+        best = math.inf
+        for j in range(G.shape[0]):
+            d0 = x0 - G[j, 0]
+            d1 = x1 - G[j, 1]
+            d2 = x2 - G[j, 2]
+            d = d0 * d0 + d1 * d1 + d2 * d2
+            if d < best:
+                best = d
+                out[i] = j
     return out

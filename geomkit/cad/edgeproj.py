@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from geomkit._kernels.ranges import nearest_rows
 from geomkit._kernels.surface import invert_points
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
@@ -26,6 +27,9 @@ from geomkit.query.projection_part import project_points
 __all__ = ["edge_uv", "EDGE_TOL", "SurfaceInverse"]
 
 _MAX_POINTS = 4097
+_BRUTE = 200_000
+"""Up to this many grid-point x query-point pairs the seeds are found by brute force
+(:func:`~geomkit._kernels.ranges.nearest_rows`), beyond by a k-d tree built once."""
 
 
 class SurfaceInverse:
@@ -36,19 +40,29 @@ class SurfaceInverse:
     def __init__(self, base):
         self.base = base
         (u0, u1), (v0, v1) = self.dom = base.domain
-        gu = int(min(128, max(16, 4 * (np.unique(base.knots_u).size - 1))))
-        gv = int(min(128, max(16, 4 * (np.unique(base.knots_v).size - 1))))
-        uu, vv = np.meshgrid(np.linspace(u0, u1, gu), np.linspace(v0, v1, gv),
-                             indexing="ij")
-        self.grid = np.column_stack([uu.ravel(), vv.ravel()])
-        self.tree = cKDTree(base.evaluate(self.grid))
+        # 4 points per knot span (the knots are sorted: a span ends where they step)
+        Ku, Kv = base.knots_u, base.knots_v
+        gu = int(min(128, max(16, 4 * np.count_nonzero(Ku[1:] != Ku[:-1]))))
+        gv = int(min(128, max(16, 4 * np.count_nonzero(Kv[1:] != Kv[:-1]))))
+        us, vs = np.linspace(u0, u1, gu), np.linspace(v0, v1, gv)
+        self.grid = np.column_stack([np.repeat(us, gv), np.tile(vs, gu)])
+        self.points = base.evaluate(self.grid)
+        self._tree = None
+
+    def nearest(self, X):
+        """Index of the grid point nearest each point of ``X``."""
+        if self.points.shape[0] * X.shape[0] <= _BRUTE:
+            return nearest_rows(self.points, np.ascontiguousarray(X, float))
+        if self._tree is None:
+            self._tree = cKDTree(self.points)
+        return self._tree.query(X)[1]
 
     def newton(self, X):
         """``(uv, dist)``: the Gauss-Newton parameters of the points ``X`` and their
         distances from the surface points there (a local minimum: an upper bound of
         the distance to the surface)."""
         (u0, u1), (v0, v1) = self.dom
-        uv = np.ascontiguousarray(self.grid[self.tree.query(X)[1]])
+        uv = np.ascontiguousarray(self.grid[self.nearest(X)])
         b = self.base
         dist = np.empty(len(X))
         if len(X):

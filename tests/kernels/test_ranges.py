@@ -27,3 +27,25 @@ def test_col_range_and_spread_are_numpys(seed):
     assert list(lo) == [3.0, -1.0] == list(hi)
     with pytest.raises(ValueError, match="no rows"):
         col_range(np.zeros((0, 3)))
+
+
+def test_nearest_rows_matches_kdtree():
+    from scipy.spatial import cKDTree
+
+    from geomkit._kernels.ranges import nearest_rows
+
+    rng = np.random.default_rng(11)
+    for trial in range(200):
+        G = rng.normal(size=(int(rng.integers(1, 400)), 3)) * 10.0 ** rng.uniform(-3, 3)
+        X = G[rng.integers(0, len(G), 30)] + rng.normal(size=(30, 3)) * 1e-2
+        got = nearest_rows(G, X)
+        d_got = ((X - G[got]) ** 2).sum(1)
+        d_tree, _ = cKDTree(G).query(X)
+        assert np.array_equal(np.sqrt(d_got), d_tree) or np.allclose(np.sqrt(d_got), d_tree,
+                                                                     rtol=1e-15, atol=0)
+        brute = ((X[:, None, :] - G[None]) ** 2).sum(-1).argmin(1)
+        assert np.array_equal(got, brute)
+    # equally near rows: the first wins
+    G = np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0]])
+    assert nearest_rows(G, np.zeros((1, 3)))[0] == 0
+    assert nearest_rows(G, np.full((1, 3), np.nan))[0] == 0
