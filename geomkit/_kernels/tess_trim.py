@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .basis import basis_funs, find_span
 from .surface import surface_point
@@ -40,7 +41,23 @@ SPLIT_AIM = 0.8
 def _curve_at(Pc, pc, Uc, t, lo0, lo1, hi0, hi1, N, left, right):
     """``C(t)`` of a rational 2-D curve (homogeneous ``Pc`` (n, 3)), clipped to the
     box; no allocation (A2.1, A2.2, then the weighted sum)."""
-    span = find_span(Pc.shape[0] - 1, pc, t, Uc)
+    return _curve_in_span(Pc, pc, Uc, find_span(Pc.shape[0] - 1, pc, t, Uc), t, lo0, lo1,
+                          hi0, hi1, N, left, right)
+
+
+@jit_inline
+def _span_of(Pc, pc, Uc, t, span):
+    """``find_span`` of ``t`` on the curve, ``span`` itself when ``t`` lies inside it
+    above the domain's start (there the binary search finds the same index: the one
+    non-empty span holding ``t``)."""
+    if Uc[span] <= t < Uc[span + 1] and t > Uc[pc]:
+        return span
+    return find_span(Pc.shape[0] - 1, pc, t, Uc)
+
+
+@jit
+def _curve_in_span(Pc, pc, Uc, span, t, lo0, lo1, hi0, hi1, N, left, right):
+    """:func:`_curve_at` with the knot span of ``t`` known."""
     basis_funs(span, t, pc, Uc, N, left, right)
     x = 0.0
     y = 0.0
@@ -96,14 +113,19 @@ def _smooth_knot(CP, a0, Uc, pc, i):
 
 @jit
 def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, lo0, lo1,
-                 hi0, hi1, Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X):
+                 hi0, hi1, Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X,
+                 grid_pts, grid_stamp, stamp):
     """The largest distance from the 3-D chord ``Pa``--``Pb`` of the segment
     ``[ta, tb]`` (UV ends ``(ua, va)``, ``(ub, vb)``) of the curve's points, and (with
     ``uv_chords``) of the UV chord's images at the same fractions of the segment: on
     each knot span the segment overlaps, at the quarter points of its part there and
     at the knot ending it, and, on a ``dense`` piece where that part is longer than a
     quarter of the span, at the span's 1/16 grid inside it (see
-    :func:`trim_polylines`)."""
+    :func:`trim_polylines`).  ``grid_pts[span, e]``: ``S(C(t))`` at the 1/16 grid
+    point ``e`` of the knot span ``span``, valid where ``grid_stamp[span, e] ==
+    stamp`` (the piece's number; 0: no cache): a grid point is the same ``t`` in
+    every segment (and retry) that holds it, so its point is evaluated once per piece
+    (the same bits)."""
     d0 = Pb[0] - Pa[0]
     d1 = Pb[1] - Pa[1]
     d2 = Pb[2] - Pa[2]
@@ -132,8 +154,19 @@ def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, l
                     continue
                 if t >= s1:
                     break
-            su, sv = _curve_at(Pc, pc, Uc, t, lo0, lo1, hi0, hi1, Nc, lc, rc)
-            surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+            if e > 4 and stamp > 0 and grid_stamp[span, e - 4] == stamp:
+                X[0] = grid_pts[span, e - 4, 0]
+                X[1] = grid_pts[span, e - 4, 1]
+                X[2] = grid_pts[span, e - 4, 2]
+            else:
+                su, sv = _curve_in_span(Pc, pc, Uc, _span_of(Pc, pc, Uc, t, span), t, lo0,
+                                        lo1, hi0, hi1, Nc, lc, rc)
+                surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+                if e > 4 and stamp > 0:
+                    grid_stamp[span, e - 4] = stamp
+                    grid_pts[span, e - 4, 0] = X[0]
+                    grid_pts[span, e - 4, 1] = X[1]
+                    grid_pts[span, e - 4, 2] = X[2]
             worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
             if uv_chords:
                 f = (t - ta) / (tb - ta)
@@ -162,7 +195,7 @@ def _emit(out, n, t, u, v):
 
 @jit
 def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
-                   U, V, chord_tol, uv_chords, cross_knots, out, counts):
+                   U, V, chord_tol, uv_chords, cross_knots, out, counts, grid_cache):
     """Polylines of many trim pieces on one surface, in one call.
 
     Piece ``c`` has degree ``deg[c]``, control points ``CP[cp_off[c]:cp_off[c+1]]``
@@ -187,22 +220,44 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
 
     Writes ``(t, u, v)`` rows into ``out`` piece after piece (each piece from its
     first knot to its last), ``counts[c]`` rows for piece ``c``; returns the row
-    count, or -1 when ``out`` is too small (call again with a larger one)."""
+    count, or -1 when ``out`` is too small (call again with a larger one).  The
+    scratch is made here, the work done by :func:`_trim_loop` on borrowed views;
+    ``grid_cache``: each grid point's ``S(C(t))`` evaluated once per piece (False:
+    at every test, the route before; the same output)."""
     mm = max(p, q) + 1
-    Nu = np.empty(p + 1)
-    Nv = np.empty(q + 1)
-    left = np.empty(mm)
-    right = np.empty(mm)
-    tmp = np.empty(4)
-    Pa = np.empty(3)
-    Pb = np.empty(3)
-    X = np.empty(3)
+    mc = 1
+    ncp = 1
+    nk = 1
+    for c in range(deg.shape[0]):
+        mc = max(mc, deg[c] + 1)
+        ncp = max(ncp, cp_off[c + 1] - cp_off[c])
+        nk = max(nk, k_off[c + 1] - k_off[c])
+    scratch = (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
+               np.empty(3), np.empty(3), np.empty(3), np.empty((ncp, 3)), np.empty(mc),
+               np.empty(mc), np.empty(mc), np.empty((nk, 16, 3)),
+               np.zeros((nk, 16), dtype=np.int64))
+    return _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw,
+                      p, q, U, V, chord_tol, uv_chords, cross_knots, out, counts, scratch,
+                      grid_cache)
+
+
+@jit
+def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
+               U, V, chord_tol, uv_chords, cross_knots, out, counts, scratch, grid_cache):
+    """The loop of :func:`trim_polylines` over borrowed views (no atomic reference
+    counting in the many evaluations, :mod:`.numba_ext.borrow`); ``scratch`` holds
+    the surface's and the pieces' evaluation arrays (the pieces' at their largest
+    degree and control point count)."""
+    CP, W, K, deg, cp_off, k_off, Pw, U, V, out, counts = borrow_all(
+        (CP, W, K, deg, cp_off, k_off, Pw, U, V, out, counts))
+    Nu, Nv, left, right, tmp, Pa, Pb, X, Pbuf, Nc, lc, rc, grid_pts, grid_stamp = \
+        borrow_all(scratch)
     n = 0
     for c in range(deg.shape[0]):
         pc = deg[c]
         a0 = cp_off[c]
         ncp = cp_off[c + 1] - a0
-        Pc = np.empty((ncp, 3))
+        Pc = Pbuf[:ncp]
         rational = False
         for r in range(ncp):
             w = W[a0 + r]
@@ -212,9 +267,7 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
             if w != 1.0:
                 rational = True
         Uc = K[k_off[c]:k_off[c + 1]]
-        Nc = np.empty(pc + 1)
-        lc = np.empty(pc + 1)
-        rc = np.empty(pc + 1)
+        stamp = c + 1 if grid_cache else 0
         kend = Uc.shape[0] - pc  # the domain's knots: Uc[pc:kend]
         spans = 0
         for j in range(pc + 1, kend):
@@ -281,7 +334,8 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
                     surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
                 worst = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
                                      uv_chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
-                                     Nc, lc, rc, Nu, Nv, left, right, tmp, X)
+                                     Nc, lc, rc, Nu, Nv, left, right, tmp, X, grid_pts,
+                                     grid_stamp, stamp)
                 if worst > chord_tol and tb - ta > tiny:
                     r = np.sqrt(SPLIT_AIM * chord_tol / worst)
                     step = (tb - ta) * min(max(r, 1.0 / MAX_PARTS), 0.9)

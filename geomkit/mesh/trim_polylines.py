@@ -144,7 +144,8 @@ class TrimPolylines:
         while True:
             n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
                                s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                               chord_tol, not self.affine, self.cross_knots, buf, counts)
+                               chord_tol, not self.affine, self.cross_knots, buf, counts,
+                               True)
             if n >= 0:
                 break
             buf = np.empty((4 * len(buf), 3))

@@ -40,12 +40,12 @@ def _kernel(s, pieces, chord_tol, uv_chords=True, cross_knots=False):
     buf = np.empty((4, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
                        s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
-                       cross_knots, buf, counts)
+                       cross_knots, buf, counts, True)
     assert n == -1  # too small: asks for more
     buf = np.empty((200_000, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
                        s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
-                       cross_knots, buf, counts)
+                       cross_knots, buf, counts, True)
     assert n == counts.sum()
     return np.split(buf[:n], np.cumsum(counts)[:-1])
 
