@@ -147,9 +147,10 @@ def clip_rectangles(c: np.ndarray, trim, inside_area: float):
 
     region = trim.region
     pieces = shapely.lib.clip_by_rect(region, c[:, 0], c[:, 2], c[:, 1], c[:, 3])
-    cut_area = float(np.sum((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))
-    if shapely.is_valid(pieces).all() and abs(inside_area + float(shapely.area(pieces).sum())
-                                              - region.area) <= 1e-9 * cut_area:
+    cut_area = float(np.add.reduce((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))
+    if np.logical_and.reduce(shapely.is_valid(pieces)) and abs(
+            inside_area + float(np.add.reduce(shapely.area(pieces))) - region.area) \
+            <= 1e-9 * cut_area:
         return pieces
     return shapely.intersection(shapely.box(c[:, 0], c[:, 2], c[:, 1], c[:, 3]), region)
 
@@ -189,7 +190,7 @@ def triangle_coordinates(collections):
     if len(xy) % 4 == 0:
         ring = xy.reshape(-1, 4, 2)
         idx4 = idx.reshape(-1, 4)
-        n = int(shapely.get_num_geometries(collections).sum())
+        n = int(np.add.reduce(shapely.get_num_geometries(collections)))
         # one closed 4-point ring per part, all parts counted: nothing else in there
         if len(ring) == n and (ring[:, 0] == ring[:, 3]).all() and (idx4 == idx4[:, :1]).all():
             return ring[:, :3, :], idx4[:, 0]

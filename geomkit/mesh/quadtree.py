@@ -441,7 +441,7 @@ def _grid_triangles(cells, dev, diag):
     tri = np.empty((len(cells), 6, 2))
     tri[:, :, 0] = cells[np.arange(len(cells))[:, None], _CORNER_U[diag]]
     tri[:, :, 1] = cells[:, _CORNER_V]
-    return tri.reshape(-1, 3, 2), np.repeat(dev, 2)
+    return tri.reshape(-1, 3, 2), dev.repeat(2)
 
 
 def _has_pole(surface) -> bool:

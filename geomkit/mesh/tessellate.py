@@ -151,14 +151,14 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
         tri_uv, dev, cells, _ = grid
         state = trim.classify_uv(cells)
         cut = np.nonzero(state == 2)[0]
-        keep = np.repeat(state == 1, 2)  # two triangles per cell, in cell order
+        keep = (state == 1).repeat(2)  # two triangles per cell, in cell order
         tri_uv, dev = tri_uv[keep], dev[keep]
         cuv = cown = None
         if len(cut):
             inside = cells[state == 1]
             cuv, cown = triangulate_pieces(clip_rectangles(
-                cells[cut], trim, float(np.sum((inside[:, 1] - inside[:, 0])
-                                               * (inside[:, 3] - inside[:, 2])))))
+                cells[cut], trim, float(np.add.reduce((inside[:, 1] - inside[:, 0])
+                                                      * (inside[:, 3] - inside[:, 2])))))
         if pair:
             tri_uv, dev = _grouped(s, tri_uv, cuv, cown, k, tol)
             if tri_uv is not None:
@@ -186,13 +186,13 @@ def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
     ``cuv`` (of piece ``cown``) together, measured by :func:`_grouped_deviation`;
     ``(None, None)`` when a triangle is above ``tol``."""
     n = len(tri_uv) // 2
-    group = np.repeat(np.arange(n), 2)
+    group = np.arange(n).repeat(2)
     if cuv is not None and len(cuv):
         if not (cown[1:] >= cown[:-1]).all():  # GEOS lists pieces in order: rarely
             order = np.argsort(cown, kind="stable")
             cuv, cown = cuv[order], cown[order]
         cg = np.zeros(len(cown), dtype=np.int64)  # each piece's rank among the pieces
-        np.cumsum(cown[1:] != cown[:-1], out=cg[1:])
+        np.add.accumulate(cown[1:] != cown[:-1], dtype=np.int64, out=cg[1:])
         tri_uv = np.concatenate([tri_uv, cuv])
         group = np.concatenate([group, n + cg])
     dev = _grouped_deviation(s, tri_uv, group, k, tol)

@@ -73,8 +73,7 @@ class TrimPolylines:
         if self._region is None:
             import shapely
 
-            rings = self.rings()
-            region = shapely.Polygon(rings[0], rings[1:])
+            region = _polygon(self.rings())
             # loops that cross or nest deeper than shell and holes: the even-odd
             # region of the loops, one at a time
             if not shapely.is_valid(region):
@@ -115,8 +114,8 @@ class TrimPolylines:
         if len(self.loops) != 1 or self.domain_loop:
             return None
         pts = self.loops[0]
-        a0, b0 = pts.min(axis=0)
-        a1, b1 = pts.max(axis=0)
+        a0, b0 = np.minimum.reduce(pts)
+        a1, b1 = np.maximum.reduce(pts)
         size_uv = max(a1 - a0, b1 - b0)
         if not size_uv > 0:
             return None
@@ -156,13 +155,14 @@ class TrimPolylines:
             pts = uv.copy()
             pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
             return [pts]
+        # (ufunc methods: numpy's function wrappers cost more than these small sums)
         first = np.zeros(m + 1, dtype=np.int64)
-        np.cumsum(counts, out=first[1:])
-        later = np.ones(m, dtype=bool)
+        np.add.accumulate(counts, out=first[1:])
+        later = np.full(m, True)
         later[loop_first[:-1]] = False
-        keep = np.ones(n, dtype=bool)
+        keep = np.full(n, True)
         keep[first[:-1][later]] = False
-        ends = np.cumsum(np.add.reduceat(counts - later, loop_first[:-1])).tolist()
+        ends = np.add.accumulate(np.add.reduceat(counts - later, loop_first[:-1])).tolist()
         uv = uv[keep]
         out = []
         for a, b in zip([0] + ends[:-1], ends):
@@ -188,7 +188,8 @@ class TrimPolylines:
             if len(rings) > n_cut:  # the domain rectangle leads rings(): move it last
                 rings = rings[1:] + rings[:1]
             starts = np.zeros(len(rings) + 1, dtype=np.int64)
-            np.cumsum([len(r) for r in rings], out=starts[1:])
+            np.add.accumulate(np.array([len(r) for r in rings], dtype=np.int64),
+                              out=starts[1:])
             self._packed_rings = (np.ascontiguousarray(np.concatenate(rings)), starts, n_cut)
         P, starts, n_cut = self._packed_rings
         state = np.empty(uv.shape[0], dtype=np.int8)
@@ -196,6 +197,22 @@ class TrimPolylines:
             classify_cells(P, starts, n_cut, np.ascontiguousarray(uv, dtype=np.float64),
                            state)
         return state
+
+
+def _polygon(rings):
+    """``shapely.Polygon(rings[0], rings[1:])`` for closed rings, built by the
+    vectorised constructors (the class's per-ring checks cost more than the GEOS
+    work on a face's few rings); a ring of fewer than 4 points goes to the class
+    (its error)."""
+    import shapely
+
+    if min(len(r) for r in rings) < 4:
+        return shapely.Polygon(rings[0], rings[1:])
+    if len(rings) == 1:
+        return shapely.polygons(rings[0])
+    geoms = shapely.linearrings(np.concatenate(rings), indices=np.repeat(
+        np.arange(len(rings)), [len(r) for r in rings]))
+    return shapely.polygons(geoms[0], holes=geoms[1:])
 
 
 def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bool:
@@ -294,8 +311,9 @@ def affine_map(s: Surface, size: float):
     control points are ``o + g_u[i] a + g_v[j] b`` at the Greville abscissae and the
     weights are equal, ``S`` is that affine map.  Also requires ``a x b != 0`` (not
     degenerate)."""
-    if s.weights is not None and np.ptp(s.weights) != 0:
-        return None
+    w = s.weights
+    if w is not None and np.maximum.reduce(w, axis=None) != np.minimum.reduce(w, axis=None):
+        return None  # (np.ptp(w) != 0, without its wrapper)
     P = s.control_points
     nu, nv = P.shape[:2]
     gu = _greville(s.knots_u, s.degree_u, nu)

@@ -47,9 +47,8 @@ def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     # crossing points computed in two neighbouring cells may differ by rounding
     dom = max(u1 - u0, v1 - v0)
     z = np.ascontiguousarray(flat).view(np.complex128).ravel()  # (u, v) as u + iv
-    uz, inv = np.unique(z, return_inverse=True)  # complex sorts by u, then v
-    uniq = np.ascontiguousarray(np.stack([uz.real, uz.imag], axis=1))
-    inv = inv.ravel()
+    uz, inv = sorted_unique(z)  # complex sorts by u, then v
+    uniq = uz.view(np.float64).reshape(-1, 2)  # (real, imag) rows: the (u, v) back
     pairs = [near_pairs(uniq, 1e-13 * dom)] if near_uv else []
     P = points(s, uniq)
     eps = 1e-12 * dom
@@ -61,6 +60,28 @@ def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     return merge(P, uniq, inv, pairs)
 
 
+def sorted_unique(z):
+    """``np.unique(z, return_inverse=True)`` for a 1-D array without NaN (UV
+    parameters), as numpy computes it (sort, first of each run of equal values, the
+    running count as the inverse) without its wrapper's checks: a few microseconds a
+    call, which is a weld's cost on a small face."""
+    perm = z.argsort()
+    aux = z[perm]
+    first = np.empty(len(aux), dtype=bool)
+    if len(aux):
+        first[0] = True
+        np.not_equal(aux[1:], aux[:-1], out=first[1:])
+    inv = np.empty(len(aux), dtype=np.intp)
+    inv[perm] = np.add.accumulate(first, dtype=np.intp) - 1
+    return aux[first], inv
+
+
+def _sorted_gaps(x):
+    """Gaps between the sorted values of ``x`` (1-D): ``np.diff(np.sort(x))``."""
+    x = np.sort(x)
+    return x[1:] - x[:-1]
+
+
 def near_pairs(Q, r):
     """Pairs of the rows of ``Q`` (n, 2) closer than ``r``; the KD-tree only when the
     points' projections on an oblique unit direction, sorted, have a gap below ``2 r``
@@ -68,8 +89,8 @@ def near_pairs(Q, r):
     :func:`boundary_pairs`)."""
     if len(Q) < 2:
         return np.empty((0, 2), np.int64)
-    gaps = np.diff(np.sort(Q @ _NEAR_DIRECTION))
-    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+    gaps = _sorted_gaps(Q @ _NEAR_DIRECTION)
+    if np.logical_and.reduce(gaps > 2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None)):
         return np.empty((0, 2), np.int64)
     from scipy.spatial import cKDTree
 
@@ -131,8 +152,8 @@ def boundary_pairs(P, bnd, size):
     # all further apart than r plus the projections' rounding (a pair within r projects
     # within r; a dot product of 3 terms errs by at most ~5 ulp of max |Q| each, so
     # 1e-14 max |Q| and a factor 2 on r are ample): an open surface skips the tree
-    gaps = np.diff(np.sort(Q @ _WELD_DIRECTION))
-    if (gaps > 2.0 * r + 1e-14 * np.abs(Q).max()).all():
+    gaps = _sorted_gaps(Q @ _WELD_DIRECTION)
+    if np.logical_and.reduce(gaps > 2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None)):
         return np.empty((0, 2), np.int64)
     from scipy.spatial import cKDTree
 

@@ -1,0 +1,53 @@
+"""The mesh path's shortcuts around numpy's and shapely's wrappers against the calls
+they replaced, bit for bit: :func:`geomkit.mesh.weld.sorted_unique` against
+``np.unique(z, return_inverse=True)`` (complex UV keys, repeats, signed zeros), and
+:func:`geomkit.mesh.trim_polylines._polygon` against ``shapely.Polygon(shell,
+holes)`` (WKB equal; a ring of fewer than 4 points as the class makes it, or
+its error)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from geomkit.mesh.trim_polylines import _polygon
+from geomkit.mesh.weld import sorted_unique
+
+
+def test_sorted_unique_is_numpys_unique():
+    rng = np.random.default_rng(7)
+    for n in (0, 1, 2, 3, 17, 500, 4000):
+        for _ in range(10):
+            uv = rng.integers(0, 9, (n, 2)) * 0.25
+            uv[rng.random((n, 2)) < 0.1] = -0.0
+            z = np.ascontiguousarray(uv).view(np.complex128).ravel()
+            want, winv = np.unique(z, return_inverse=True)
+            got, inv = sorted_unique(z)
+            assert got.tobytes() == want.tobytes()
+            assert np.array_equal(inv, winv.ravel())
+
+
+def _ring(rng, c, r, k):
+    a = np.sort(rng.uniform(0, 2 * np.pi, k))
+    p = np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)]
+    return np.vstack([p, p[:1]])
+
+
+def test_polygon_is_the_class_polygon():
+    rng = np.random.default_rng(2)
+    for holes in (0, 1, 3):
+        for _ in range(5):
+            rings = [_ring(rng, (0, 0), 10, 40)] + [_ring(rng, (4 * np.cos(h), 4 * np.sin(h)),
+                                                            1, 12) for h in range(holes)]
+            want = shapely.Polygon(rings[0], rings[1:])
+            assert shapely.to_wkb(_polygon(rings)) == shapely.to_wkb(want)
+    for short in ([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 0.0]]):
+        rings = [np.array(short)]
+        try:
+            want = shapely.to_wkb(shapely.Polygon(rings[0]))
+        except Exception as exc:  # noqa: BLE001 - the same error expected
+            with pytest.raises(type(exc)):
+                _polygon(rings)
+        else:
+            assert shapely.to_wkb(_polygon(rings)) == want
