@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geomkit.cad.p21_cut import cut
+from geomkit.cad.p21_cut import Bodies, cut
 from geomkit.cad.p21_numbers import BY_FLOAT, OTHER, CoordinateTable
 from geomkit.errors import FileFormatError
 
@@ -488,7 +488,8 @@ class P21:
         ids = self.of_type(name)
         raw = self._raw
         try:
-            t = CoordinateTable(ids, [raw[i] for i in ids],
+            t = CoordinateTable(ids, raw.many(ids) if isinstance(raw, Bodies)
+                                else [raw[i] for i in ids],
                                 lambda i: self._numbers_each(i, name))
         except UnicodeEncodeError:
             t = None

@@ -22,7 +22,7 @@ from geomkit._kernels.p21_scan import (BODY0, BODY1, CODE, ID, LOWER, NAME0, NAM
                                        find_upper as find_upper_bytes)
 from geomkit.errors import FileFormatError
 
-__all__ = ["cut", "cut_records", "sections", "strip_comments", "find_upper"]
+__all__ = ["cut", "cut_records", "sections", "strip_comments", "find_upper", "Bodies"]
 
 _COMMENT = re.compile(r"'(?:[^']|'')*'|/\*.*?\*/", re.S)
 _SHARP_S = "\xdf"
@@ -138,6 +138,67 @@ def cut(text: str, source: str):
     return (text[h + 7:d],) + _scan(text, b, d + 5, e, source, semis)
 
 
+class Bodies:
+    """``{id: body}`` of a file's records (ids in file order), each body cut from the
+    file's text when asked for (a reader asks for a part of them): a dict's reading
+    methods; setting a body makes it a dict."""
+
+    __slots__ = ("_text", "_ids", "_row", "_a", "_e", "_dict")
+
+    def __init__(self, text: str, ids: list, a: list, e: list):
+        self._text, self._ids, self._a, self._e = text, ids, a, e
+        self._row = dict(zip(ids, range(len(ids))))  # (fewer than ids: one repeated)
+        self._dict = None
+
+    def get(self, i, default=None):
+        if self._dict is not None:
+            return self._dict.get(i, default)
+        r = self._row.get(i)
+        return default if r is None else self._text[self._a[r]:self._e[r]]
+
+    def __getitem__(self, i):
+        got = self.get(i, _MISSING)
+        if got is _MISSING:
+            raise KeyError(i)
+        return got
+
+    def __setitem__(self, i, body):
+        if self._dict is None:
+            self._dict = dict(self.items())
+        self._dict[i] = body
+
+    def __contains__(self, i) -> bool:
+        return i in (self._row if self._dict is None else self._dict)
+
+    def __len__(self) -> int:
+        return len(self._row if self._dict is None else self._dict)
+
+    def __iter__(self):
+        return iter(self.keys())
+
+    def keys(self):
+        return self._row.keys() if self._dict is None else self._dict.keys()
+
+    def values(self):
+        if self._dict is not None:
+            return self._dict.values()
+        t = self._text
+        return [t[a:e] for a, e in zip(self._a, self._e)]
+
+    def items(self):
+        return zip(self.keys(), self.values())
+
+    def many(self, ids) -> list:
+        """``[self[i] for i in ids]``."""
+        if self._dict is not None:
+            return [self._dict[i] for i in ids]
+        t, a, e = self._text, self._a, self._e
+        return [t[a[r]:e[r]] for r in map(self._row.__getitem__, ids)]
+
+
+_MISSING = object()
+
+
 def _scan(text, b, start, stop, source, semis=None):
     """``(raw, names, by_name, ordered)`` of the DATA section ``text[start:stop]``
     (``b``: the text's bytes, ``semis``: the places of its ``;``, optional) from one
@@ -155,8 +216,7 @@ def _scan(text, b, start, stop, source, semis=None):
         return cut_records(text[start:stop], source) + (None, None)
     recs = recs[:n]
     ids = recs[:, ID].tolist()
-    raw = dict(zip(ids, [text[a:e] for a, e in zip(recs[:, BODY0].tolist(),
-                                                    recs[:, BODY1].tolist())]))
+    raw = Bodies(text, ids, recs[:, BODY0].tolist(), recs[:, BODY1].tolist())
     if len(raw) != n:  # an id defined twice: named record by record
         return cut_records(text[start:stop], source) + (None, None)
     rows = recs[firsts[:m]]

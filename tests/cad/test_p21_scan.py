@@ -142,3 +142,38 @@ def test_has_comment():
         assert p21_cut._has_comment(text) == ("/*" in text)
     for text in ("/" * 100 + "x/*", "/" * 100, "a/*", "/*", "/", "", "*/"):
         assert p21_cut._has_comment(text) == ("/*" in text)
+
+
+def test_bodies_read_as_a_dict():
+    """p21_cut.Bodies (bodies cut from the text when asked) against the dict of the
+    same bodies: every reading method, and after a body is set."""
+    text = "xx#5=A(1);#2=B('a;b');#9=C();"
+    spans = [(5, 9), (13, 21), (25, 28)]
+    ids = [5, 2, 9]
+    ref = {i: text[a:e] for i, (a, e) in zip(ids, spans)}
+    got = p21_cut.Bodies(text, ids, [a for a, _ in spans], [e for _, e in spans])
+    for _ in range(2):
+        assert list(got.items()) == list(ref.items())
+        assert list(got) == list(ref) and list(got.keys()) == list(ref.keys())
+        assert list(got.values()) == list(ref.values()) and len(got) == len(ref)
+        for i in (5, 2, 9, 7):
+            assert (i in got) == (i in ref) and got.get(i) == ref.get(i)
+            assert got.get(i, "") == ref.get(i, "")
+            if i in ref:
+                assert got[i] == ref[i]
+            else:
+                with pytest.raises(KeyError):
+                    got[i]
+        assert got.many([9, 5, 9]) == [ref[9], ref[5], ref[9]]
+        got[2] = ref[2] = "B('c')"  # (then a dict)
+        got[7] = ref[7] = "D()"
+
+
+def test_bodies_of_the_parts():
+    for path in PARTS:
+        p = P21(open(path, "rb").read().decode("latin-1"), path)
+        assert isinstance(p._raw, p21_cut.Bodies)
+        text = p21_cut.strip_comments(open(path, "rb").read().decode("latin-1"))
+        head, data = p21_cut.sections(text, "t")
+        raw, _ = p21_cut.cut_records(data, "t")
+        assert list(p._raw.items()) == list(raw.items())
