@@ -13,7 +13,8 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline, prun
-from .basis import basis_funs, ders_basis_funs, ders_scratch, find_span
+from .basis import (basis_funs_inline, ders_basis_funs_inline, ders_scratch,
+                    find_span_inline)
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
 POLE_RATIO = 1e-7
@@ -33,10 +34,10 @@ def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
     """Write S(u, v) into ``out[0:3]`` (A4.3).  Scratch arrays are caller-provided."""
     nu = Pw.shape[0]
     nv = Pw.shape[1]
-    su = find_span(nu - 1, p, u, U)
-    basis_funs(su, u, p, U, Nu, left, right)
-    sv = find_span(nv - 1, q, v, V)
-    basis_funs(sv, v, q, V, Nv, left, right)
+    su = find_span_inline(nu - 1, p, u, U)
+    basis_funs_inline(su, u, p, U, Nu, left, right)
+    sv = find_span_inline(nv - 1, q, v, V)
+    basis_funs_inline(sv, v, q, V, Nv, left, right)
     for c in range(4):
         tmp[c] = 0.0
     for k in range(p + 1):
@@ -118,10 +119,10 @@ def surface_derivs(Pw, p, q, U, V, u, v, d, bin_, scr, SKL):
     nv = Pw.shape[1]
     du = d if d < p else p
     dv = d if d < q else q
-    su = find_span(nu - 1, p, u, U)
-    ders_basis_funs(su, u, p, du, U, dNu, sa[0], sa[1], sa[2], sa[3])
-    sv = find_span(nv - 1, q, v, V)
-    ders_basis_funs(sv, v, q, dv, V, dNv, sb[0], sb[1], sb[2], sb[3])
+    su = find_span_inline(nu - 1, p, u, U)
+    ders_basis_funs_inline(su, u, p, du, U, dNu, sa[0], sa[1], sa[2], sa[3])
+    sv = find_span_inline(nv - 1, q, v, V)
+    ders_basis_funs_inline(sv, v, q, dv, V, dNv, sb[0], sb[1], sb[2], sb[3])
     for k in range(d + 1):
         for l in range(d + 1):
             for c in range(4):
@@ -327,7 +328,7 @@ def surface_normals(Pw, p, q, U, V, uv, umin, umax, vmin, vmax, degen_rel, out, 
 
 
 # ------------------------------------------------ order-2 derivatives, fixed size
-@jit
+@jit_inline
 def _basis_d2(i, u, p, U, D, W, left, right, A):
     """Basis functions and their first and second derivatives at ``u`` in span ``i``:
     ``D[0..2, 0..p]`` (rows: N, N', N'').
@@ -412,9 +413,9 @@ def surface_derivs2(Pw, p, q, U, V, u, v, scr, SKL):
     surface's degrees (any order >= 2 ... the arrays are only used as scratch).
     """
     dNu, dNv, Aw, sa, sb = scr
-    su = find_span(Pw.shape[0] - 1, p, u, U)
+    su = find_span_inline(Pw.shape[0] - 1, p, u, U)
     _basis_d2(su, u, p, U, dNu, sa[0], sa[1], sa[2], sa[3])
-    sv = find_span(Pw.shape[1] - 1, q, v, V)
+    sv = find_span_inline(Pw.shape[1] - 1, q, v, V)
     _basis_d2(sv, v, q, V, dNv, sb[0], sb[1], sb[2], sb[3])
     a00x = a00y = a00z = a00w = 0.0
     a10x = a10y = a10z = a10w = 0.0
