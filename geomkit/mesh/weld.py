@@ -15,6 +15,7 @@ import numpy as np
 from geomkit.tolerances import WELD_REL
 from geomkit._kernels.surface import surface_points_range, surface_points
 from geomkit._kernels.tess_grid import grid_vertices
+from geomkit._kernels.tess_weld import close_pairs
 from geomkit.nurbs.surface import Surface
 
 SERIAL_POINTS = 2048
@@ -76,25 +77,15 @@ def sorted_unique(z):
     return aux[first], inv
 
 
-def _sorted_gaps(x):
-    """Gaps between the sorted values of ``x`` (1-D): ``np.diff(np.sort(x))``."""
-    x = np.sort(x)
-    return x[1:] - x[:-1]
-
-
 def near_pairs(Q, r):
-    """Pairs of the rows of ``Q`` (n, 2) closer than ``r``; the KD-tree only when the
-    points' projections on an oblique unit direction, sorted, have a gap below ``2 r``
-    plus rounding (a pair within ``r`` projects within ``r``: see
+    """Pairs of the rows of ``Q`` (n, 2) within ``r``, by their projections on an
+    oblique unit direction, sorted (:func:`geomkit._kernels.tess_weld.close_pairs`; a
+    pair within ``r`` projects within ``r``, the window's rounding margin as in
     :func:`boundary_pairs`)."""
     if len(Q) < 2:
         return np.empty((0, 2), np.int64)
-    gaps = _sorted_gaps(Q @ _NEAR_DIRECTION)
-    if np.logical_and.reduce(gaps > 2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None)):
-        return np.empty((0, 2), np.int64)
-    from scipy.spatial import cKDTree
-
-    return cKDTree(Q).query_pairs(r, output_type="ndarray")
+    return close_pairs(np.ascontiguousarray(Q, dtype=np.float64), _NEAR_DIRECTION, r,
+                       2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None))
 
 
 _NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes
@@ -147,17 +138,13 @@ def boundary_pairs(P, bnd, size):
     if len(bnd) < 2:
         return np.empty((0, 2), np.int64)
     r = WELD_REL * size
-    Q = P[bnd]
-    # no pair when the points' projections on a unit-or-shorter direction, sorted, are
-    # all further apart than r plus the projections' rounding (a pair within r projects
-    # within r; a dot product of 3 terms errs by at most ~5 ulp of max |Q| each, so
-    # 1e-14 max |Q| and a factor 2 on r are ample): an open surface skips the tree
-    gaps = _sorted_gaps(Q @ _WELD_DIRECTION)
-    if np.logical_and.reduce(gaps > 2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None)):
-        return np.empty((0, 2), np.int64)
-    from scipy.spatial import cKDTree
-
-    return bnd[cKDTree(Q).query_pairs(r, output_type="ndarray")]
+    Q = np.ascontiguousarray(P[bnd], dtype=np.float64)
+    # the points sorted by their projections on a unit-or-shorter direction: a pair
+    # within r projects within r plus the projections' rounding (a dot product of 3
+    # terms errs by at most ~5 ulp of max |Q| each, so 1e-14 max |Q| and a factor 2 on
+    # r are ample) (:func:`geomkit._kernels.tess_weld.close_pairs`)
+    return bnd[close_pairs(Q, _WELD_DIRECTION, r,
+                           2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None))]
 
 
 def weld_grid(s: Surface, u: np.ndarray, v: np.ndarray, diag: np.ndarray, size: float):
