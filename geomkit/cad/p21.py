@@ -18,6 +18,7 @@ is ``(None, {NAME: [params], ...})``.  Anything else is a
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -448,6 +449,19 @@ class P21:
         if got == BY_FLOAT:
             return self._numbers_each(i, name)
         return got
+
+    def xyz(self, i, name: str):
+        """:meth:`numbers` of record ``i`` as a new (3,) float array when they are three
+        finite numbers, else None."""
+        t = self._table(name)
+        if t is not None:
+            r = t.row.get(int(i))
+            if r is not None and t.finite3[r]:
+                return t.values[r].copy()
+        x = self.numbers(i, name)
+        if x is None or len(x) != 3 or not all(map(math.isfinite, x)):
+            return None
+        return np.array(x)
 
     def _numbers_each(self, i: int, name: str):
         """:meth:`numbers` of one record: its regex and ``float``."""

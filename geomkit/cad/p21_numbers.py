@@ -35,9 +35,11 @@ class CoordinateTable:
     values : (n, 3) float, a row's numbers (``count`` of them) when its status is
         PLAIN (BY_FLOAT: a record of more than three numbers).
     count, status : lists of int per row.
+    finite3 : list of bool per row, PLAIN with three finite numbers.
     """
 
-    __slots__ = ("row", "values", "rows", "count", "status", "_status", "_count", "_k")
+    __slots__ = ("row", "values", "rows", "count", "status", "finite3", "_status", "_count",
+                 "_k")
 
     def __init__(self, ids, bodies, each):
         buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
@@ -55,6 +57,8 @@ class CoordinateTable:
         self.values, self._count, self._status = values, count, status
         plain = (status == PLAIN).all() and count.size and (count == count[0]).all()
         self._k = int(count[0]) if plain else None  # every row PLAIN with k numbers
+        self.finite3 = ((status == PLAIN) & (count == 3)
+                        & np.isfinite(values).all(axis=1)).tolist()
         self.rows = values.tolist()
         self.count = count.tolist()
         self.status = status.tolist()

@@ -192,9 +192,9 @@ class StepGeometry:
         return out
 
     def point(self, i):
-        x = self.p.numbers(i, "CARTESIAN_POINT")
-        if x is not None and len(x) == 3 and all(map(math.isfinite, x)):
-            return np.array(x)
+        x = self.p.xyz(i, "CARTESIAN_POINT")
+        if x is not None:
+            return x
         _, a = self.rec(i, "CARTESIAN_POINT")
         if len(a) < 2 or not isinstance(a[1], list):
             raise self._bad(i, "CARTESIAN_POINT without coordinates")
@@ -213,9 +213,8 @@ class StepGeometry:
         return np.array([self.point(k) for k in ids]).reshape(-1, 3)
 
     def direction(self, i):
-        x = self.p.numbers(i, "DIRECTION")
-        if x is not None and len(x) == 3:
-            v = np.array(x)
+        v = self.p.xyz(i, "DIRECTION")
+        if v is not None:
             n = norm3(v)
             if n > 0 and math.isfinite(n):
                 return v / n

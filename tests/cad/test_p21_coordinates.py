@@ -1,4 +1,4 @@
-"""P21.numbers and P21.coordinates (every point / direction record read at once from
+"""P21.numbers, P21.xyz and P21.coordinates (every point / direction record read at once from
 its bytes: geomkit/cad/p21_numbers.py and the p21_scan kernel) against the
 record-by-record reading (the oracle below: the regex and float of each record), and
 the kernel's numbers against float."""
@@ -63,7 +63,15 @@ def _check(p):
         ids = p.of_type(name)
         other = list(p.names)[:30] + [10 ** 9]
         for i in ids + other:
-            assert p.numbers(i, name) == _numbers(p, i, name), i
+            x = _numbers(p, i, name)
+            assert p.numbers(i, name) == x, i
+            want = np.array(x) if x is not None and len(x) == 3 and \
+                np.isfinite(x).all() else None  # (P21.xyz: three finite numbers)
+            got = p.xyz(i, name)
+            assert _same(got, want), i
+            if got is not None:  # (a new array each time)
+                got[:] = 7.0
+                assert _same(p.xyz(i, name), want), i
         for k in (1, 2, 3, 0):
             for chunk in (ids, ids[:7], ids[::5], ids + other[:1], [], ids[::-1],
                           [str(i) for i in ids[:3]], [np.int64(i) for i in ids[:3]]):
