@@ -347,6 +347,11 @@ def _parse(s: str, where: str):
     flat = _plain(s)
     if flat is not None:
         return flat
+    return _parse_other(s, where)
+
+
+def _parse_other(s: str, where: str):
+    """:func:`_parse` of a body that is not of :data:`_PLAIN`'s form."""
     flat = _flat(s)
     if flat is not None:
         return flat
@@ -425,7 +430,10 @@ class P21:
             raw = self._raw.get(i)
             if raw is None:
                 raise FileFormatError(f"{self.source}: #{i} is referenced but not defined")
-            out = self._cache[i] = _parse(raw, f"{self.source} #{i}")
+            out = _plain(raw)  # (most records: no message to prepare)
+            if out is None:
+                out = _parse_other(raw, f"{self.source} #{i}")
+            self._cache[i] = out
         return out
 
     def body(self, i) -> str:
@@ -556,11 +564,12 @@ class P21:
     def complex_ids(self, part: str | None = None) -> list[int]:
         """Ids of the complex records (``#id = (A(...) B(...))``), those naming entity
         ``part`` among their parts when given (found in the text, parsed later)."""
-        ids = [i for i, n in self.names.items() if n == ""]
+        ids = self.of_type("")  # (the complex records' name)
         if part is None:
             return ids
-        want = part.upper()
-        return [i for i in ids if want in self._raw[i].upper()]
+        want, raw = part.upper(), self._raw
+        bodies = raw.many(ids) if isinstance(raw, Bodies) else [raw[i] for i in ids]
+        return [i for i, b in zip(ids, bodies) if want in b.upper()]
 
 
 def read_p21(path) -> P21:

@@ -54,6 +54,10 @@ def _check(text: str):
         if p._ordered is not None:
             assert p._ordered == all(a < b for a, b in zip(ids, ids[1:]))
         assert p.complex_ids() == [i for i, n in p.names.items() if n == ""]
+        for part in ("B_SPLINE_SURFACE", "representation_relationship", "LENGTH_UNIT",
+                     "SI_UNIT(", "X"):
+            assert p.complex_ids(part) == [i for i, n in p.names.items() if n == ""
+                                           and part.upper() in p._raw[i].upper()]
     return got
 
 
