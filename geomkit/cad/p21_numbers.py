@@ -38,8 +38,8 @@ class CoordinateTable:
     finite3 : list of bool per row, PLAIN with three finite numbers.
     """
 
-    __slots__ = ("row", "values", "rows", "count", "status", "finite3", "_status", "_count",
-                 "_k")
+    __slots__ = ("row", "values", "_rows", "count", "status", "finite3", "_status",
+                 "_count", "_k")
 
     def __init__(self, ids, bodies, each):
         buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
@@ -59,7 +59,7 @@ class CoordinateTable:
         self._k = int(count[0]) if plain else None  # every row PLAIN with k numbers
         self.finite3 = ((status == PLAIN) & (count == 3)
                         & np.isfinite(values).all(axis=1)).tolist()
-        self.rows = values.tolist()
+        self._rows = None  # (rows, made at the first numbers())
         self.count = count.tolist()
         self.status = status.tolist()
         self.row = dict(zip(ids, range(len(ids))))
@@ -70,6 +70,13 @@ class CoordinateTable:
         if s != PLAIN:
             return s
         return tuple(self.rows[r][:self.count[r]])
+
+    @property
+    def rows(self) -> list:
+        """The rows' numbers as lists (:attr:`values`)."""
+        if self._rows is None:
+            self._rows = self.values.tolist()
+        return self._rows
 
     def coordinates(self, rows, k: int, each):
         """The numbers (n, k) of ``rows``, or None when any is OTHER or has another
