@@ -316,37 +316,55 @@ def affine_map(s: Surface, size: float):
         return None  # (np.ptp(w) != 0, without its wrapper)
     P = s.control_points
     nu, nv = P.shape[:2]
+    if nu == 2 and nv == 2:  # the bilinear patch (degree 1): the parallelogram test
+        return _bilinear_affine(P.tolist(), float(s.knots_u[1]), float(s.knots_u[2]),
+                                float(s.knots_v[1]), float(s.knots_v[2]), size)
     gu = _greville(s.knots_u, s.degree_u, nu)
     gv = _greville(s.knots_v, s.degree_v, nv)
-    if nu == 2 and nv == 2:  # the bilinear patch: the parallelogram test
-        du, dv = gu[1] - gu[0], gv[1] - gv[0]
-        a = (P[1, 0] - P[0, 0]) / du
-        b = (P[0, 1] - P[0, 0]) / dv
-        o = P[0, 0] - gu[0] * a - gv[0] * b
-        twist = np.abs(P[1, 1] - P[1, 0] - (P[0, 1] - P[0, 0])).max()
-        if twist > AFFINE_REL * size:
+    du, dv = gu[-1] - gu[0], gv[-1] - gv[0]
+    if du > 0 and dv > 0:
+        # quick rejection (most curved nets): the affine map through three corners.
+        # Had the least-squares map a residual <= eps at every point, this one would
+        # differ from it by an affine function bounded by eps at those corners, so
+        # by at most 3 eps on the Greville box: its residual would be <= 4 eps.
+        R = P - P[0, 0] - np.multiply.outer(gu - gu[0], (P[-1, 0] - P[0, 0]) / du)[:, None] \
+            - np.multiply.outer(gv - gv[0], (P[0, -1] - P[0, 0]) / dv)[None]
+        if np.abs(R).max() > 4.5 * AFFINE_REL * size:
             return None
-    else:
-        du, dv = gu[-1] - gu[0], gv[-1] - gv[0]
-        if du > 0 and dv > 0:
-            # quick rejection (most curved nets): the affine map through three corners.
-            # Had the least-squares map a residual <= eps at every point, this one would
-            # differ from it by an affine function bounded by eps at those corners, so
-            # by at most 3 eps on the Greville box: its residual would be <= 4 eps.
-            R = P - P[0, 0] - np.multiply.outer(gu - gu[0], (P[-1, 0] - P[0, 0]) / du)[:, None] \
-                - np.multiply.outer(gv - gv[0], (P[0, -1] - P[0, 0]) / dv)[None]
-            if np.abs(R).max() > 4.5 * AFFINE_REL * size:
-                return None
-        G = np.stack([np.ones(nu * nv), np.repeat(gu, nv), np.tile(gv, nu)], axis=1)
-        X = P.reshape(-1, 3)
-        coef = np.linalg.lstsq(G, X, rcond=None)[0]
-        if np.abs(G @ coef - X).max() > AFFINE_REL * size:
-            return None
-        o, a, b = coef
+    G = np.stack([np.ones(nu * nv), np.repeat(gu, nv), np.tile(gv, nu)], axis=1)
+    X = P.reshape(-1, 3)
+    coef = np.linalg.lstsq(G, X, rcond=None)[0]
+    if np.abs(G @ coef - X).max() > AFFINE_REL * size:
+        return None
+    o, a, b = coef
+    return _not_degenerate(o, a, b)
+
+
+def _not_degenerate(o, a, b):
+    """``(o, a, b)`` unless ``a x b`` is 0 (a line or a point): then None."""
     n = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
     if not n[0] ** 2 + n[1] ** 2 + n[2] ** 2 > 1e-24 * np.dot(a, a) * np.dot(b, b):
         return None  # degenerate (a line or a point)
     return o, a, b
+
+
+def _bilinear_affine(P, gu0, gu1, gv0, gv1, size):
+    """:func:`affine_map` of a 2 x 2 net ``P`` (nested lists of floats) at the
+    Greville abscissae ``gu0, gu1`` / ``gv0, gv1``: ``a``, ``b`` the edges, ``o`` the
+    origin, refused when the twist (the net's departure from a parallelogram) exceeds
+    ``AFFINE_REL * size``.  Float by float, the operations numpy did on the rows (the
+    same values, without a numpy call per 3-vector)."""
+    (p00, p01), (p10, p11) = P
+    du, dv = gu1 - gu0, gv1 - gv0
+    a = [(p10[i] - p00[i]) / du for i in range(3)]
+    b = [(p01[i] - p00[i]) / dv for i in range(3)]
+    o = [p00[i] - gu0 * a[i] - gv0 * b[i] for i in range(3)]
+    t = [abs(p11[i] - p10[i] - (p01[i] - p00[i])) for i in range(3)]
+    lim = AFFINE_REL * size
+    # numpy's max(t) > lim: NaN propagates through the max (and then fails the test)
+    if t[0] == t[0] and t[1] == t[1] and t[2] == t[2] and max(t) > lim:
+        return None
+    return _not_degenerate(np.array(o), np.array(a), np.array(b))
 
 
 def planar_trimmed(trim: TrimPolylines):

@@ -51,3 +51,41 @@ def test_polygon_is_the_class_polygon():
                 _polygon(rings)
         else:
             assert shapely.to_wkb(_polygon(rings)) == want
+
+
+def _affine_numpy(P, gu, gv, size):
+    """The bilinear branch of ``affine_map`` as numpy computed it before (the oracle)."""
+    from geomkit.tolerances import AFFINE_REL
+
+    du, dv = gu[1] - gu[0], gv[1] - gv[0]
+    a = (P[1, 0] - P[0, 0]) / du
+    b = (P[0, 1] - P[0, 0]) / dv
+    o = P[0, 0] - gu[0] * a - gv[0] * b
+    if np.abs(P[1, 1] - P[1, 0] - (P[0, 1] - P[0, 0])).max() > AFFINE_REL * size:
+        return None
+    n = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    if not n[0] ** 2 + n[1] ** 2 + n[2] ** 2 > 1e-24 * np.dot(a, a) * np.dot(b, b):
+        return None
+    return o, a, b
+
+
+def test_bilinear_affine_is_the_numpy_test():
+    from geomkit.mesh.trim_polylines import _bilinear_affine
+    from geomkit.tolerances import AFFINE_REL
+
+    rng = np.random.default_rng(9)
+    for trial in range(400):
+        o, a, b = rng.normal(size=(3, 3)) * rng.choice([1e-3, 1.0, 1e4])
+        if trial % 5 == 0:
+            b = a * 2.0  # degenerate: a line
+        gu = np.sort(rng.uniform(-5, 5, 2))
+        gv = np.sort(rng.uniform(-5, 5, 2))
+        P = o + gu[:, None, None] * a + gv[None, :, None] * b
+        size = float(np.linalg.norm(np.ptp(P.reshape(-1, 3), axis=0)))
+        P[1, 1] += rng.normal(size=3) * AFFINE_REL * size * rng.choice([0.0, 0.5, 0.99, 2.0])
+        want = _affine_numpy(P, gu, gv, size)
+        got = _bilinear_affine(P.tolist(), float(gu[0]), float(gu[1]), float(gv[0]),
+                               float(gv[1]), size)
+        assert (got is None) == (want is None), trial
+        if want is not None:
+            assert all(x.tobytes() == y.tobytes() for x, y in zip(got, want))
