@@ -13,6 +13,7 @@ triangle is within ``tol`` (steps 1, 3 and 4 of :mod:`geomkit.mesh.tessellate`).
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 
@@ -54,15 +55,21 @@ def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
     ku, kv = s.knots_u, s.knots_v
     if ku[0] == ku[p] and ku[-1] == ku[-p - 1] and kv[0] == kv[q] and kv[-1] == kv[-q - 1]:
         P = s.control_points
-        c00, c10, c01 = P[0, 0], P[-1, 0], P[0, -1]  # S at (u0,v0), (u1,v0), (u0,v1)
-        margin = 2.0 * eps + 1e-12 * float(np.abs(P).max())
-        if (float(np.abs(c00 - c10).max()) > margin
-                and float(np.abs(c00 - c01).max()) > margin):
+        # S at (u0,v0), (u1,v0), (u0,v1), as floats (numpy calls on 3-vectors cost more)
+        c00, c10, c01 = P[0, 0].tolist(), P[-1, 0].tolist(), P[0, -1].tolist()
+        margin = 2.0 * eps + 1e-12 * float(np.maximum.reduce(np.abs(P), axis=None))
+        if _max_gap(c00, c10) > margin and _max_gap(c00, c01) > margin:
             return False, False
     (u0, u1), (v0, v1) = s.domain
     # the u0, u1, v0, v1 edges' samples and their largest differences in one call
     cu, cv = edge_gaps(s.homogeneous, p, q, ku, kv, u0, u1, v0, v1, _EDGE_T)
     return bool(cu <= eps), bool(cv <= eps)
+
+
+def _max_gap(a, b) -> float:
+    """``np.abs(a - b).max()`` of two 3-lists of floats (NaN when a difference is)."""
+    d = [abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2])]
+    return max(d) if d[0] == d[0] and d[1] == d[1] and d[2] == d[2] else math.nan
 
 
 def breakpoints(knots: np.ndarray, p: int) -> np.ndarray:

@@ -89,3 +89,18 @@ def test_bilinear_affine_is_the_numpy_test():
         assert (got is None) == (want is None), trial
         if want is not None:
             assert all(x.tobytes() == y.tobytes() for x, y in zip(got, want))
+
+
+def test_max_gap_is_numpys_max_of_abs():
+    from geomkit.mesh.cells import _max_gap
+
+    rng = np.random.default_rng(12)
+    for trial in range(300):
+        a, b = rng.normal(size=(2, 3)) * rng.choice([1e-9, 1.0, 1e9])
+        if trial % 4 == 0:
+            b[trial % 3] = a[trial % 3]
+        if trial % 7 == 0:
+            a[rng.integers(3)] = np.nan
+        want = float(np.abs(a - b).max())
+        got = _max_gap(a.tolist(), b.tolist())
+        assert (got == want) or (np.isnan(got) and np.isnan(want))
