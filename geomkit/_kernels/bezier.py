@@ -13,7 +13,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_plain as jit, prun
 
-from .basis import ders_basis_funs, ders_scratch, find_span
+from .basis import ders_basis_funs_inline, ders_scratch, find_span_inline
 
 CURVE_CHUNK = 1024
 """Curve parameters per parallel task: a curve point costs ~0.1-0.2 us, so a smaller
@@ -226,9 +226,9 @@ def curve_derivs(Pw, p, U, t, d, dN, out):
     n = Pw.shape[0]
     k = Pw.shape[1] - 1
     du = d if d < p else p
-    span = find_span(n - 1, p, t, U)
+    span = find_span_inline(n - 1, p, t, U)
     ndu, left, right, a = ders_scratch(p)
-    ders_basis_funs(span, t, p, du, U, dN, ndu, left, right, a)
+    ders_basis_funs_inline(span, t, p, du, U, dN, ndu, left, right, a)
     Aw = np.zeros((d + 1, k + 1))
     for j in range(du + 1):  # element loops: no shape-check raise path to compile
         for r in range(p + 1):

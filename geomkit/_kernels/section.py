@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .basis import basis_funs, find_span
+from .basis import basis_funs_inline, find_span_inline
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import D2, _binomial_table, derivs_scratch, surface_derivs, surface_point
@@ -378,8 +378,8 @@ def f_u_line(Pw, p, U, plane, u, rows, r0, Nu, left, right):
     """The plane function at ``(u, v)`` from the row sums of
     :func:`.section_refine._u_rows` at ``v``, as :func:`_f_at` computes it."""
     nu = Pw.shape[0]
-    su = find_span(nu - 1, p, u, U)
-    basis_funs(su, u, p, U, Nu, left, right)
+    su = find_span_inline(nu - 1, p, u, U)
+    basis_funs_inline(su, u, p, U, Nu, left, right)
     t0 = 0.0
     t1 = 0.0
     t2 = 0.0

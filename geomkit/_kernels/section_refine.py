@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .basis import basis_funs, find_span
+from .basis import basis_funs_inline, find_span_inline
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit
 from .section import MONO_U, MONO_V, _f_at, edge_root, f_u_line
@@ -271,8 +271,8 @@ def _root_on_u_line(Pw, p, q, U, V, plane, lu, hu, v, zsnap, ttol, sp, nd):
     Nu, Nv, left, right, tmp, X = sp
     rows = nd[3]
     nu = Pw.shape[0]
-    r0 = find_span(nu - 1, p, lu, U) - p
-    r1 = find_span(nu - 1, p, hu, U)
+    r0 = find_span_inline(nu - 1, p, lu, U) - p
+    r1 = find_span_inline(nu - 1, p, hu, U)
     _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows)
     flo = f_u_line(Pw, p, U, plane, lu, rows, r0, Nu, left, right)
     fhi = f_u_line(Pw, p, U, plane, hu, rows, r0, Nu, left, right)
@@ -291,8 +291,8 @@ def _u_rows(Pw, q, V, v, r0, r1, Nv, left, right, rows):
     """``rows[k - r0]`` = the row sums ``sum_l N_l(v) P_kl`` of ``surface_point`` at
     ``v``, for the control rows ``r0 <= k <= r1``."""
     nv = Pw.shape[1]
-    sv = find_span(nv - 1, q, v, V)
-    basis_funs(sv, v, q, V, Nv, left, right)
+    sv = find_span_inline(nv - 1, q, v, V)
+    basis_funs_inline(sv, v, q, V, Nv, left, right)
     for row in range(r0, r1 + 1):
         a0 = 0.0
         a1 = 0.0

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from .numba_ext.policy import jit_plain as jit
-from .basis import basis_funs, find_span
+from .basis import basis_funs_inline, find_span_inline
 
 
 @jit
@@ -31,8 +31,8 @@ def _rational_point(Q, W, r0, n, p, U, u0, nu, t, N, left, right, out, k):
     """``out[k]`` = the piece (rows ``r0:r0+n`` of ``Q``, ``W``; knots
     ``U[u0:u0+nu]``) at ``t`` (A2.1, A2.2 and the weighted sum)."""
     Uk = U[u0:u0 + nu]
-    span = find_span(n - 1, p, t, Uk)
-    basis_funs(span, t, p, Uk, N, left, right)
+    span = find_span_inline(n - 1, p, t, Uk)
+    basis_funs_inline(span, t, p, Uk, N, left, right)
     x = y = w = 0.0
     for r in range(p + 1):
         row = r0 + span - p + r
