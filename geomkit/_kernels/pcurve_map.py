@@ -424,6 +424,42 @@ def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, period
 
 
 @jit
+def spans_net(starts, bez, end):
+    """The C0 chain of Bézier spans ``bez`` (k, d + 1, 2) that start at the
+    parameters ``starts`` (any order; a stable sort) and end, the last one, at
+    ``end``: ``(ok, knots, points)`` with interior knots of multiplicity d.  ``ok``:
+    the points are finite and the starts increase strictly, below ``end`` (else the
+    arrays are returned for the checks that name the fault)."""
+    k = starts.shape[0]
+    d = bez.shape[1] - 1
+    order = np.argsort(starts, kind="mergesort")
+    pts = np.zeros((k * d + 1, 2))
+    knots = np.zeros(k * d + d + 2)
+    ok = True
+    for i in range(k):
+        j = order[i]
+        a = starts[j]
+        if i == 0:
+            pts[0, 0] = bez[j, 0, 0]
+            pts[0, 1] = bez[j, 0, 1]
+            for m in range(d + 1):
+                knots[m] = a
+        else:
+            ok = ok and a > starts[order[i - 1]]
+            for m in range(d):
+                knots[d + 1 + (i - 1) * d + m] = a
+        for m in range(1, d + 1):
+            pts[1 + i * d + m - 1, 0] = bez[j, m, 0]
+            pts[1 + i * d + m - 1, 1] = bez[j, m, 1]
+    for m in range(d + 1):
+        knots[k * d + 1 + m] = end
+    ok = ok and k > 0 and starts[order[0]] < end and starts[order[k - 1]] < end
+    for i in range(pts.shape[0]):
+        ok = ok and math.isfinite(pts[i, 0]) and math.isfinite(pts[i, 1])
+    return ok, knots, pts
+
+
+@jit
 def unwrap_angles(x, period):
     """``np.unwrap(x, period=period)`` of a 1-D float array (the same values: each
     step's correction as numpy computes it, summed in order; the readers unwrap

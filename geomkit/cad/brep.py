@@ -512,19 +512,6 @@ def _distinct(x):
     return x[keep]
 
 
-def _diagonal(sk):
-    """``TrimCurve.polyline`` of the points ``(sk, sk)`` (the same knots: chord
-    length), its checks made once on ``sk``: increasing and finite, else the
-    polyline's error."""
-    d = np.diff(sk)
-    if not (np.isfinite(sk).all() and (d > 0).all()):
-        return TrimCurve.polyline(np.column_stack([sk, sk]))
-    t = np.concatenate([[0.0], np.cumsum(np.hypot(d, d))])
-    t /= t[-1]
-    return TrimCurve(1, readonly(np.concatenate([[0.0], t, [1.0]])),
-                     readonly(np.column_stack([sk, sk])), readonly(np.ones(len(sk))))
-
-
 def _fit(srf, e, ab, fu, fv, tol):
     """A non-iso edge: piecewise-quintic interpolant of its mapped local coordinates
     (angles on the branch of the chained samples); compiled on the surfaces of
@@ -554,7 +541,7 @@ def _fit(srf, e, ab, fu, fv, tol):
     sk = _distinct(sk) if np.isfinite(sk).all() else np.unique(sk)
     if sk.size < 2:
         sk = np.array([0.0, 1.0])
-    diag = _diagonal(sk)
+    diag = TrimCurve.polyline(np.column_stack([sk, sk]))  # (chord length: knots sk)
     code = KIND_CODE.get(srf.kind)
     if code is not None and all(f is None or isinstance(f, AngleMap) for f in (fu, fv)):
         frame = srf.frame

@@ -44,6 +44,7 @@ from geomkit.mesh.tessellate import closed_directions
 from geomkit.nurbs.surface import Surface
 from geomkit.tolerances import EDGE_TOL, PCURVE_TOL
 from geomkit._kernels.pcurve_map import CYLINDER, local_points
+from geomkit._kernels.ranges import col_range
 
 __all__ = ["read_native", "file_units", "UnreadFaces"]
 
@@ -305,9 +306,16 @@ class _Faces:
                          for e in edges[::-1]]
             (outer if bname == "FACE_OUTER_BOUND" else inner).append(edges)
         if not outer and len(inner) > 1:  # no outer bound named: the widest loop
-            inner.sort(key=lambda lp: -float(np.ptp(np.concatenate(
-                [e.curve[2][:, :3] / e.curve[2][:, 3:] for e in lp]), axis=0).max()))
+            inner.sort(key=_extent_down)
         return outer + inner, np.array(vertices).reshape(-1, 3)
+
+
+def _extent_down(loop):
+    """Minus the largest extent along x, y or z of a loop's control points (a sort
+    key: the widest loop first)."""
+    Pw = np.concatenate([e.curve[2] for e in loop])
+    lo, hi = col_range(Pw[:, :3] / Pw[:, 3:])
+    return -float((hi - lo).max())
 
 
 def _bspline_base(args, name):

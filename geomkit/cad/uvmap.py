@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geomkit._kernels.pcurve_map import fit_edge_pcurve
+from geomkit._kernels.pcurve_map import fit_edge_pcurve, spans_net
 from geomkit.nurbs.trimming import evaluate_trim_curve
 from geomkit.nurbs.surface import TrimCurve
 
@@ -134,14 +134,8 @@ def map_edge(edge, rev: bool, kind: int, frame, radii, periodic, ref, maps,
 def spans_curve(starts: np.ndarray, bez: np.ndarray, end: float) -> TrimCurve:
     """The C0 chain of quintic Bézier spans (k, 6, 2) that start at the parameters
     ``starts`` (any order) and end, the last one, at ``end``."""
-    order = np.argsort(starts, kind="stable")
-    A = starts[order]
-    bez = bez[order]
-    pts = np.concatenate([bez[:1, 0], bez[:, 1:].reshape(-1, 2)])
-    knots = np.concatenate([np.full(DEGREE + 1, A[0]), np.repeat(A[1:], DEGREE),
-                            np.full(DEGREE + 1, end)])
-    if not (np.isfinite(pts).all() and A[0] < end and (A[1:] > A[:-1]).all()
-            and A[-1] < end):
+    ok, knots, pts = spans_net(starts, bez, float(end))
+    if not ok:
         return TrimCurve.create(DEGREE, knots, pts)  # the error that names the fault
     # clamped, interior knots of multiplicity DEGREE: what create() would check
     w = np.ones(len(pts))

@@ -375,3 +375,31 @@ def test_worst_residual_is_the_largest_numpy_residual(name):
         assert s.worst_residual(P) == pytest.approx(ref, rel=1e-12, abs=1e-13)
     P[7, 1] = np.nan
     assert np.isnan(s.worst_residual(P))
+
+
+def test_spans_net_matches_numpy_route():
+    """uvmap.spans_curve's kernel against its former numpy assembly."""
+    from geomkit._kernels.pcurve_map import spans_net
+
+    rng = np.random.default_rng(5)
+    for trial in range(500):
+        k = int(rng.integers(1, 40))
+        starts = np.sort(rng.uniform(0.0, 1.0, k))
+        if trial % 7 == 0 and k > 1:
+            starts[1] = starts[0]  # a repeated start: not ok
+        bez = rng.normal(size=(k, 6, 2))
+        if trial % 11 == 0:
+            bez[rng.integers(k), rng.integers(6), 0] = np.nan
+        end = 1.0 if trial % 13 else float(starts[-1])
+        perm = rng.permutation(k)
+        S, B = starts[perm], bez[perm]
+        order = np.argsort(S, kind="stable")
+        A, Bo = S[order], B[order]
+        pts = np.concatenate([Bo[:1, 0], Bo[:, 1:].reshape(-1, 2)])
+        knots = np.concatenate([np.full(6, A[0]), np.repeat(A[1:], 5), np.full(6, end)])
+        ok = bool(np.isfinite(pts).all() and A[0] < end and (A[1:] > A[:-1]).all()
+                  and A[-1] < end)
+        got = spans_net(S, B, end)
+        assert got[0] == ok
+        if ok:
+            assert np.array_equal(got[1], knots) and np.array_equal(got[2], pts)
