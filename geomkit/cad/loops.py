@@ -14,6 +14,7 @@ from geomkit.tolerances import GAP_TOL, PCURVE_CLIP_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack, readonly
 from geomkit.cad.uvmap import map_pcurve
+from geomkit._kernels.ranges import col_range
 from geomkit._kernels.trim_loops import loop_joins
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
@@ -180,7 +181,7 @@ def clip_to_domain(pieces, domain, rel: float, refit_rel: float = 0.0):
     eps = rel * max(u1 - u0, v1 - v0)
     out, moves = [], []
     for c in pieces:
-        lo, hi = c.control_points.min(axis=0), c.control_points.max(axis=0)
+        lo, hi = col_range(c.control_points)
         if lo[0] >= u0 and hi[0] <= u1 and lo[1] >= v0 and hi[1] <= v1:
             out.append(c)  # inside: nothing to move
             continue

@@ -57,9 +57,8 @@ def duplicate_faces(surfaces, loose, tol) -> dict:
     solid = [i for i in range(len(surfaces)) if i not in set(loose)]
     if not loose or not solid:
         return {}
-    nets = [np.asarray(surfaces[i].control_points).reshape(-1, 3) for i in solid]
-    lo = np.array([P.min(axis=0) for P in nets])
-    hi = np.array([P.max(axis=0) for P in nets])
+    boxes = np.array([surfaces[i].bounds for i in solid])  # the control nets' boxes
+    lo, hi = boxes[:, 0], boxes[:, 1]
     out = {}
     for i in loose:
         X = _samples(surfaces[i])
