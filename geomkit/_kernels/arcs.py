@@ -214,3 +214,27 @@ def circle_frames(Z, Xd, C, r, X1, X2, same, closed):
         t[k, 0], t[k, 1] = t1, t2
         ok[k] = t2 > t1  # (a NaN angle: no edge)
     return ok, x, y, t
+
+
+@jit
+def axis2_x(Z, X, E):
+    """The unit reference direction of an axis placement as the STEP reader computed
+    it with numpy (``StepGeometry.axis2``, ISO 10303-42 ``build_axes``): ``X`` (None:
+    absent) replaced by ``E[0]`` (+x), or ``E[1]`` (+y) when ``|Z[0]| >= 0.9``, if absent
+    or ``|X . Z| > 1 - 1e-12``; then ``X - (X . Z) Z`` divided by its norm.  The dots
+    are OpenBLAS's (:func:`_dot3`); the defaults come in as data (``E``), not
+    constants, so that no ``0 - y`` is folded to ``-y`` (signed zeros kept)."""
+    z0, z1, z2 = Z[0], Z[1], Z[2]
+    use = X is None
+    if X is not None:
+        x0, x1, x2 = X[0], X[1], X[2]
+        use = abs(_dot3(x0, x1, x2, z0, z1, z2)) > 1 - 1e-12
+    if use:
+        e = 0 if abs(z0) < 0.9 else 1
+        x0, x1, x2 = E[e, 0], E[e, 1], E[e, 2]
+    d = _dot3(x0, x1, x2, z0, z1, z2)
+    a0, a1, a2 = x0 - d * z0, x1 - d * z1, x2 - d * z2
+    m = math.sqrt(_dot3(a0, a1, a2, a0, a1, a2))
+    out = np.empty(3)
+    out[0], out[1], out[2] = a0 / m, a1 / m, a2 / m
+    return out

@@ -22,12 +22,15 @@ from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.p21 import P21, Ref
 from geomkit.errors import FileFormatError
+from geomkit._kernels.arcs import axis2_x
 from geomkit._kernels.bezier import curve_nearest_param
 
 __all__ = ["StepGeometry", "Curve", "reverse_curve"]
 
 TWO_PI = 2.0 * math.pi
 
+_AXES_XY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # axis2's default X: +x, +y
+_AXES_XY.flags.writeable = False
 _NUM = r"[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?"
 _ENUM = r"\s*,\s*\.[A-Za-z_]+\."
 _BSPLINE_CURVE = re.compile(
@@ -243,10 +246,7 @@ class StepGeometry:
             Z = self.direction(a[2]) if isinstance(a[2], Ref) else np.array([0.0, 0, 1])
             ref = a[3] if len(a) > 3 else None
         X = self.direction(ref) if isinstance(ref, Ref) else None
-        if X is None or abs(float(X @ Z)) > 1 - 1e-12:
-            X = np.array([1.0, 0, 0]) if abs(Z[0]) < 0.9 else np.array([0.0, 1, 0])
-        X = X - (X @ Z) * Z
-        return O, Z, X / norm3(X)
+        return O, Z, axis2_x(Z, X, _AXES_XY)  # numpy's arithmetic, compiled
 
     # ---------------------------------------------------------------- curves
     def curve(self, i) -> Curve:
