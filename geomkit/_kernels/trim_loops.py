@@ -12,8 +12,9 @@ import math
 
 import numpy as np
 
-from .numba_ext.policy import jit_plain as jit
+from .numba_ext.policy import jit_exact, jit_plain as jit
 from .basis import basis_funs_inline, find_span_inline
+from .surface import surface_point
 
 
 @jit
@@ -199,3 +200,40 @@ def polyline_knots(P):
         U[k + 1] = t[k] / t[m - 1]
     U[m + 1] = 1.0
     return 0, Q, U
+
+
+@jit_exact
+def segment_spread(Pw, p, q, U, V, a0, a1, b0, b1, u0, u1, v0, v1, samples):
+    """How far the straight UV segment from ``(a0, a1)`` to ``(b0, b1)``, sampled at
+    ``samples`` evenly spaced points (``(1 - s) a + s b``, clamped to the domain
+    ``[u0, u1] x [v0, v1]``), strays in 3-D from one of its ends: the least over the
+    two ends of the largest distance of a sample from that end (a pole or a
+    degenerate edge maps to one point: 0).  numpy's values (no contraction here; the
+    points are :func:`~geomkit._kernels.surface.surface_point`'s)."""
+    m = max(p, q) + 1
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(m)
+    right = np.empty(m)
+    tmp = np.empty(4)
+    X = np.empty((samples, 3))
+    step = 1.0 / (samples - 1)
+    for i in range(samples):
+        s = 1.0 if i == samples - 1 else i * step
+        u = min(max((1 - s) * a0 + s * b0, u0), u1)
+        v = min(max((1 - s) * a1 + s * b1, v0), v1)
+        surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, X[i])
+    d_first = 0.0
+    d_last = 0.0
+    for i in range(samples):
+        for e in range(2):
+            j = 0 if e == 0 else samples - 1
+            dx = X[i, 0] - X[j, 0]
+            dy = X[i, 1] - X[j, 1]
+            dz = X[i, 2] - X[j, 2]
+            d = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if e == 0:
+                d_first = d if d > d_first or d != d else d_first
+            else:
+                d_last = d if d > d_last or d != d else d_last
+    return d_last if d_last < d_first else d_first  # Python's min(d_first, d_last)

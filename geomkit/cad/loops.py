@@ -15,7 +15,7 @@ from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack, readonly
 from geomkit.cad.uvmap import map_pcurve
 from geomkit._kernels.ranges import col_range
-from geomkit._kernels.trim_loops import loop_joins
+from geomkit._kernels.trim_loops import loop_joins, segment_spread
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
            "same_point_3d", "finish_loop"]
@@ -284,14 +284,11 @@ def same_point_3d(base, tol3d: float, samples: int = 17):
     a degenerate edge, or a gap the file's tolerance covers).  The largest distance
     found is kept in ``same.errors``."""
     (u0, u1), (v0, v1) = base.domain
+    net = (base.homogeneous, base.degree_u, base.degree_v, base.knots_u, base.knots_v)
 
     def same(a, b) -> bool:
-        s = np.linspace(0.0, 1.0, samples)[:, None]
-        uv = (1 - s) * np.asarray(a, float) + s * np.asarray(b, float)
-        uv = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
-        X = base.evaluate(uv)
-        d = float(np.linalg.norm(X - X[0], axis=1).max())
-        d = min(d, float(np.linalg.norm(X - X[-1], axis=1).max()))
+        d = segment_spread(*net, float(a[0]), float(a[1]), float(b[0]), float(b[1]),
+                           u0, u1, v0, v1, samples)
         if d <= tol3d:
             same.errors.append(d)
             return True

@@ -179,3 +179,35 @@ def test_shift_is_create_of_the_moved_points():
             assert got.degree == ref.degree and not got.control_points.flags.writeable
     with pytest.raises(InvalidTrimError):
         shift(arc, np.array([np.inf, 0.0]))
+
+
+def test_segment_spread_matches_numpy_route():
+    """same_point_3d's kernel against its former numpy route, value for value."""
+    from geomkit import Surface
+    from geomkit._kernels.trim_loops import segment_spread
+
+    rng = np.random.default_rng(9)
+    for trial in range(60):
+        p, q = int(rng.integers(1, 4)), int(rng.integers(1, 4))
+        nu, nv = p + int(rng.integers(1, 4)), q + int(rng.integers(1, 4))
+        ku = np.concatenate([np.zeros(p + 1), np.sort(rng.random(nu - p - 1)), np.ones(p + 1)])
+        kv = np.concatenate([np.zeros(q + 1), np.sort(rng.random(nv - q - 1)), np.ones(q + 1)])
+        P = rng.normal(size=(nu, nv, 3))
+        if trial % 3 == 0:  # a pole: the first row collapsed
+            P[0] = P[0, 0]
+        W = rng.uniform(0.5, 2.0, (nu, nv)) if trial % 2 else None
+        s = Surface(p, q, ku, kv, P, W)
+        (u0, u1), (v0, v1) = s.domain
+        for _ in range(5):
+            a, b = rng.uniform(-0.1, 1.1, 2), rng.uniform(-0.1, 1.1, 2)
+            if trial % 3 == 0:
+                a[0] = b[0] = 0.0  # along the pole
+            t = np.linspace(0.0, 1.0, 17)[:, None]
+            uv = (1 - t) * a + t * b
+            uv = np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
+            X = s.evaluate(uv)
+            want = min(float(np.linalg.norm(X - X[0], axis=1).max()),
+                       float(np.linalg.norm(X - X[-1], axis=1).max()))
+            got = segment_spread(s.homogeneous, p, q, s.knots_u, s.knots_v, *a, *b,
+                                 u0, u1, v0, v1, 17)
+            assert got == want
