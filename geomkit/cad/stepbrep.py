@@ -313,8 +313,7 @@ class _Faces:
 def _extent_down(loop):
     """Minus the largest extent along x, y or z of a loop's control points (a sort
     key: the widest loop first)."""
-    Pw = np.concatenate([e.curve[2] for e in loop])
-    lo, hi = col_range(Pw[:, :3] / Pw[:, 3:])
+    lo, hi = col_range(np.concatenate([e.box() for e in loop]))
     return -float((hi - lo).max())
 
 
