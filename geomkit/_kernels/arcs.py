@@ -238,3 +238,33 @@ def axis2_x(Z, X, E):
     out = np.empty(3)
     out[0], out[1], out[2] = a0 / m, a1 / m, a2 / m
     return out
+
+
+@jit
+def axis2_zx(z, x, E):
+    """``StepGeometry.axis2``'s ``(Z, X)`` from the DIRECTION records' numbers ``z``
+    and ``x`` (None: no reference direction) at once, as a (2, 3) array: each divided
+    by its norm (``StepGeometry.direction``), then :func:`axis2_x`'s arithmetic.  A
+    (0, 3) array when a norm is not positive and finite (the caller reads the records
+    the long way)."""
+    n = math.sqrt(_dot3(z[0], z[1], z[2], z[0], z[1], z[2]))
+    if not (n > 0 and math.isfinite(n)):
+        return np.empty((0, 3))
+    z0, z1, z2 = z[0] / n, z[1] / n, z[2] / n
+    use = x is None
+    if x is not None:
+        n = math.sqrt(_dot3(x[0], x[1], x[2], x[0], x[1], x[2]))
+        if not (n > 0 and math.isfinite(n)):
+            return np.empty((0, 3))
+        x0, x1, x2 = x[0] / n, x[1] / n, x[2] / n
+        use = abs(_dot3(x0, x1, x2, z0, z1, z2)) > 1 - 1e-12
+    if use:
+        e = 0 if abs(z0) < 0.9 else 1
+        x0, x1, x2 = E[e, 0], E[e, 1], E[e, 2]
+    d = _dot3(x0, x1, x2, z0, z1, z2)
+    a0, a1, a2 = x0 - d * z0, x1 - d * z1, x2 - d * z2
+    m = math.sqrt(_dot3(a0, a1, a2, a0, a1, a2))
+    out = np.empty((2, 3))
+    out[0, 0], out[0, 1], out[0, 2] = z0, z1, z2
+    out[1, 0], out[1, 1], out[1, 2] = a0 / m, a1 / m, a2 / m
+    return out

@@ -22,7 +22,7 @@ from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.p21 import P21, Ref
 from geomkit.errors import FileFormatError
-from geomkit._kernels.arcs import axis2_x
+from geomkit._kernels.arcs import axis2_x, axis2_zx
 from geomkit._kernels.bezier import curve_nearest_param
 
 __all__ = ["StepGeometry", "Curve", "reverse_curve"]
@@ -31,6 +31,8 @@ TWO_PI = 2.0 * math.pi
 
 _AXES_XY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # axis2's default X: +x, +y
 _AXES_XY.flags.writeable = False
+_Z_UP = np.array([0.0, 0.0, 1.0])  # axis2's default Z (read only)
+_Z_UP.flags.writeable = False
 _NUM = r"[-+]?(?:\d+\.\d*|\d*\.\d+|\d+)(?:[Ee][-+]?\d+)?"
 _ENUM = r"\s*,\s*\.[A-Za-z_]+\."
 _BSPLINE_CURVE = re.compile(
@@ -239,6 +241,14 @@ class StepGeometry:
         orthogonal to Z, as ISO 10303-42 ``build_axes``)."""
         name, a = self.rec(i, "AXIS2_PLACEMENT_3D", "AXIS2_PLACEMENT_2D")
         O = self.point(a[1])
+        if name == "AXIS2_PLACEMENT_3D":  # plain DIRECTION records: in one kernel call
+            zr, xr = a[2], (a[3] if len(a) > 3 else None)
+            z = self.p.xyz(zr, "DIRECTION") if isinstance(zr, Ref) else _Z_UP
+            x = self.p.xyz(xr, "DIRECTION") if isinstance(xr, Ref) else None
+            if z is not None and (x is not None or not isinstance(xr, Ref)):
+                ZX = axis2_zx(z, x, _AXES_XY)
+                if len(ZX):
+                    return O, ZX[0], ZX[1]
         if name == "AXIS2_PLACEMENT_2D":
             Z = np.array([0.0, 0.0, 1.0])
             ref = a[2] if len(a) > 2 else None

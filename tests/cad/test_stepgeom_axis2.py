@@ -1,13 +1,14 @@
-"""``_kernels.arcs.axis2_x`` (``StepGeometry.axis2``'s reference direction) against
-the numpy formulas it replaced, bit for bit (signed zeros included): random unit and
-non-unit ``Z`` and ``X``, ``X`` missing, (nearly) along ``Z``, ``Z`` with zero
-components or along an axis, ``|Z[0]|`` about 0.9 (the default +x / +y switch)."""
+"""``_kernels.arcs.axis2_x`` and ``axis2_zx`` (``StepGeometry.axis2``'s directions)
+against the numpy formulas they replaced, bit for bit (signed zeros included): random
+unit and non-unit ``Z`` and ``X``, ``X`` missing, (nearly) along ``Z``, ``Z`` with zero
+components or along an axis, ``|Z[0]|`` about 0.9 (the default +x / +y switch); a
+DIRECTION of zero or overflowing norm left to the long way."""
 
 import numpy as np
 
-from geomkit._kernels.arcs import axis2_x
+from geomkit._kernels.arcs import axis2_x, axis2_zx
 from geomkit.cad.analytic import norm3
-from geomkit.cad.stepgeom import _AXES_XY
+from geomkit.cad.stepgeom import _AXES_XY, _Z_UP
 
 
 def _numpy_axis2_x(Z, X):
@@ -46,5 +47,24 @@ def test_axis2_x_bit_for_bit():
             want = _numpy_axis2_x(Z, x)
             got = axis2_x(Z, x, _AXES_XY)
             assert _bits(got) == _bits(want), (Z.tolist(), None if x is None else x.tolist())
+            # from the records' numbers: StepGeometry.direction's v / norm3(v) first
+            Zu = Z / norm3(Z)
+            xu = None if x is None else x / norm3(x)
+            ZX = axis2_zx(Z, x, _AXES_XY)
+            assert _bits(ZX[0]) == _bits(Zu)
+            assert _bits(ZX[1]) == _bits(_numpy_axis2_x(Zu, xu)), (Z.tolist(), x)
             cases += 1
     assert cases == 12000
+
+
+def test_axis2_zx_defaults_and_refusals():
+    X = np.array([0.3, -0.4, 2.0])
+    for x in (X, None):
+        ZX = axis2_zx(_Z_UP, x, _AXES_XY)
+        assert _bits(ZX[0]) == _bits(np.array([0.0, 0, 1]))
+        xu = None if x is None else x / norm3(x)
+        assert _bits(ZX[1]) == _bits(_numpy_axis2_x(np.array([0.0, 0, 1]), xu))
+    bad = [np.zeros(3), np.array([1e200, 0, 0]), np.array([np.nan, 0, 1])]
+    for v in bad:
+        assert axis2_zx(v, X, _AXES_XY).shape == (0, 3)
+        assert axis2_zx(X, v, _AXES_XY).shape == (0, 3)
