@@ -83,7 +83,7 @@ class SurfaceInverse:
 
 def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
     """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
-    (:class:`geomkit.cad.brep._Edge`) on the untrimmed ``base``, and the largest
+    (:class:`geomkit.cad.faceedges.Edge`) on the untrimmed ``base``, and the largest
     model-space distance measured between a segment's UV midpoint and the edge.
     ``periods``: the UV period of each closed direction of ``base`` (0: open)."""
     (u0, u1), (v0, v1) = base.domain

@@ -12,7 +12,7 @@ and geometry (:mod:`geomkit.cad.p21`, :mod:`geomkit.cad.stepgeom`) to trimmed su
   files rarely carry pcurves (none of the 17 real parts of the test corpus does), so
   the UV boundary comes from the 3-D edges, as in the IGES B-rep reader:
   closed-form inversion on planes, cylinders, cones, spheres and tori
-  (:func:`geomkit.cad.brep.analytic_pieces`: exact on iso-lines, within the pcurve
+  (:func:`geomkit.cad.faceedges.analytic_pieces`: exact on iso-lines, within the pcurve
   tolerance elsewhere), projection onto B-spline surfaces
   (:func:`geomkit.cad.edgeproj.edge_uv`, within the model's tolerance, unwrapped
   across closed directions).
@@ -29,7 +29,7 @@ import re
 import numpy as np
 
 from geomkit.cad.analytic import cross3, curve_eval, extrude, revolve
-from geomkit.cad.brep import _Edge, analytic_pieces
+from geomkit.cad.faceedges import Edge, analytic_pieces
 from geomkit.cad.edgeproj import edge_uv
 from geomkit.cad.iges.reader import IgesResult, Skipped
 from geomkit.cad.loose import duplicate_faces
@@ -282,7 +282,7 @@ class _Faces:
         return bname, lname, la, sense
 
     def loops(self, face):
-        """The face's bounds as lists of oriented :class:`~geomkit.cad.brep._Edge`,
+        """The face's bounds as lists of oriented :class:`~geomkit.cad.faceedges.Edge`,
         outer bound first, and the points of its vertex loops (a pole, an apex)."""
         outer, inner, vertices = [], [], []
         for b in self.face(face)[0]:
@@ -300,9 +300,9 @@ class _Faces:
                     key, rev = int(oa[3]), oa[4] is False
                 else:
                     key, rev = f[0], not f[1]
-                edges.append(_Edge(self.edge(key), key, rev, self._samples))
+                edges.append(Edge(self.edge(key), key, rev, self._samples))
             if sense is False:
-                edges = [_Edge(e.curve, e.key, not e.reverse, self._samples)
+                edges = [Edge(e.curve, e.key, not e.reverse, self._samples)
                          for e in edges[::-1]]
             (outer if bname == "FACE_OUTER_BOUND" else inner).append(edges)
         if not outer and len(inner) > 1:  # no outer bound named: the widest loop

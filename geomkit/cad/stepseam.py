@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from geomkit.cad.analytic import unwrap
-from geomkit.cad.brep import KIND_CODE, _Edge
+from geomkit.cad.faceedges import KIND_CODE, Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
@@ -78,7 +78,7 @@ def _angles(srf, e, n=65, full=False):
 def _split_edge(srf, e, target):
     """Where edge ``e`` crosses the angle ``target`` (mod 2 pi) about the axis: None
     (it does not), ``0.0`` / ``1.0`` (at its start / end) or the two
-    :class:`_Edge` pieces in the loop's order."""
+    :class:`Edge` pieces in the loop's order."""
     n = 257
     b = _angles(srf, e, n, full=True)
     if b is None:
@@ -105,13 +105,13 @@ def _split_edge(srf, e, target):
 
 
 def _cut(srf, e, sc):
-    """Edge ``e`` cut at the loop parameter ``sc``: two :class:`_Edge` in loop order."""
+    """Edge ``e`` cut at the loop parameter ``sc``: two :class:`Edge` in loop order."""
     t = float(e.ts(np.array([sc]))[0])
     p, U, Pw = e.curve
     a1 = (p, *restrict(p, U, Pw, float(U[p]), t))
     a2 = (p, *restrict(p, U, Pw, t, float(U[-p - 1])))
     first, second = (a2, a1) if e.reverse else (a1, a2)
-    return _Edge(first, e.key, e.reverse), _Edge(second, e.key, e.reverse)
+    return Edge(first, e.key, e.reverse), Edge(second, e.key, e.reverse)
 
 
 def cut_at_seam(srf, loops, sweep=False):

@@ -84,7 +84,7 @@ def test_edge_samples_and_their_inverse_in_one_call(name):
     """edge_local: the curve's samples as curve_eval gives them at the reader's
     linspace (to rounding) and local() of them, on a rational arc and a cubic."""
     from geomkit.cad.analytic import arc_curve, curve_eval
-    from geomkit.cad.brep import _linspace
+    from geomkit.cad.faceedges import _linspace
     from geomkit._kernels.pcurve_map import edge_local
 
     s = SURFACES[name]
@@ -110,7 +110,7 @@ def test_curve_at_is_curve_eval_bit_for_bit():
     random rational curves of degrees 1 to 5, at the reader's parameters and at the
     knots and ends."""
     from geomkit.cad.analytic import curve_eval
-    from geomkit.cad.brep import _linspace
+    from geomkit.cad.faceedges import _linspace
     from geomkit._kernels.pcurve_map import curve_at
 
     rng = np.random.default_rng(9)
@@ -127,12 +127,12 @@ def test_curve_at_is_curve_eval_bit_for_bit():
 
 @pytest.mark.parametrize("name", ["cylinder", "cone", "torus", "spindle torus"])
 def test_edge_turn_against_the_methods_it_replaces(name):
-    """_Edge.turn (one edge_turn call): the same nearest distance to the axis, spread
+    """Edge.turn (one edge_turn call): the same nearest distance to the axis, spread
     and unwrapped loop-order coordinates as the per-method route (local, np.ptp,
     np.unwrap), bit for bit, both ways along the edge, from the curve or from samples
     already taken; a NaN sample gives -inf and NaN as the methods do."""
     from geomkit.cad.analytic import arc_curve
-    from geomkit.cad.brep import _NS, _Edge
+    from geomkit.cad.faceedges import NS as _NS, Edge
 
     s = SURFACES[name]
     # an arc around the axis (crossing the angle branch cut) and a wild cubic
@@ -144,7 +144,7 @@ def test_edge_turn_against_the_methods_it_replaces(name):
     for curve in (arc, cubic):
         for rev in (False, True):
             for pre in (False, True):
-                e, ref = _Edge(curve, 1, rev), _Edge(curve, 1, rev)
+                e, ref = Edge(curve, 1, rev), Edge(curve, 1, rev)
                 if pre:  # samples already taken (curve_eval's): turn inverts those
                     e.points(_NS)
                     ref.points(_NS)
@@ -161,7 +161,7 @@ def test_edge_turn_against_the_methods_it_replaces(name):
                 assert e.nearest_axis(s, _NS) == nearest and e.spread(_NS) == spread
     bad = (cubic[0], cubic[1], cubic[2].copy())
     bad[2][3, 0] = np.nan
-    nearest, spread, _ = _Edge(bad, 2, False).turn(s)
+    nearest, spread, _ = Edge(bad, 2, False).turn(s)
     assert nearest == -np.inf and np.isnan(spread)
 
 
@@ -290,7 +290,7 @@ def test_plane_piece_against_numpy(seed):
     rational and polynomial edges with repeated knots, both ways round; a curve
     with a bad knot vector or a zero weight is refused as ``TrimCurve.create``
     refuses it."""
-    from geomkit.cad.brep import _plane_piece
+    from geomkit.cad.faceedges import _plane_piece
     from geomkit.errors import InvalidTrimError
     rng = np.random.default_rng(seed)
     s = SURFACES["plane"]
@@ -325,7 +325,7 @@ def test_plane_piece_against_numpy(seed):
 def test_plane_piece_that_is_no_trim_curve_is_named():
     """A plane face's piece with a non-finite control point or a weight <= 0 is not
     kept as it stands: TrimCurve.create names the fault."""
-    from geomkit.cad.brep import _plane_piece
+    from geomkit.cad.faceedges import _plane_piece
     from geomkit.errors import InvalidTrimError
 
     s = SURFACES["plane"]
