@@ -250,21 +250,18 @@ def axis2_zx(z, x, E):
     n = math.sqrt(_dot3(z[0], z[1], z[2], z[0], z[1], z[2]))
     if not (n > 0 and math.isfinite(n)):
         return np.empty((0, 3))
-    z0, z1, z2 = z[0] / n, z[1] / n, z[2] / n
-    use = x is None
-    if x is not None:
+    Z = np.empty(3)
+    Z[0], Z[1], Z[2] = z[0] / n, z[1] / n, z[2] / n
+    if x is None:
+        X = axis2_x(Z, None, E)
+    else:
         n = math.sqrt(_dot3(x[0], x[1], x[2], x[0], x[1], x[2]))
         if not (n > 0 and math.isfinite(n)):
             return np.empty((0, 3))
-        x0, x1, x2 = x[0] / n, x[1] / n, x[2] / n
-        use = abs(_dot3(x0, x1, x2, z0, z1, z2)) > 1 - 1e-12
-    if use:
-        e = 0 if abs(z0) < 0.9 else 1
-        x0, x1, x2 = E[e, 0], E[e, 1], E[e, 2]
-    d = _dot3(x0, x1, x2, z0, z1, z2)
-    a0, a1, a2 = x0 - d * z0, x1 - d * z1, x2 - d * z2
-    m = math.sqrt(_dot3(a0, a1, a2, a0, a1, a2))
+        Xu = np.empty(3)
+        Xu[0], Xu[1], Xu[2] = x[0] / n, x[1] / n, x[2] / n
+        X = axis2_x(Z, Xu, E)
     out = np.empty((2, 3))
-    out[0, 0], out[0, 1], out[0, 2] = z0, z1, z2
-    out[1, 0], out[1, 1], out[1, 2] = a0 / m, a1 / m, a2 / m
+    out[0] = Z
+    out[1] = X
     return out

@@ -64,14 +64,15 @@ def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
 
 
 @jit
-def surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
+def point_scratch(p, q):
+    """Scratch for :func:`surface_point`: ``(Nu, Nv, left, right, tmp)``."""
     m = max(p, q) + 1
-    Nu = np.empty(p + 1)
-    Nv = np.empty(q + 1)
-    left = np.empty(m)
-    right = np.empty(m)
-    tmp = np.empty(4)
-    _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, (Nu, Nv, left, right, tmp))
+    return np.empty(p + 1), np.empty(q + 1), np.empty(m), np.empty(m), np.empty(4)
+
+
+@jit
+def surface_points_range(i0, i1, Pw, p, q, U, V, uv, out):
+    _surface_points_loop(i0, i1, Pw, p, q, U, V, uv, out, point_scratch(p, q))
 
 
 @jit

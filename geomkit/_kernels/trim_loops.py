@@ -14,7 +14,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_exact, jit_plain as jit
 from .basis import basis_funs_inline, find_span_inline
-from .surface import surface_point
+from .surface import point_scratch, surface_point
 
 
 @jit
@@ -210,12 +210,7 @@ def segment_spread(Pw, p, q, U, V, a0, a1, b0, b1, u0, u1, v0, v1, samples):
     two ends of the largest distance of a sample from that end (a pole or a
     degenerate edge maps to one point: 0).  numpy's values (no contraction here; the
     points are :func:`~geomkit._kernels.surface.surface_point`'s)."""
-    m = max(p, q) + 1
-    Nu = np.empty(p + 1)
-    Nv = np.empty(q + 1)
-    left = np.empty(m)
-    right = np.empty(m)
-    tmp = np.empty(4)
+    Nu, Nv, left, right, tmp = point_scratch(p, q)
     X = np.empty((samples, 3))
     step = 1.0 / (samples - 1)
     for i in range(samples):
