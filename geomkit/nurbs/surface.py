@@ -348,10 +348,14 @@ class Surface:
 
     @property
     def size(self) -> float:
-        """Model size: diagonal of :attr:`bounds` (scale for relative tolerances)."""
-        b = self.bounds
-        d = b[1] - b[0]
-        return math.sqrt(d.dot(d))  # np.linalg.norm's value, at a fifth of its cost
+        """Model size: diagonal of :attr:`bounds` (scale for relative tolerances;
+        computed once: the net is read-only)."""
+        v = self._cache.get("size")
+        if v is None:
+            b = self.bounds
+            d = b[1] - b[0]
+            v = self._cache["size"] = math.sqrt(d.dot(d))  # np.linalg.norm's value
+        return v
 
     def __repr__(self) -> str:
         kind = "NURBS" if self.is_rational else "B-spline"
