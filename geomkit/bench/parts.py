@@ -28,6 +28,10 @@ see its README for their sources), beside OCC in the same process:
   difference from OCC on those 40 (OCC measures to the edges' 3-D curves near edges,
   up to the file's edge tolerance away).
 
+Reading and meshing are timed in turn with OCC's (:func:`alternate`: medians of 3 runs
+each, 7 with ``--full``), so that a slow first run or the machine's drift falls on both
+sides; the other stages are medians of their own runs.
+
 Usage: ``python -m geomkit.bench.parts [--full]``
 """
 
@@ -79,18 +83,41 @@ def _occ_mesh_points(shape, deflection):
     return pts, ntri
 
 
-def _occ_mesh_time(path, deflection, repeat):
-    """Median seconds of ``BRepMesh_IncrementalMesh`` alone, each run on a fresh read
+def _occ_mesh_run(path, deflection):
+    """``(seconds, None)`` of one ``BRepMesh_IncrementalMesh`` alone, on a fresh read
     (a meshed shape is not meshed again)."""
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
 
-    ts = []
-    for _ in range(max(1, repeat)):
-        shape = _occ_read(path)
+    shape = _occ_read(path)
+    t0 = time.perf_counter()
+    BRepMesh_IncrementalMesh(shape, deflection)
+    return time.perf_counter() - t0, None
+
+
+def _timed(fn):
+    """A run of ``fn()`` as ``(seconds, result)``."""
+    def run():
         t0 = time.perf_counter()
-        BRepMesh_IncrementalMesh(shape, deflection)
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts))
+        out = fn()
+        return time.perf_counter() - t0, out
+    return run
+
+
+def alternate(run_a, run_b, repeat):
+    """``(median a, last result of a, median b, last result of b, runs)``: the runs
+    ``run_a() -> (seconds, result)`` and ``run_b()`` taken in turn, ``repeat`` times
+    each, b first every other round (a slow first run in a round, the machine's
+    drift, fall on both sides alike)."""
+    ta, tb, out_a, out_b = [], [], None, None
+    for r in range(max(1, int(repeat))):
+        for side in ((0, 1) if r % 2 else (1, 0)):
+            if side == 0:
+                t, out_a = run_a()
+                ta.append(t)
+            else:
+                t, out_b = run_b()
+                tb.append(t)
+    return float(np.median(ta)), out_a, float(np.median(tb)), out_b, len(ta)
 
 
 def _mesh_error(projector, parts, rng, n=4000):
@@ -171,8 +198,8 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             read_step(path, cache=False)                      # warm-up (OCC, JIT)
-            tg, res, k = median_time(lambda: read_step(path, cache=False), repeat)
-            to, shape, _ = median_time(lambda: _occ_read(path), k)
+            tg, res, to, shape, k = alternate(_timed(lambda: read_step(path, cache=False)),
+                                              _timed(lambda: _occ_read(path)), repeat)
             read_step(path)                                   # into the read cache
             tc, _, kc = median_time(lambda: read_step(path), repeat)
         S = res.surfaces
@@ -190,8 +217,8 @@ def sweep(parts=QUICK, parts_dir=None, repeat=3):
                                   "(this process's copy: unpickled)"))
         # tessellate at the same linear deflection
         tol = 1e-3 * size
-        tm, mesh, k = median_time(lambda: geomkit.tessellate(S, tol), repeat)
-        tmo = _occ_mesh_time(path, tol, k)
+        tm, mesh, tmo, _, k = alternate(_timed(lambda: geomkit.tessellate(S, tol)),
+                                        lambda: _occ_mesh_run(path, tol), repeat)
         occ_parts, occ_ntri = _occ_mesh_points(_occ_read(path), tol)
         pj = Projector(S)
         eg = _mesh_error(pj, [(mesh.vertices, mesh.faces)], rng)
@@ -247,7 +274,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     folder = Path(a.parts_dir) if a.parts_dir else PARTS_DIR
     names = sorted(p.name for p in folder.glob("*.st*p")) if a.full else QUICK
-    print(format_table(sweep(names, folder)))
+    print(format_table(sweep(names, folder, repeat=7 if a.full else 3)))
 
 
 if __name__ == "__main__":

@@ -235,3 +235,25 @@ def test_fit_engine_rows_against_references():
     assert ("sphere", "scipy least_squares") in refs
     if res["machine"].get("have_occ") is not None and not res["engines"]["fit"]["notes"]:
         assert ("plane", "scikit-spatial") in refs
+
+
+def test_parts_alternate_takes_the_runs_in_turn():
+    """The parts bench times geomkit and OCC in turn (b first every other round), and
+    reports each side's median and last result."""
+    from geomkit.bench.parts import alternate
+
+    order = []
+
+    def run(name, times):
+        it = iter(times)
+
+        def f():
+            order.append(name)
+            return next(it), len(order)
+        return f
+
+    ta, out_a, tb, out_b, n = alternate(run("a", [3.0, 1.0, 2.0, 9.0]),
+                                        run("b", [5.0, 4.0, 6.0, 7.0]), 4)
+    assert order == ["b", "a", "a", "b", "b", "a", "a", "b"]
+    assert (ta, tb, n) == (2.5, 5.5, 4)
+    assert out_a == 7 and out_b == 8
