@@ -85,6 +85,12 @@ def _normal_gap(Nrm, G, i, j, x0, x1, x2):
 
 @jit
 def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
+    _cell_errors_box_range(i0, i1, Pw, p, q, U, V, cells, m, np.nan, np.nan, np.nan, np.nan,
+                           out)
+
+
+@jit
+def _cell_errors_box_range(i0, i1, Pw, p, q, U, V, cells, m, bu0, bu1, bv0, bv1, out):
     mm = max(p, q) + 1
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
@@ -96,13 +102,46 @@ def _cell_errors_range(i0, i1, Pw, p, q, U, V, cells, m, out):
     Bu = np.empty((m, p + 1))
     Bv = np.empty((m, q + 1))
     H = np.empty((q + 1, 4))
-    _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out,
+    _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, bu0, bu1, bv0, bv1, out,
                       (Nu, Nv, left, right, tmp, G, Nrm, Bu, Bv, H))
 
 
+@jit_inline
+def _edge_sag(G, a0, b0, da, db, n):
+    """Largest distance of the grid points ``G[a0 + i da, b0 + i db]`` (i = 1 .. n-2)
+    from the segment between the first and the last."""
+    a1 = a0 + (n - 1) * da
+    b1 = b0 + (n - 1) * db
+    d0 = G[a1, b1, 0] - G[a0, b0, 0]
+    d1 = G[a1, b1, 1] - G[a0, b0, 1]
+    d2 = G[a1, b1, 2] - G[a0, b0, 2]
+    ll = d0 * d0 + d1 * d1 + d2 * d2
+    worst = 0.0
+    for i in range(1, n - 1):
+        a = a0 + i * da
+        b = b0 + i * db
+        e0 = G[a, b, 0] - G[a0, b0, 0]
+        e1 = G[a, b, 1] - G[a0, b0, 1]
+        e2 = G[a, b, 2] - G[a0, b0, 2]
+        s = 0.0  # the closest point of the chord segment
+        if ll > 0.0:
+            s = min(1.0, max(0.0, (e0 * d0 + e1 * d1 + e2 * d2) / ll))
+        e0 -= s * d0
+        e1 -= s * d1
+        e2 -= s * d2
+        worst = max(worst, np.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+    return worst
+
+
+@jit_inline
+def _fold(e, sag):
+    """``e`` raised to ``sag`` (a NaN estimate stays NaN)."""
+    return e if (np.isnan(e) or e >= sag) else sag
+
+
 @jit
-def _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out, scratch):
-    """The loop of :func:`_cell_errors_range` over borrowed views of its arrays and
+def _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, bu0, bu1, bv0, bv1, out, scratch):
+    """The loop of :func:`_cell_errors_box_range` over borrowed views of its arrays and
     the caller's scratch (no atomic reference counting, :mod:`.numba_ext.borrow`)."""
     Pw, U, V, cells, out, (Nu, Nv, left, right, tmp, G, Nrm, Bu, Bv, H) = borrow_all((
         Pw, U, V, cells, out, scratch))
@@ -150,14 +189,27 @@ def _cell_errors_loop(i0, i1, Pw, p, q, U, V, cells, m, out, scratch):
         edge = max(edge, _dist3(G[0, last, 0], G[0, last, 1], G[0, last, 2], G[last, last, 0], G[last, last, 1], G[last, last, 2]))
         edge = max(edge, _dist3(G[0, 0, 0], G[0, 0, 1], G[0, 0, 2], G[0, last, 0], G[0, last, 1], G[0, last, 2]))
         edge = max(edge, _dist3(G[last, 0, 0], G[last, 0, 1], G[last, 0, 2], G[last, last, 0], G[last, last, 1], G[last, last, 2]))
+        # a cell edge on the box's edge lines: the boundary's sag from its chord (it
+        # bends in the tangent plane, where the normal gap does not see it) raises the
+        # chord error along it, which sets the children counts (``split_counts``)
+        sag_u = 0.0
+        sag_v = 0.0
+        if cells[c, 2] == bv0 or cells[c, 2] == bv1:
+            sag_u = max(sag_u, _edge_sag(G, 0, 0, 1, 0, m))
+        if cells[c, 3] == bv0 or cells[c, 3] == bv1:
+            sag_u = max(sag_u, _edge_sag(G, 0, last, 1, 0, m))
+        if cells[c, 0] == bu0 or cells[c, 0] == bu1:
+            sag_v = max(sag_v, _edge_sag(G, 0, 0, 0, 1, m))
+        if cells[c, 1] == bu0 or cells[c, 1] == bu1:
+            sag_v = max(sag_v, _edge_sag(G, last, 0, 0, 1, m))
         out[c, 0] = e_d0
         out[c, 1] = e_d1
-        out[c, 2] = e_u
-        out[c, 3] = e_v
+        out[c, 2] = _fold(e_u, sag_u)
+        out[c, 3] = _fold(e_v, sag_v)
         out[c, 4] = edge
 
 
-def cell_errors(Pw, p, q, U, V, cells, m, out):
+def cell_errors(Pw, p, q, U, V, cells, m, out, box=None):
     """Error estimates for axis-aligned UV cells (parallel over cells).
 
     The surface is sampled on an m x m grid per cell; each error is the largest
@@ -175,7 +227,11 @@ def cell_errors(Pw, p, q, U, V, cells, m, out):
         3: gap of v-line chords (u fixed) across the cell (need to split v);
         4: largest 3-D edge length of the cell's corners (for ``max_edge``).
     """
-    _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
+    if box is None:
+        _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
+    else:
+        _run(_cell_errors_box_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m,
+             *(float(b) for b in box), out)
 
 
 @jit

@@ -5,9 +5,9 @@ The Python route makes a dozen numpy and kernel calls per face (root estimates,
 children counts, grid lines, cells, their estimates, the measurement, the better
 diagonal, the triangles): on the small grids of most cylinders and cones of real parts
 that glue costs more than the arithmetic.  :func:`small_grid` does the same steps with
-the same kernels (:func:`.tess._cell_errors_range`, :func:`.tess_lattice.split_counts`,
-:func:`.tess._cell_deviation_range`, each over its whole range in this thread, as the
-Python route runs a range of at most one chunk) and the glue's formulas without
+the same kernels (:func:`.tess._cell_errors_box_range` with the domain as the box,
+:func:`.tess_lattice.split_counts`, :func:`.tess._cell_deviation_range`, each over its
+whole range in this thread, as the Python route runs a range of at most one chunk) and the glue's formulas without
 contraction (each ``a * b + c`` rounded twice, as numpy): the same grid, bit for bit.
 """
 
@@ -17,7 +17,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_exact as jit
 from .surface import surface_points_range
-from .tess import _cell_deviation_range, _cell_errors_range
+from .tess import _cell_deviation_range, _cell_errors_box_range
 from .tess_lattice import split_counts
 
 GRID_OK = 0
@@ -86,7 +86,7 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
     roots = _tensor(ub, vb)
     nr = roots.shape[0]
     E = np.empty((nr, 5))
-    _cell_errors_range(0, nr, Pw, p, q, U, V, roots, m, E)
+    _cell_errors_box_range(0, nr, Pw, p, q, U, V, roots, m, u0, u1, v0, v1, E)
     e = np.empty(nr)
     for i in range(nr):
         e[i] = min(E[i, 0], E[i, 1]) if not (np.isnan(E[i, 0]) or np.isnan(E[i, 1])) \
@@ -121,7 +121,8 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
         v = _lines(vb, cv)
         cells = _tensor(u, v)
         Ec = np.empty((cells.shape[0], 5))
-        _cell_errors_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, Ec)
+        _cell_errors_box_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, u0, u1, v0, v1,
+                               Ec)
     n = cells.shape[0]
     first = np.empty(n, dtype=np.int64)
     for i in range(n):

@@ -15,7 +15,6 @@ import numpy as np
 from geomkit._kernels.tess import cell_deviation, cell_errors
 from geomkit._kernels.tess_lattice import edge_counts, fill_rings
 from geomkit._kernels.tess_lattice import split_counts as split_counts_kernel
-from geomkit._kernels.tess_trim import box_edge_sags
 from geomkit._kernels.tess_grid import GRID_FAILED, GRID_OK, GRID_REFUSED, small_grid
 
 LEVELS = 24
@@ -324,24 +323,6 @@ _CORNER_U = np.array([[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]])
 _CORNER_V = np.array([2, 2, 3, 2, 3, 3])
 
 
-def box_errors(surface, cells: np.ndarray, m: int, box, E: np.ndarray) -> np.ndarray:
-    """``E`` (:func:`geomkit._kernels.tess.cell_errors` of ``cells``) with, for the cells
-    along the edges of the face's ``box`` ``(u0, u1, v0, v1)``, the sag of the boundary
-    from their edges' chords (:func:`geomkit._kernels.tess_trim.box_edge_sags`) folded
-    in: into both diagonals' errors, and into the u (v) chord error for edges along u
-    (v).  The normal gap of ``cell_errors`` misses a boundary that bends in the tangent
-    plane, which the measurement sees."""
-    sag = np.empty((len(cells), 2))
-    box_edge_sags(surface.homogeneous, surface.degree_u, surface.degree_v, surface.knots_u,
-                  surface.knots_v, cells, m, *(float(b) for b in box), sag)
-    both = sag.max(axis=1)
-    np.maximum(E[:, 0], both, out=E[:, 0])
-    np.maximum(E[:, 1], both, out=E[:, 1])
-    np.maximum(E[:, 2], sag[:, 0], out=E[:, 2])
-    np.maximum(E[:, 3], sag[:, 1], out=E[:, 3])
-    return E
-
-
 def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
                  target: float, exact_above: float, max_cells: int, box=None,
                  pair: bool = False):
@@ -362,8 +343,10 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     The measurement is the one adaptive refinement accepts cells with, so the stated
     bound is the same.  ``box`` ``(u0, u1, v0, v1)``: the face's rectangle when it is
     a part of the domain (``ub``, ``vb`` then run from its corners): the measurement's
-    feet stay in it, and the estimates include the sag of the box's edges
-    (:func:`box_errors`).  ``pair``: the grid is the face (untrimmed, or ``box``):
+    feet stay in it.  The estimates include the sag of the box's edges, or of the
+    domain's without a box (``cell_errors``' ``box``: the normal gap misses a boundary
+    that bends in the tangent plane, as a cone's rim does, which the measurement
+    sees).  ``pair``: the grid is the face (untrimmed, or ``box``):
     cells are measured with ``cell_deviation``'s ``pair``.
     """
     nsu, nsv = len(ub) - 1, len(vb) - 1
@@ -391,8 +374,7 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     else:
         u0, u1, v0, v1 = box
         E = np.empty((len(roots), 5))
-        cell_errors(Pw, p, q, U, V, roots, m, E)
-        box_errors(surface, roots, m, box, E)
+        cell_errors(Pw, p, q, U, V, roots, m, E, box=box)
     for attempt in range(start, 3):  # the target scaled by the excess measured
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
                               max_parts=max_cells)
@@ -410,9 +392,7 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
             v = _lines(vb, cv)
             cells = _tensor_cells(u, v)
             Ec = np.empty((len(cells), 5))
-            cell_errors(Pw, p, q, U, V, cells, m, Ec)
-            if box is not None:
-                box_errors(surface, cells, m, box, Ec)
+            cell_errors(Pw, p, q, U, V, cells, m, Ec, box=(u0, u1, v0, v1))
         first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
         M = np.empty((len(cells), 2))
         cell_deviation(Pw, p, q, U, V, cells, first, k, u0, u1, v0, v1, exact_above, tol, M,

@@ -73,10 +73,11 @@ def _grid(name, tol):
 
 @pytest.mark.parametrize("name,tol", [("sphere", 1e-1), ("torus", 1e-1),
                                       ("cylinder_quarter", 1e-2), ("crease", 3e-2),
-                                      ("saddle", 1e-2), ("freeform_1", 1e-1),
+                                      ("saddle", 1e-2), ("freeform_1", 1.2e-1),
                                       ("wave_seed003", 3e-1)])
 def test_grid_weld_matches_the_general_weld(name, tol):
-    """Poles (sphere: faces collapse), seams (sphere, torus) and open surfaces."""
+    """Poles (sphere: faces collapse), seams (sphere, torus) and open surfaces
+    (freeform_1: a grid of 3,392 cells; at 0.1 its grid exceeds ``GRID_CELLS``)."""
     s, (tri_uv, dev, cells, (u, v, diag)) = _grid(name, tol)
     got = W.weld_grid(s, u, v, diag, s.size)
     want = W.weld(s, tri_uv, s.size, near_uv=False)
