@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from geomkit.mesh.cells import triangle_coordinates
-from geomkit.mesh.trim_polylines import TrimPolylines, affine_map
+from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, loop_polylines
 from geomkit.nurbs.surface import Surface
 
 __all__ = ["planar_batch"]
@@ -63,14 +63,24 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     t0 = time.perf_counter()
     faces, rings = [], []
     out = {}
+    planes = []
     for i, s in enumerate(surfaces):
         if not s.trim:
             continue
         if affine_map(s, s.size if sizes is None else sizes[i]) is None:
             out[i] = False  # not a plane: the face-by-face path need not ask again
             continue
+        planes.append(i)
+    if not planes:
+        return out
+    try:  # every plane's trim polylines in one call
+        lines = loop_polylines([surfaces[i] for i in planes], chord_tol, True, cross_knots)
+    except Exception:  # noqa: BLE001 - face by face below: the face path reports it
+        lines = [None] * len(planes)
+    for i, polylines in zip(planes, lines):
         try:
-            trim = TrimPolylines(s, chord_tol, affine=True, cross_knots=cross_knots)
+            trim = TrimPolylines(surfaces[i], chord_tol, affine=True, cross_knots=cross_knots,
+                                 polylines=polylines)
         except Exception:  # noqa: BLE001 - the face-by-face path reports it
             continue
         r = trim.rings()

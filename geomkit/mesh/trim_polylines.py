@@ -20,8 +20,9 @@ import numpy as np
 
 from geomkit.tolerances import AFFINE_REL
 from geomkit._kernels.tess_lattice import classify_cells
+from geomkit._kernels.tess_loops import face_loops
 from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
-                                       speed_bound_of, trim_polylines)
+                                       speed_bound_of)
 from geomkit.nurbs.surface import Surface
 from geomkit.nurbs.trims import loop_pack
 
@@ -31,13 +32,14 @@ class TrimPolylines:
     """Trim loops as UV polylines whose 3-D chords are within ``chord_tol``.
 
     ``packed``: :func:`packed_trims` of the surface, if the caller made it.
-    ``loops``: the closed (k, 2) polylines, the domain rectangle left out when a loop
-    is just that rectangle (``domain_loop``).  ``region`` (the trimmed region, a
+    ``loops``: the closed (k, 2) polylines (read only), the domain rectangle left out
+    when a loop is just that rectangle (``domain_loop``); ``polylines``: this surface's
+    :func:`loop_polylines`, if the caller made them.  ``region`` (the trimmed region, a
     prepared shapely geometry inside the domain) is built on first use.
     """
 
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
-                 packed=None, cross_knots: bool = False):
+                 packed=None, cross_knots: bool = False, polylines=None):
         self.surface = surface
         self.cross_knots = cross_knots  # segments may run across smooth knots
         self.chord_tol = chord_tol
@@ -53,8 +55,10 @@ class TrimPolylines:
         hi = 1e-6 * size_uv  # eps is at most this: a loop failing it fails eps too
         eps = None
         perimeter = u1 - u0 + v1 - v0
-        for pts in self._loop_polylines(chord_tol, packed):
-            gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
+        if polylines is None:
+            polylines = loop_polylines([surface], chord_tol, affine, cross_knots,
+                                       None if packed is None else [packed])[0]
+        for pts, (gap, area_gap) in zip(*polylines):
             if not (gap <= hi and area_gap <= hi * perimeter):
                 self.loops.append(pts)
                 continue
@@ -130,47 +134,6 @@ class TrimPolylines:
             return None
         return float(a0), float(a1), float(b0), float(b1)
 
-    def _loop_polylines(self, chord_tol: float, packed=None) -> list[np.ndarray]:
-        """The closed (k, 2) UV polylines of the surface's loops, every piece of every
-        loop in one :func:`geomkit._kernels.tess_trim.trim_polylines` call (each piece
-        from its knots, split until every 3-D chord is within ``chord_tol``)."""
-        s = self.surface
-        (u0, u1), (v0, v1) = s.domain
-        CP, W, K, deg, cp_off, k_off, loop_first = packed or packed_trims(s)
-        m = len(deg)
-        counts = np.empty(m, dtype=np.int64)
-        buf = np.empty((8 * len(K) + 64, 3))
-        while True:
-            n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
-                               s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                               chord_tol, not self.affine, self.cross_knots, buf, counts,
-                               True)
-            if n >= 0:
-                break
-            buf = np.empty((4 * len(buf), 3))
-        # a loop's pieces join end to start: each piece after a loop's first drops its
-        # first row
-        uv = buf[:n, 1:]
-        if m == 1:
-            pts = uv.copy()
-            pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
-            return [pts]
-        # (ufunc methods: numpy's function wrappers cost more than these small sums)
-        first = np.zeros(m + 1, dtype=np.int64)
-        np.add.accumulate(counts, out=first[1:])
-        later = np.full(m, True)
-        later[loop_first[:-1]] = False
-        keep = np.full(n, True)
-        keep[first[:-1][later]] = False
-        ends = np.add.accumulate(np.add.reduceat(counts - later, loop_first[:-1])).tolist()
-        uv = uv[keep]
-        out = []
-        for a, b in zip([0] + ends[:-1], ends):
-            pts = uv[a:b].copy()
-            pts[-1] = pts[0]  # close exactly (pieces join within the closure tolerance)
-            out.append(pts)
-        return out
-
     def classify(self, lat, cells: np.ndarray) -> np.ndarray:
         """(N,) int8 for lattice cells: 0 outside the trimmed region, 1 inside, 2 cut
         by the trim."""
@@ -239,6 +202,71 @@ def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bo
         return True
     eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
     return worst <= max(eps, lo)
+
+
+def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
+                   packs=None) -> list:
+    """Per surface ``(loops, gaps)``: the closed (k, 2) UV polylines of its trim loops
+    (read only) and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`,
+    every piece of every loop of every surface in one
+    :func:`geomkit._kernels.tess_loops.face_loops` call (each piece from its knots, split
+    until every 3-D chord is within ``chord_tol``; ``affine``: the surfaces are affine
+    maps of their parameters, whose UV chords map to 3-D chords).  ``packs``: their
+    :func:`packed_trims`, if made."""
+    packs = packs or [packed_trims(s) for s in surfaces]
+    if len(surfaces) == 1:
+        s = surfaces[0]
+        CP, W, K, deg, cp_off, k_off, loop_first = packs[0]
+        face_piece = np.array([0, len(deg)], dtype=np.int64)
+        face_loop = np.array([0, len(loop_first) - 1], dtype=np.int64)
+        Pw = s.homogeneous.reshape(-1, 4)
+        U, V = s.knots_u, s.knots_v
+        pw_off = np.array([0, len(Pw)], dtype=np.int64)
+        u_off = np.array([0, len(U)], dtype=np.int64)
+        v_off = np.array([0, len(V)], dtype=np.int64)
+    else:
+        pieces = np.array([len(pk[3]) for pk in packs], dtype=np.int64)
+        cps = np.array([len(pk[0]) for pk in packs], dtype=np.int64)
+        kns = np.array([len(pk[2]) for pk in packs], dtype=np.int64)
+        face_piece = _starts(pieces)
+        face_loop = _starts(np.array([len(pk[6]) - 1 for pk in packs], dtype=np.int64))
+        cp_base, k_base = _starts(cps), _starts(kns)
+        CP = np.concatenate([pk[0] for pk in packs])
+        W = np.concatenate([pk[1] for pk in packs])
+        K = np.concatenate([pk[2] for pk in packs])
+        deg = np.concatenate([pk[3] for pk in packs])
+        # each face's offsets (from 0) moved to its place; the last end once
+        cp_off = np.concatenate([pk[4][:-1] + b for pk, b in zip(packs, cp_base.tolist())]
+                                + [cp_base[-1:]])
+        k_off = np.concatenate([pk[5][:-1] + b for pk, b in zip(packs, k_base.tolist())]
+                               + [k_base[-1:]])
+        loop_first = np.concatenate([pk[6][:-1] + b for pk, b in
+                                     zip(packs, face_piece.tolist())] + [face_piece[-1:]])
+        Pw = np.concatenate([s.homogeneous.reshape(-1, 4) for s in surfaces])
+        U = np.concatenate([s.knots_u for s in surfaces])
+        V = np.concatenate([s.knots_v for s in surfaces])
+        pw_off = _starts(np.array([s.homogeneous.shape[0] * s.homogeneous.shape[1]
+                                   for s in surfaces], dtype=np.int64))
+        u_off = _starts(np.array([len(s.knots_u) for s in surfaces], dtype=np.int64))
+        v_off = _starts(np.array([len(s.knots_v) for s in surfaces], dtype=np.int64))
+    nets = np.array([s.homogeneous.shape[:2] + (s.degree_u, s.degree_v) for s in surfaces],
+                    dtype=np.int64)
+    domains = np.array([s.domain[0] + s.domain[1] for s in surfaces], dtype=np.float64)
+    pts, start, gaps = face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece,
+                                  face_loop, Pw, pw_off, nets, U, u_off, V, v_off, domains,
+                                  SEED_SPANS, chord_tol, not affine, cross_knots)
+    pts.flags.writeable = False
+    bounds = start.tolist()
+    loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    fl = face_loop.tolist()
+    return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+
+
+def _starts(counts: np.ndarray) -> np.ndarray:
+    """``[0, c0, c0 + c1, ...]`` (len(counts) + 1,) int64."""
+    out = np.zeros(len(counts) + 1, dtype=np.int64)
+    np.add.accumulate(counts, out=out[1:])
+    return out
 
 
 def packed_trims(surface: Surface):

@@ -1,0 +1,93 @@
+"""The closed trim loops of many faces in one call.
+
+Per face, :func:`.tess_trim.trim_polylines` makes the polylines of its trim pieces; here
+they are joined into closed loops (each piece after a loop's first drops its first row,
+which repeats the previous piece's last; the last row is set to the first, closing the
+loop exactly: pieces join within the closure tolerance) and each loop's distance from
+its face's domain rectangle is measured (:func:`.tess_trim.loop_rectangle_gap`).  The
+Python route did this face by face with a dozen numpy calls each: on the trimmed planes
+of a part (90 on a Pro/ENGINEER part) that glue cost more than the polylines.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .numba_ext.policy import jit
+from .tess_trim import loop_rectangle_gap, trim_polylines
+
+
+@jit
+def _grow(a, n):
+    """``a`` (m, k) with room for at least ``n`` rows (doubled), rows kept."""
+    if n <= a.shape[0]:
+        return a
+    b = np.empty((max(n, 2 * a.shape[0]), a.shape[1]))
+    b[:a.shape[0]] = a
+    return b
+
+
+@jit
+def face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece, face_loop, Pw, pw_off,
+               nets, U, u_off, V, v_off, domains, dense_spans, chord_tol, uv_chords,
+               cross_knots):
+    """The closed UV polylines of the trim loops of faces ``f`` (``len(face_piece) - 1``).
+
+    Face ``f``: surface net ``Pw[pw_off[f]:pw_off[f+1]]`` rows of ``(x w, y w, z w, w)``
+    (``nets[f] = (nu, nv, p, q)``, row-major), knots ``U[u_off[f]:u_off[f+1]]``,
+    ``V[v_off[f]:v_off[f+1]]``, domain ``domains[f] = (u0, u1, v0, v1)``; trim pieces
+    ``face_piece[f]:face_piece[f+1]`` (piece ``c``: degree ``deg[c]``, control points
+    ``CP[cp_off[c]:cp_off[c+1]]`` with weights ``W``, knots ``K[k_off[c]:k_off[c+1]]``),
+    loops ``face_loop[f]:face_loop[f+1]`` (loop ``l``: pieces
+    ``loop_first[l]:loop_first[l+1]``).  The other arguments are
+    :func:`.tess_trim.trim_polylines`'.
+
+    Returns ``(pts (n, 2), start (L+1,), gaps (L, 2))``: loop ``l``'s closed polyline
+    ``pts[start[l]:start[l+1]]`` and its :func:`.tess_trim.loop_rectangle_gap`."""
+    nf = face_piece.shape[0] - 1
+    nl = loop_first.shape[0] - 1
+    start = np.zeros(nl + 1, dtype=np.int64)
+    gaps = np.empty((nl, 2))
+    pts = np.empty((64, 2))
+    n = 0
+    for f in range(nf):
+        c0 = face_piece[f]
+        c1 = face_piece[f + 1]
+        nu = nets[f, 0]
+        nv = nets[f, 1]
+        Pf = np.ascontiguousarray(Pw[pw_off[f]:pw_off[f + 1]]).reshape((nu, nv, 4))
+        Uf = U[u_off[f]:u_off[f + 1]]
+        Vf = V[v_off[f]:v_off[f + 1]]
+        u0 = domains[f, 0]
+        u1 = domains[f, 1]
+        v0 = domains[f, 2]
+        v1 = domains[f, 3]
+        counts = np.empty(c1 - c0, dtype=np.int64)
+        rows = np.empty((8 * (k_off[c1] - k_off[c0]) + 64, 3))
+        while True:
+            m = trim_polylines(CP, W, K, deg[c0:c1], cp_off[c0:c1 + 1], k_off[c0:c1 + 1],
+                               dense_spans, u0, v0, u1, v1, Pf, nets[f, 2], nets[f, 3], Uf,
+                               Vf, chord_tol, uv_chords, cross_knots, rows, counts, True)
+            if m >= 0:
+                break
+            rows = np.empty((4 * rows.shape[0], 3))
+        r = 0  # the face's rows, piece after piece
+        for lp in range(face_loop[f], face_loop[f + 1]):
+            a = n
+            for c in range(loop_first[lp], loop_first[lp + 1]):
+                k = counts[c - c0]
+                skip = 0 if c == loop_first[lp] else 1
+                pts = _grow(pts, n + k)
+                for i in range(skip, k):
+                    pts[n, 0] = rows[r + i, 1]
+                    pts[n, 1] = rows[r + i, 2]
+                    n += 1
+                r += k
+            if n > a:
+                pts[n - 1, 0] = pts[a, 0]  # close exactly
+                pts[n - 1, 1] = pts[a, 1]
+            start[lp + 1] = n
+            g, ga = loop_rectangle_gap(pts[a:n], u0, u1, v0, v1)
+            gaps[lp, 0] = g
+            gaps[lp, 1] = ga
+    return pts[:n], start, gaps
