@@ -53,6 +53,42 @@ def spread(X):
     return out
 
 
+@jit
+def hull_spread(Pw):
+    """:func:`spread` of the Cartesian points ``Pw[:, :3] / Pw[:, 3]`` of homogeneous
+    control points (n >= 1, 4), without making them: the largest extent along x, y
+    or z of a loop's control points (NaN when a coordinate is)."""
+    if Pw.shape[0] == 0:
+        raise ValueError("the range of no rows")
+    lo = np.empty(3)
+    hi = np.empty(3)
+    nan = np.zeros(3, dtype=np.bool_)
+    for c in range(3):
+        a = Pw[0, c] / Pw[0, 3]
+        lo[c] = a
+        hi[c] = a
+        nan[c] = a != a
+    for i in range(1, Pw.shape[0]):
+        for c in range(3):
+            x = Pw[i, c] / Pw[i, 3]
+            if x != x:
+                nan[c] = True
+            elif x < lo[c]:
+                lo[c] = x
+            elif x > hi[c]:
+                hi[c] = x
+    out = 0.0
+    for c in range(3):
+        d = math.nan if nan[c] else hi[c] - lo[c]
+        if c == 0:
+            out = d
+        elif d != d or out != out:
+            out = math.nan
+        elif d > out:
+            out = d
+    return out
+
+
 @jit_exact
 def nearest_rows(G, X):
     """For each row of ``X`` (m, 3) the index of its nearest row of ``G`` (n >= 1, 3)

@@ -144,6 +144,28 @@ def loop_joins(Q, off, box):
     return gaps, inside
 
 
+@jit_exact
+def shifted_points(Q, w, d):
+    """A trim curve's control points ``Q`` (n, 2) moved by ``d`` (2,) as
+    :func:`geomkit.cad.loops.shift` moves them (``Q + d``, then ``* w / w`` unless every
+    weight ``w`` is 1): ``(points, unit, finite)`` with ``finite`` whether every
+    ``Q + d`` is (a reader shifts a band's pieces by a period one call each)."""
+    n = Q.shape[0]
+    unit = True
+    for i in range(n):
+        if w[i] != 1.0:
+            unit = False
+            break
+    out = np.empty((n, 2))
+    finite = True
+    for i in range(n):
+        for k in range(2):
+            x = Q[i, k] + d[k]
+            finite = finite and math.isfinite(x)
+            out[i, k] = x if unit else x * w[i] / w[i]
+    return out, unit, finite
+
+
 @jit
 def loop_check(Q, W, off, deg, U, uoff, per, close, box):
     """What :func:`geomkit.nurbs.trims.check_loop` tests, in one call over a loop

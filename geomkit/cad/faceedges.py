@@ -84,16 +84,6 @@ class Edge:
             self._cache[k] = X
         return X[::-1] if self.reverse else X
 
-    def box(self) -> np.ndarray:
-        """(2, 3): the least and largest x, y, z of the curve's control points
-        (:func:`~geomkit._kernels.ranges.col_range`), computed once per curve."""
-        k = ("box", id(self.curve))
-        b = self._cache.get(k)
-        if b is None:
-            Pw = self.curve[2]
-            b = self._cache[k] = np.array(col_range(Pw[:, :3] / Pw[:, 3:]))
-        return b
-
     def local(self, srf, n: int):
         """``srf.local`` of :meth:`points` (copies: callers unwrap them in place),
         computed once per surface and curve (a seam cut and the face's chain read

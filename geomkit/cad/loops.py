@@ -15,7 +15,7 @@ from geomkit.nurbs.surface import TrimCurve
 from geomkit.nurbs.trims import TrimLoop, evaluate_trim_curve, loop_pack, readonly
 from geomkit.cad.uvmap import map_pcurve
 from geomkit._kernels.ranges import col_range
-from geomkit._kernels.trim_loops import loop_joins, segment_spread
+from geomkit._kernels.trim_loops import loop_joins, segment_spread, shifted_points
 
 __all__ = ["close_gaps", "chain", "reverse", "Unsupported", "GAP_TOL", "clip_in_3d",
            "same_point_3d", "finish_loop"]
@@ -60,8 +60,16 @@ def shift(c: TrimCurve, d) -> TrimCurve:
     ``TrimCurve.create`` of the moved points with ``c``'s knots and weights, which
     were checked when ``c`` was made (its points ``Q w / w`` when rational, as create
     stores them); a point that is not finite goes through create, which names it."""
-    Q = np.asarray(c.control_points) + d
     w = c.weights
+    P = c.control_points
+    d = np.asarray(d, dtype=np.float64)
+    if (P.dtype == np.float64 and P.ndim == 2 and P.shape[1] == 2 and d.shape == (2,)
+            and w.dtype == np.float64 and w.shape == (P.shape[0],)):
+        Q, unit, finite = shifted_points(P, w, d)  # (one call: the same values)
+        if finite:
+            return TrimCurve(c.degree, c.knots, readonly(Q), w)
+        return TrimCurve.create(c.degree, c.knots, P + d, None if unit else w)
+    Q = np.asarray(P) + d
     unit = bool((w == 1).all())
     if not (Q.dtype == np.float64 and Q.shape == c.control_points.shape
             and np.isfinite(Q).all()):

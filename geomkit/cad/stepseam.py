@@ -23,11 +23,10 @@ import math
 import numpy as np
 
 from geomkit.cad.analytic import unwrap
-from geomkit.cad.faceedges import KIND_CODE, Edge
+from geomkit.cad.faceedges import Edge
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported, reverse, shift
 from geomkit.nurbs.surface import TrimCurve
-from geomkit._kernels.pcurve_map import CYLINDER
 from geomkit._kernels.seam import level_crossing, seam_crossing, seam_margins
 from geomkit._kernels.ranges import col_range
 
@@ -93,20 +92,17 @@ def _split_edge(srf, e, target):
         return None
     # the crossing bracketed on the loop's parameter s, 32 samples a round (each round
     # narrows it 32 times: as fine as bisection's 60 halvings in 12 rounds)
+    # (srf.inverse: the kind's code, the frame O, X, Y, A, R, r and tan(alpha))
     p, U, Pw = e.curve
-    code = CYLINDER if srf.kind == "revolution" else KIND_CODE[srf.kind]
-    frame = np.concatenate([srf.O, srf.X, srf.Y, srf.A])
-    R, r, alpha = (getattr(srf, k, 0.0) for k in ("R", "r", "alpha"))
     sc = seam_crossing(np.ascontiguousarray(Pw, float), int(p), np.asarray(U, float),
-                       e.t0, e.t1, bool(e.reverse), code, frame, float(R), float(r),
-                       math.tan(alpha), j / (n - 1), (j + 1) / (n - 1), float(b[j]),
-                       level, bool(b[j + 1] > b[j]))
+                       e.t0, e.t1, bool(e.reverse), *srf.inverse, j / (n - 1),
+                       (j + 1) / (n - 1), float(b[j]), level, bool(b[j + 1] > b[j]))
     return _cut(srf, e, sc)
 
 
 def _cut(srf, e, sc):
     """Edge ``e`` cut at the loop parameter ``sc``: two :class:`Edge` in loop order."""
-    t = float(e.ts(np.array([sc]))[0])
+    t = e.t0 + ((1.0 - sc) if e.reverse else sc) * (e.t1 - e.t0)  # (Edge.ts's value)
     p, U, Pw = e.curve
     a1 = (p, *restrict(p, U, Pw, float(U[p]), t))
     a2 = (p, *restrict(p, U, Pw, t, float(U[-p - 1])))

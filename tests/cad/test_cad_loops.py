@@ -168,7 +168,10 @@ def test_shift_is_create_of_the_moved_points():
     arc = TrimCurve.create(2, [0, 0, 0, 0.4, 0.4, 1, 1, 1], rng.uniform(0, 1, (5, 2)),
                            [1.0, 0.7071, 1.0, 0.3, 1.0])
     seg = TrimCurve.polyline([[0.1, 0.2], [0.4, 0.9], [0.3, 0.1]])
-    for c in (arc, seg):
+    more = [TrimCurve.create(2, [0, 0, 0, 0.5, 1, 1, 1], rng.normal(size=(4, 2))
+                             * 10.0 ** rng.integers(-8, 8), rng.uniform(0.05, 3.0, 4))
+            for _ in range(50)]  # (the compiled route: random weights and scales)
+    for c in (arc, seg, *more):
         for d in (np.array([TWO_PI, 0.0]), np.array([0.0, -TWO_PI]), [0.3, 1e-9]):
             got = shift(c, d)
             ref = TrimCurve.create(c.degree, c.knots, np.asarray(c.control_points) + d,

@@ -29,6 +29,34 @@ def test_col_range_and_spread_are_numpys(seed):
         col_range(np.zeros((0, 3)))
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_hull_spread_is_the_loop_boxes_extent(seed):
+    """The reader's sort key of a loop: the extent of the edges' control-point boxes
+    (each ``col_range(Pw[:, :3] / Pw[:, 3:])``), as it was computed before, bit for bit
+    (NaN and infinite coordinates, zero weights, one row)."""
+    from geomkit._kernels.ranges import hull_spread
+
+    rng = np.random.default_rng(seed)
+    for _ in range(300):
+        edges = []
+        for _ in range(int(rng.integers(1, 6))):
+            n = int(rng.integers(1, 12))
+            Pw = np.column_stack([rng.normal(size=(n, 3)) * 10.0 ** rng.integers(-6, 6),
+                                  rng.uniform(0.2, 2.0, n)])
+            if rng.random() < 0.1:
+                Pw[rng.integers(n), rng.integers(4)] = rng.choice([np.nan, np.inf, 0.0])
+            edges.append(Pw)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            boxes = np.concatenate([np.array(col_range(Pw[:, :3] / Pw[:, 3:]))
+                                    for Pw in edges])
+            lo, hi = col_range(boxes)
+            ref = float((hi - lo).max())
+        got = hull_spread(np.concatenate(edges))
+        assert got == ref or (np.isnan(got) and np.isnan(ref))
+    with pytest.raises(ValueError, match="no rows"):
+        hull_spread(np.zeros((0, 4)))
+
+
 def test_nearest_rows_matches_kdtree():
     from scipy.spatial import cKDTree
 
