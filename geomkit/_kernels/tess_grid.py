@@ -65,15 +65,12 @@ def _lines(b, counts):
 
 
 @jit
-def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells,
-               max_small, u0, u1, v0, v1, pair):
-    """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (no ``box``):
-    ``(status, u, v, cells, dev, diag, E, cu, cv, worst)``: status :data:`GRID_OK` with
-    the grid lines, cells (N, 4), each cell's measured deviation and better diagonal;
-    :data:`GRID_FAILED` with the same and the largest deviation ``worst`` (NaN if one
-    is); :data:`GRID_BIG` or :data:`GRID_REFUSED` with empty ones.  Always (but for a
-    refusal before them) the root spans' estimates ``E`` and the children counts per
-    span row ``cu`` and column ``cv``, for the Python route to go on from."""
+def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, u0, u1, v0, v1):
+    """The grid of the estimates: ``(status, u, v, cells, first, E, cu, cv)``, the
+    grid lines, cells (N, 4) and each cell's diagonal of the smaller estimate
+    (:data:`GRID_OK`), or :data:`GRID_BIG` / :data:`GRID_REFUSED` with empty ones; the
+    root spans' estimates ``E`` and children counts ``cu``, ``cv`` (but for a refusal
+    before them)."""
     nsu = ub.shape[0] - 1
     nsv = vb.shape[0] - 1
     empty1 = np.empty(0)
@@ -81,8 +78,7 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
     empty5 = np.empty((0, 5))
     noint = np.empty(0, dtype=np.int64)
     if nsu * nsv > max_cells:
-        return (GRID_REFUSED, empty1, empty1, empty2, empty1, noint, empty5, noint, noint,
-                np.nan)
+        return GRID_REFUSED, empty1, empty1, empty2, noint, empty5, noint, noint
     roots = _tensor(ub, vb)
     nr = roots.shape[0]
     E = np.empty((nr, 5))
@@ -108,9 +104,9 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
     for c in cv:
         sv += c
     if su * sv > max_cells:
-        return GRID_REFUSED, empty1, empty1, empty2, empty1, noint, E, cu, cv, np.nan
+        return GRID_REFUSED, empty1, empty1, empty2, noint, E, cu, cv
     if su * sv > max_small:
-        return GRID_BIG, empty1, empty1, empty2, empty1, noint, E, cu, cv, np.nan
+        return GRID_BIG, empty1, empty1, empty2, noint, E, cu, cv
     if su == nsu and sv == nsv:  # every count 1: the root spans themselves
         u = ub
         v = vb
@@ -127,6 +123,34 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
     first = np.empty(n, dtype=np.int64)
     for i in range(n):
         first[i] = 1 if Ec[i, 1] < Ec[i, 0] else 0
+    return GRID_OK, u, v, cells, first, E, cu, cv
+
+
+@jit
+def grid_plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, u0, u1, v0, v1):
+    """The grid :func:`small_grid` would measure, unmeasured: ``(ok, u, v, cells,
+    first)``, each cell's diagonal the one of the smaller estimate; not ``ok`` (empty
+    arrays) when it would exceed ``max_cells``."""
+    status, u, v, cells, first, _, _, _ = _plan(Pw, p, q, U, V, ub, vb, m, target,
+                                                max_cells, max_cells, u0, u1, v0, v1)
+    return status == GRID_OK, u, v, cells, first
+
+
+@jit
+def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells,
+               max_small, u0, u1, v0, v1, pair):
+    """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (no ``box``):
+    ``(status, u, v, cells, dev, diag, E, cu, cv, worst)``: status :data:`GRID_OK` with
+    the grid lines, cells (N, 4), each cell's measured deviation and better diagonal;
+    :data:`GRID_FAILED` with the same and the largest deviation ``worst`` (NaN if one
+    is); :data:`GRID_BIG` or :data:`GRID_REFUSED` with empty ones.  Always (but for a
+    refusal before them) the root spans' estimates ``E`` and the children counts per
+    span row ``cu`` and column ``cv``, for the Python route to go on from."""
+    status, u, v, cells, first, E, cu, cv = _plan(Pw, p, q, U, V, ub, vb, m, target,
+                                                  max_cells, max_small, u0, u1, v0, v1)
+    if status != GRID_OK:
+        return status, u, v, cells, np.empty(0), first, E, cu, cv, np.nan
+    n = cells.shape[0]
     M = np.empty((n, 2))
     _cell_deviation_range(0, n, Pw, p, q, U, V, cells, first, k, u0, u1, v0, v1,
                           exact_above, tol, pair, M)

@@ -15,7 +15,8 @@ import numpy as np
 from geomkit._kernels.tess import cell_deviation, cell_errors
 from geomkit._kernels.tess_lattice import edge_counts, fill_rings
 from geomkit._kernels.tess_lattice import split_counts as split_counts_kernel
-from geomkit._kernels.tess_grid import GRID_FAILED, GRID_OK, GRID_REFUSED, small_grid
+from geomkit._kernels.tess_grid import (GRID_FAILED, GRID_OK, GRID_REFUSED, grid_plan,
+                                       small_grid)
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -413,6 +414,20 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     else:
         return None
     return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
+
+
+def planned_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, target: float,
+                 max_cells: int):
+    """The first grid :func:`uniform_grid` would measure (the root spans' children from
+    the estimates, :func:`geomkit._kernels.tess_grid.grid_plan`), unmeasured: ``(cells,
+    diag)``, each cell's diagonal the one of the smaller estimate; None above
+    ``max_cells``.  For a trimmed face, whose kept triangles are measured once clipped."""
+    (u0, u1), (v0, v1) = surface.domain
+    ok, _, _, cells, diag = grid_plan(surface.homogeneous, surface.degree_u,
+                                      surface.degree_v, surface.knots_u, surface.knots_v,
+                                      ub, vb, m, float(target), int(max_cells), u0, u1, v0,
+                                      v1)
+    return (cells, diag) if ok else None
 
 
 def _grid_triangles(cells, dev, diag):

@@ -37,9 +37,11 @@ Method (Paper 1 step 1, then beyond it):
    (a STEP face bounded by its surface's own edges: most cylinders and cones of real
    parts; :func:`geomkit.mesh.trim_polylines.domain_rectangle_only`), is tried as one
    uniform grid of cells (:func:`geomkit.mesh.quadtree.uniform_grid`, every cell's
-   two triangles measured).  A trimmed curved surface is tried on such a grid too:
-   cells inside the region keep their measured triangles, cells the trim crosses are
-   clipped as in step 3 and their triangles measured.  A grid that is refused or has
+   two triangles measured).  A trimmed curved surface is tried on the grid of the
+   estimates (:func:`geomkit.mesh.quadtree.planned_grid`): cells inside the region keep
+   two triangles, cells the trim crosses are clipped as in step 3, and only the kept
+   triangles are measured (feet inside the face); a failing grid is made again for a
+   target scaled by the excess.  A grid that is refused or has
    a triangle above ``tol`` leaves the surface to the adaptive cells of steps 1-4.
 7. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
    closed seams) are merged and the triangles they collapse dropped, so a sphere is
@@ -87,6 +89,9 @@ SAMPLES_PER_EDGE = 6
 """``k``: barycentric samples per triangle edge in the deviation measurement."""
 TRIM_TARGET = 0.5
 """Trim polylines are refined until their 3-D chord error is below ``TRIM_TARGET * tol``."""
+PLANNED_TRIES = 3
+"""Grids of the estimates tried for a trimmed surface before the measured grid
+(:func:`_trimmed_grid`)."""
 GRID_CELLS = 4096
 """Untrimmed surfaces whose first estimate asks for at most this many cells are tried
 as one uniform grid first (:func:`geomkit.mesh.quadtree.uniform_grid`): small meshes then
@@ -135,35 +140,38 @@ def _planar_stats(seconds: float) -> dict:
 
 def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: float,
                   size: float, t0: float):
-    """A trimmed surface on one uniform grid (:func:`geomkit.mesh.quadtree.uniform_grid`):
-    cells inside the region keep their two triangles, cells the trim crosses are
-    clipped and triangulated (step 3).  First the grid whose cells are measured with
-    ``pair``, every kept triangle then measured again within its cell's group
-    (:func:`_grouped_deviation`: feet inside the face); if one fails, the grid of the
-    single-triangle measure, its clipped triangles measured alone.  None when the
-    grid is refused or a triangle measures above ``tol``: the adaptive cells take
-    over."""
-    for pair in (True, False):
+    """A trimmed surface on one uniform grid: cells inside the region keep their two
+    triangles, cells the trim crosses are clipped and triangulated (step 3).  First the
+    grid of the estimates (:func:`geomkit.mesh.quadtree.planned_grid`; inside cells split
+    along the diagonal of the smaller estimate), every kept triangle measured within
+    its cell's group (:func:`_grouped_deviation`: feet inside the face), the target
+    scaled down by the excess and the grid made again while a triangle fails (at most
+    :data:`PLANNED_TRIES` grids); then the grid whose cells are measured alone
+    (:func:`geomkit.mesh.quadtree.uniform_grid`), its clipped triangles measured alone.
+    None when the grid is refused or a triangle measures above ``tol``: the adaptive
+    cells take over."""
+    target = CELL_TARGET * tol
+    grouped = True
+    for _ in range(PLANNED_TRIES):
+        plan = qt.planned_grid(s, ub, vb, m, target, GRID_CELLS)
+        if plan is None:
+            return None
+        cells, diag = plan
+        tri_uv, _ = qt._grid_triangles(cells, np.zeros(len(cells)), diag)
+        cells, cut, tri_uv, _, cuv, cown = _clip_grid(trim, cells, tri_uv, None)
+        tri_uv, dev, worst = _grouped(s, tri_uv, cuv, cown, k, tol)
+        if tri_uv is not None:
+            break
+        # errors fall with the square of the cell size: aim the next grid below target
+        target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+    else:
+        grouped = False
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                               GRID_CELLS, pair=pair)
+                               GRID_CELLS)
         if grid is None:
             return None
         tri_uv, dev, cells, _ = grid
-        state = trim.classify_uv(cells)
-        cut = np.nonzero(state == 2)[0]
-        keep = (state == 1).repeat(2)  # two triangles per cell, in cell order
-        tri_uv, dev = tri_uv[keep], dev[keep]
-        cuv = cown = None
-        if len(cut):
-            inside = cells[state == 1]
-            cuv, cown = triangulate_pieces(clip_rectangles(
-                cells[cut], trim, float(np.add.reduce((inside[:, 1] - inside[:, 0])
-                                                      * (inside[:, 3] - inside[:, 2])))))
-        if pair:
-            tri_uv, dev = _grouped(s, tri_uv, cuv, cown, k, tol)
-            if tri_uv is not None:
-                break
-            continue
+        cells, cut, tri_uv, dev, cuv, cown = _clip_grid(trim, cells, tri_uv, dev)
         if cuv is not None:
             cdev = deviation(s, cuv, k, tol)
             if not (cdev <= tol).all():
@@ -177,14 +185,35 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
              "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
-             "grouped": pair, "seconds": time.perf_counter() - t0}
+             "grouped": grouped, "seconds": time.perf_counter() - t0}
     return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
+def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):
+    """A grid's cells (N, 4) against the trimmed region: ``(cells, cut, tri_uv, dev,
+    cuv, cown)``, the indices of the cut cells, the two triangles (and deviations, if
+    given) of each cell inside, the cut cells' pieces triangulated and the piece of each
+    (None when no cell is cut)."""
+    state = trim.classify_uv(cells)
+    cut = np.nonzero(state == 2)[0]
+    keep = (state == 1).repeat(2)  # two triangles per cell, in cell order
+    tri_uv = tri_uv[keep]
+    if dev is not None:
+        dev = dev[keep]
+    cuv = cown = None
+    if len(cut):
+        inside = cells[state == 1]
+        cuv, cown = triangulate_pieces(clip_rectangles(
+            cells[cut], trim, float(np.add.reduce((inside[:, 1] - inside[:, 0])
+                                                  * (inside[:, 3] - inside[:, 2])))))
+    return cells, cut, tri_uv, dev, cuv, cown
 
 
 def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
     """The inside cells' triangle pairs ``tri_uv`` and the cut cells' clipped triangles
-    ``cuv`` (of piece ``cown``) together, measured by :func:`_grouped_deviation`;
-    ``(None, None)`` when a triangle is above ``tol``."""
+    ``cuv`` (of piece ``cown``) together, measured by :func:`_grouped_deviation`:
+    ``(tri_uv, dev, worst)``, or ``(None, None, worst)`` when a triangle is above
+    ``tol`` (``worst``: the largest deviation, NaN if one is)."""
     n = len(tri_uv) // 2
     group = np.arange(n).repeat(2)
     if cuv is not None and len(cuv):
@@ -197,8 +226,8 @@ def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
         group = np.concatenate([group, n + cg])
     dev = _grouped_deviation(s, tri_uv, group, k, tol)
     if not (dev <= tol).all():
-        return None, None
-    return tri_uv, dev
+        return None, None, float(np.max(dev)) if len(dev) else np.nan
+    return tri_uv, dev, float(np.max(dev)) if len(dev) else 0.0
 
 
 def _grouped_deviation(s: Surface, tri_uv, group, k: int, tol: float):

@@ -155,3 +155,38 @@ def test_small_grid_kernel_matches_the_python_steps(monkeypatch):
             for a, b in zip(got[:3] + got[3], want[:3] + want[3]):
                 assert a.dtype == b.dtype and np.array_equal(a, b)
     assert kinds == {"refused", "small", "big"}
+
+
+def test_planned_grid_is_the_grid_small_grid_measures():
+    """``quadtree.planned_grid`` (the trimmed faces' grid of the estimates) against the
+    grid :func:`geomkit._kernels.tess_grid.small_grid` measures: the same cells, bit for
+    bit, each cell's diagonal the one of the smaller estimate (small_grid measures it
+    first)."""
+    from geomkit._kernels.tess import cell_errors
+    from geomkit._kernels.tess_grid import GRID_FAILED, GRID_OK, small_grid
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        part = read_step(DATA / "parts" / "euclid_screw_ap214.step").surfaces
+    seen = 0
+    for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
+        ub = C.breakpoints(s.knots_u, s.degree_u)
+        vb = C.breakpoints(s.knots_v, s.degree_v)
+        m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+        (u0, u1), (v0, v1) = s.domain
+        for tol in (1e-1 * s.size, 1e-3 * s.size):
+            st, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
+                s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, ub, vb, m, 6,
+                tol, C.CELL_TARGET * tol, tol, 4096, 4096, u0, u1, v0, v1, True)
+            got = Q.planned_grid(s, ub, vb, m, C.CELL_TARGET * tol, 4096)
+            if st not in (GRID_OK, GRID_FAILED):
+                assert got is None
+                continue
+            seen += 1
+            assert np.array_equal(got[0], cells)
+            # the diagonal of the smaller estimate (the domain's edge sags folded in)
+            Ec = np.empty((len(cells), 5))
+            cell_errors(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
+                        np.ascontiguousarray(cells), m, Ec, box=(u0, u1, v0, v1))
+            assert np.array_equal(got[1], (Ec[:, 1] < Ec[:, 0]).astype(np.int64))
+    assert seen > 20
