@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from geomkit._kernels.pcurve_map import curve_at
 from geomkit._kernels.ranges import nearest_rows
 from geomkit._kernels.surface import invert_points
 from geomkit.tolerances import EDGE_TOL
@@ -81,6 +82,14 @@ class SurfaceInverse:
         return uv, dist
 
 
+def _curve_at(e, s):
+    """The points of edge ``e`` at its loop parameters ``s``: ``curve_eval(e.curve,
+    e.ts(s))``, bit for bit, in one compiled call."""
+    p, U, Pw = e.curve
+    return curve_at(np.ascontiguousarray(Pw, dtype=np.float64), int(p),
+                    np.asarray(U, dtype=np.float64), e.ts(s))
+
+
 def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
     """``(pieces, err)``: one UV polyline :class:`~geomkit.TrimCurve` per oriented edge
     (:class:`geomkit.cad.faceedges.Edge`) on the untrimmed ``base``, and the largest
@@ -89,52 +98,72 @@ def edge_uv(base, edges, tol: float, what: str, periods=(0.0, 0.0)):
     (u0, u1), (v0, v1) = base.domain
     lo = np.array([u0, v0])
     per = np.asarray(periods, float)
-    wrapped = per > 0
+    wrapped = np.flatnonzero(per > 0).tolist()
 
     def inside(uv):  # unwrapped parameters back into the domain
-        if not wrapped.any():
+        if not wrapped:
             return uv
         out = uv.copy()
-        for c in np.flatnonzero(wrapped):
+        for c in wrapped:
             out[:, c] = lo[c] + np.mod(uv[:, c] - lo[c], per[c])
         return out
 
     # the edges of the loop are refined together: each round projects the new points
-    # of every edge in one call (the per-call cost of the inversion dominates)
+    # of every edge in one call (the per-call cost of the inversion dominates) and
+    # measures every edge's midpoints in a few array operations
     inverse = SurfaceInverse(base)
     n0 = 17
-    S = [np.linspace(0.0, 1.0, n0) for _ in edges]
+    s0 = np.linspace(0.0, 1.0, n0)
+    sm0 = 0.5 * (s0[1:] + s0[:-1])
+    S = [s0] * len(edges)  # (replaced, never written to)
     raw0, dist0 = inverse(np.concatenate([e.points(n0) for e in edges]), tol)
     RAW = [raw0[k * n0:(k + 1) * n0] for k in range(len(edges))]
     DIST = [dist0[k * n0:(k + 1) * n0] for k in range(len(edges))]
+    # the first round's largest distance of each edge (np.nanmax when all are finite)
+    D0 = dist0.reshape(len(edges), n0)
+    fin0 = np.isfinite(D0).all(axis=1).tolist()
+    max0 = D0.max(axis=1).tolist()
     UV = [None] * len(edges)
     worst = 0.0
     active = list(range(len(edges)))
+    first = True
     while active:
         rounds = []
         for k in active:
-            dist = DIST[k]
-            off = float(np.nanmax(dist)) if np.all(np.isfinite(dist)) else np.inf
+            if first:
+                off = max0[k] if fin0[k] else np.inf
+            else:
+                dist = DIST[k]
+                off = float(np.nanmax(dist)) if np.all(np.isfinite(dist)) else np.inf
             if off > tol:
                 raise Unsupported(f"{what}: edge {k} is not on the surface (a point is "
                                   f"{off:.3g} from it, tolerance {tol:.3g})")
             uv = RAW[k].copy()
-            for c in np.flatnonzero(wrapped):
+            for c in wrapped:
                 uv[:, c] = unwrap(uv[:, c], per[c])
-            sm = 0.5 * (S[k][1:] + S[k][:-1])
+            sm = sm0 if S[k] is s0 else 0.5 * (S[k][1:] + S[k][:-1])
             rounds.append((k, off, uv, sm))
+        first = False
         mid = evaluate(base, inside(np.concatenate([0.5 * (uv[1:] + uv[:-1])
                                                     for _, _, uv, _ in rounds])))
+        # every edge's curve at its midpoints (curve_eval's points) and their
+        # distances (np.linalg.norm's: the square root of each row's sum of squares)
+        C = np.concatenate([_curve_at(edges[k], sm) for k, _, _, sm in rounds])
+        d = mid - C
+        dev_all = np.sqrt(np.add.reduce(d * d, axis=1))
+        starts = np.cumsum([0] + [sm.size for _, _, _, sm in rounds[:-1]])
+        any_bad = np.logical_or.reduceat(dev_all > tol, starts).tolist()
+        dev_max = np.maximum.reduceat(dev_all, starts).tolist()
         todo, new_X, o = [], [], 0
-        for k, off, uv, sm in rounds:
+        for j, (k, off, uv, sm) in enumerate(rounds):
             e = edges[k]
-            dev = np.linalg.norm(mid[o:o + sm.size] - curve_eval(e.curve, e.ts(sm)), axis=1)
+            dev = dev_all[o:o + sm.size]
             o += sm.size
-            bad = dev > tol
-            if not bad.any():
-                worst = max(worst, float(dev.max()), off)
+            if not any_bad[j]:
+                worst = max(worst, dev_max[j], off)
                 UV[k] = uv
                 continue
+            bad = dev > tol
             if len(S[k]) + int(bad.sum()) > _MAX_POINTS:
                 raise Unsupported(f"{what}: edge {k} has no UV polyline within {tol:.3g} "
                                   f"of {_MAX_POINTS} points (its projection jumps: a "
