@@ -341,6 +341,13 @@ def edge_points(loops):
     return np.concatenate([e.points(9) for lp in loops for e in lp])
 
 
+def _extent(lo, hi) -> float:
+    """``float(np.max(hi - lo))`` of two 2-vectors (NaN when a difference is), in
+    Python floats."""
+    a, b = float(hi[0] - lo[0]), float(hi[1] - lo[1])
+    return math.nan if a != a or b != b else max(a, b)
+
+
 def analytic_pieces(srf, loops, tol_rel: float, what: str, extra=None,
                     bridge: bool = True):
     """``(surface args, [loops of TrimCurve pieces], domain)`` of a face on the
@@ -382,14 +389,15 @@ def analytic_pieces(srf, loops, tol_rel: float, what: str, extra=None,
             lo[0] = apex
         elif abs(hi[0] - apex) <= near or lo[0] < apex < hi[0]:
             hi[0] = apex
-    pad = 1e-9 * max(float(np.max(hi - lo)), 1.0)
+    pad = 1e-9 * max(_extent(lo, hi), 1.0)
     if srf.kind == "sphere":
         lo[0], hi[0] = max(lo[0], -math.pi / 2), min(hi[0], math.pi / 2)
-    if np.any(hi - lo <= pad):
+    if float(hi[0] - lo[0]) <= pad or float(hi[1] - lo[1]) <= pad:
         raise Unsupported(f"{what}: its boundary spans no area")
     args, fu, fv = srf.build((lo[0], hi[0]), (lo[1], hi[1]))
-    tol = tol_rel * float(np.max(hi - lo))
-    uv_loops = [_pieces(srf, lp, ch, fu, fv, tol, float(np.max(hi - lo)), bridge)
+    ext = _extent(lo, hi)
+    tol = tol_rel * ext
+    uv_loops = [_pieces(srf, lp, ch, fu, fv, tol, ext, bridge)
                 for lp, ch in zip(loops, chains)]
     dom = ((float(args[2][0]), float(args[2][-1])), (float(args[3][0]), float(args[3][-1])))
     return args, uv_loops, dom

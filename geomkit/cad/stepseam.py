@@ -140,7 +140,10 @@ def cut_at_seam(srf, loops, sweep=False):
         return loops, turns
     # theta: crossed once by each loop around the axis, as far from the other loops'
     # angle ranges as can be
-    starts = np.cumsum([0] + [len(path) for path in paths])
+    starts = [0]
+    for path in paths:
+        starts.append(starts[-1] + len(path))
+    starts = np.array(starts, dtype=np.int64)  # (np.cumsum's: a tenth of its cost)
     margin = seam_margins(np.concatenate(paths) if paths else np.zeros(0), starts,
                           np.array(spans, dtype=np.float64).reshape(-1, 2), _CANDIDATES)
     if not (margin > 0).any():
@@ -192,7 +195,8 @@ def _reversed_loop(pieces):
 def _winding(pieces, periods, size):
     """Turns of a loop's pieces around each closed direction (0, or +-1: a loop
     that goes once around the surface, a full circle on a cylinder)."""
-    d = pieces[-1].end - pieces[0].start
+    e, s = pieces[-1].end.tolist(), pieces[0].start.tolist()
+    d = [e[0] - s[0], e[1] - s[1]]  # (floats: numpy's values on 2-vectors)
     k = [int(round(d[c] / periods[c])) if periods[c] > 0 else 0 for c in (0, 1)]
     return k if all(abs(d[c] - k[c] * periods[c]) <= 1e-6 * size for c in (0, 1)) \
         else [0, 0]
