@@ -1,5 +1,5 @@
 """A small uniform grid of cells in one compiled call (the first try of
-:func:`geomkit.mesh.quadtree.uniform_grid` on a whole domain).
+:func:`geomkit.mesh.quadtree.uniform_grid` on a whole domain or a face's box).
 
 The Python route makes a dozen numpy and kernel calls per face (root estimates,
 children counts, grid lines, cells, their estimates, the measurement, the better
@@ -139,7 +139,9 @@ def grid_plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, u0, u1, v0, v1):
 @jit
 def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells,
                max_small, u0, u1, v0, v1, pair):
-    """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (no ``box``):
+    """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (``u0, u1, v0, v1``:
+    its box, or the domain; the measurement's feet stay in it, its edges' sags are
+    folded into the estimates):
     ``(status, u, v, cells, dev, diag, E, cu, cv, worst)``: status :data:`GRID_OK` with
     the grid lines, cells (N, 4), each cell's measured deviation and better diagonal;
     :data:`GRID_FAILED` with the same and the largest deviation ``worst`` (NaN if one

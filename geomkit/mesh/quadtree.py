@@ -357,25 +357,21 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
                       surface.knots_u, surface.knots_v)
     roots = _tensor_cells(ub, vb)
     start = 0
-    if box is None:
-        (u0, u1), (v0, v1) = surface.domain
-        # the first grid in one compiled call (the same grid): kept when it is small and
-        # passes; else the steps below go on from its estimates (and its measurement)
-        status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
-            Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
-            int(max_cells), SMALL_GRID, u0, u1, v0, v1, bool(pair))
-        if status == GRID_REFUSED:
-            return None
-        if status == GRID_OK:
-            return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
-        if status == GRID_FAILED:  # as the loop below after its first grid
-            grow = (cu, cv, min(np.sqrt(worst / target), 2.0) if np.isfinite(worst) else 2.0)
-            target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
-            start = 1
-    else:
-        u0, u1, v0, v1 = box
-        E = np.empty((len(roots), 5))
-        cell_errors(Pw, p, q, U, V, roots, m, E, box=box)
+    # the measurement's feet and the estimates' edge sags: the box's, else the domain's
+    u0, u1, v0, v1 = (*surface.domain[0], *surface.domain[1]) if box is None else box
+    # the first grid in one compiled call (the same grid): kept when it is small and
+    # passes; else the steps below go on from its estimates (and its measurement)
+    status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
+        Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
+        int(max_cells), SMALL_GRID, float(u0), float(u1), float(v0), float(v1), bool(pair))
+    if status == GRID_REFUSED:
+        return None
+    if status == GRID_OK:
+        return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
+    if status == GRID_FAILED:  # as the loop below after its first grid
+        grow = (cu, cv, min(np.sqrt(worst / target), 2.0) if np.isfinite(worst) else 2.0)
+        target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+        start = 1
     for attempt in range(start, 3):  # the target scaled by the excess measured
         nu, nv = split_counts(np.minimum(E[:, 0], E[:, 1]), E[:, 2], E[:, 3], target,
                               max_parts=max_cells)

@@ -12,6 +12,7 @@ as the formulas they replace:
 from __future__ import annotations
 
 import importlib
+import itertools
 import warnings
 
 import numpy as np
@@ -123,30 +124,40 @@ def test_grid_lines_match_the_span_by_span_formula():
                                                           want.view(np.int64)), trial
 
 
-def _grid_both_ways(s, tol, pair, monkeypatch):
+def _grid_both_ways(s, tol, pair, monkeypatch, box=None):
     ub = C.breakpoints(s.knots_u, s.degree_u)
     vb = C.breakpoints(s.knots_v, s.degree_v)
+    if box is not None:  # the box's lines, as the box route makes them
+        a0, a1, b0, b1 = box
+        ub = np.concatenate([[a0], ub[(ub > a0) & (ub < a1)], [a1]])
+        vb = np.concatenate([[b0], vb[(vb > b0) & (vb < b1)], [b1]])
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     args = (s, ub, vb, m, 6, tol, C.CELL_TARGET * tol, C.EXACT_ABOVE * tol, 4096)
-    got = Q.uniform_grid(*args, pair=pair)
+    got = Q.uniform_grid(*args, box=box, pair=pair)
     with monkeypatch.context() as mp:
         mp.setattr(Q, "SMALL_GRID", -1)  # every grid by the Python steps
-        want = Q.uniform_grid(*args, pair=pair)
+        want = Q.uniform_grid(*args, box=box, pair=pair)
     return got, want
 
 
 def test_small_grid_kernel_matches_the_python_steps(monkeypatch):
     """The first grid in one compiled call (kept, failed and retried by the Python
-    steps, or too big) against the Python steps alone, bit for bit."""
+    steps, or too big) against the Python steps alone, bit for bit, on the whole
+    domain and on a box inside it."""
     kinds = set()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         part = read_step(DATA / "parts" / "euclid_screw_ap214.step").surfaces
     cases = [(s, t) for n in samples.names() for s in samples.load(n)
              for t in (1e-1, 1e-2, 1e-3)] + [(s, t) for s in part for t in (0.05, 0.01)]
-    for s, tol in cases:
+    for (s, tol), inner in itertools.product(cases, (False, True)):
+        box = None
+        if inner:  # a box inside the domain (the box route: a face on a rectangle)
+            (u0, u1), (v0, v1) = s.domain
+            box = (u0 + 0.1 * (u1 - u0), u0 + 0.8 * (u1 - u0),
+                   v0 + 0.2 * (v1 - v0), v0 + 0.9 * (v1 - v0))
         for pair in (False, True):
-            got, want = _grid_both_ways(s, tol, pair, monkeypatch)
+            got, want = _grid_both_ways(s, tol, pair, monkeypatch, box)
             assert (got is None) == (want is None)
             if got is None:
                 kinds.add("refused")
