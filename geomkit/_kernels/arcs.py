@@ -67,6 +67,50 @@ def arc_net(C, X, Y, radius, theta0, theta1):
 
 
 @jit
+def circle_nets(C, x, y, r, t, same, use):
+    """Every circle edge's curve as the STEP reader builds it one by one (the arc
+    ``arc_net(C[k], r[k] x[k], r[k] y[k], 1, t[k, 0], t[k, 1])``, run backwards as
+    :func:`geomkit.cad.stepgeom.reverse_curve` runs it where ``same[k]`` is False), for
+    the edges ``use[k]``: ``(ok, U, Pw, uoff, poff)``, edge ``k``'s knots ``U[uoff[k]:
+    uoff[k + 1]]`` and points ``Pw[poff[k]:poff[k + 1]]`` (none where not used); ``ok``
+    False when a used edge's sweep is not finite and positive (nothing built: the
+    caller's route names it)."""
+    n = C.shape[0]
+    uoff = np.zeros(n + 1, np.int64)
+    poff = np.zeros(n + 1, np.int64)
+    for k in range(n):
+        nu = npw = 0
+        if use[k]:
+            sweep = t[k, 1] - t[k, 0]
+            if not (sweep > 0 and math.isfinite(sweep)):
+                return False, np.empty(0), np.empty((0, 4)), uoff, poff
+            m = max(1, int(math.ceil(sweep / (0.5 * math.pi) - 1e-12)))
+            nu, npw = 2 * m + 4, 2 * m + 1
+        uoff[k + 1] = uoff[k] + nu
+        poff[k + 1] = poff[k] + npw
+    U = np.empty(uoff[n])
+    Pw = np.empty((poff[n], 4))
+    X = np.empty(3)
+    Y = np.empty(3)
+    for k in range(n):
+        if not use[k]:
+            continue
+        for c in range(3):
+            X[c] = r[k] * x[k, c]
+            Y[c] = r[k] * y[k, c]
+        Uk, Pk = arc_net(C[k], X, Y, 1.0, t[k, 0], t[k, 1])
+        mu, mp = Uk.shape[0], Pk.shape[0]
+        a, b = uoff[k], poff[k]
+        for j in range(mu):
+            U[a + j] = Uk[j] if same[k] else (Uk[0] + Uk[mu - 1]) - Uk[mu - 1 - j]
+        for j in range(mp):
+            src = j if same[k] else mp - 1 - j
+            for c in range(4):
+                Pw[b + j, c] = Pk[src, c]
+    return True, U, Pw, uoff, poff
+
+
+@jit
 def _dot3(x0, x1, x2, y0, y1, y2):
     """The dot product as numpy's 1-D ``dot`` of two 3-vectors computes it (OpenBLAS's
     ``ddot``: the first product, then each next one fused into the sum)."""

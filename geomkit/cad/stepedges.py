@@ -23,7 +23,7 @@ import numpy as np
 from geomkit.cad.analytic import arc_curve, norm3
 from geomkit.cad.p21 import DERIVED, P21, Ref
 from geomkit.cad.stepgeom import reverse_curve
-from geomkit._kernels.arcs import circle_frames, line_edges
+from geomkit._kernels.arcs import circle_frames, circle_nets, line_edges
 
 __all__ = ["line_and_circle_edges", "fields", "fields_of"]
 
@@ -217,11 +217,19 @@ def _circles(p, edges):
     ok = okz & okx & np.isfinite(r) & (r > 0)
     # every circle's frame and its vertices' angles in one call (the edge-by-edge
     # route's arithmetic)
-    keep, x, y, t = circle_frames(Z, Xd, C, r, X1, X2,
-                                  np.array([e[5] for e in edges], dtype=bool),
+    same = np.array([e[5] for e in edges], dtype=bool)
+    keep, x, y, t = circle_frames(Z, Xd, C, r, X1, X2, same,
                                   np.array([e[6] for e in edges], dtype=bool))
-    for k in np.flatnonzero(ok & keep).tolist():
-        e, rk = edges[k], float(r[k])
+    use = ok & keep
+    # every circle's arc (and its reversal) in one call, each edge's arrays views
+    built, U, Pw, uo, po = circle_nets(C, x, y, r, t, same, use)
+    uo, po = uo.tolist(), po.tolist()
+    for k in np.flatnonzero(use).tolist():
+        e = edges[k]
+        if built:
+            out[e[0]] = (2, U[uo[k]:uo[k + 1]], Pw[po[k]:po[k + 1]])
+            continue
+        rk = float(r[k])  # (the arc one by one: a sweep that is not an arc raises)
         c = arc_curve(C[k], rk * x[k], rk * y[k], 1.0, float(t[k, 0]), float(t[k, 1]))
         out[e[0]] = c if e[5] else reverse_curve(c)
     return out

@@ -143,3 +143,40 @@ def test_plane_patch_is_the_numpy_formula_bit_for_bit():
         assert (p, q) == (1, 1) and (W == 1).all()
         np.testing.assert_array_equal(U, [u0, u0, u1, u1])
         np.testing.assert_array_equal(V, [v0, v0, v1, v1])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_circle_nets_are_the_edge_by_edge_arcs(seed):
+    """The STEP reader's circles in one call (``circle_nets``) against the route it
+    replaced, edge by edge: ``arc_curve(C, r x, r y, 1, t0, t1)``, reversed by
+    ``reverse_curve`` where the edge runs against its circle; knots and points bit for
+    bit, unused edges empty, a sweep that is not finite and positive refused."""
+    from geomkit.cad.stepgeom import reverse_curve
+    from geomkit._kernels.arcs import circle_nets
+
+    rng = np.random.default_rng(seed)
+    n = 60
+    C = rng.normal(size=(n, 3)) * 10.0 ** rng.integers(-3, 4, (n, 1))
+    x = rng.normal(size=(n, 3))
+    y = rng.normal(size=(n, 3))
+    r = rng.uniform(0.01, 100.0, n)
+    t0 = rng.uniform(0.0, 2 * math.pi, n)
+    t = np.column_stack([t0, t0 + rng.choice([rng.uniform(1e-3, 2 * math.pi),
+                                              2 * math.pi, 0.5 * math.pi], n)])
+    same = rng.random(n) < 0.5
+    use = rng.random(n) < 0.8
+    ok, U, Pw, uo, po = circle_nets(C, x, y, r, t, same, use)
+    assert ok
+    for k in range(n):
+        Uk, Pk = U[uo[k]:uo[k + 1]], Pw[po[k]:po[k + 1]]
+        if not use[k]:
+            assert Uk.size == 0 and Pk.shape[0] == 0
+            continue
+        rk = float(r[k])
+        c = arc_curve(C[k], rk * x[k], rk * y[k], 1.0, float(t[k, 0]), float(t[k, 1]))
+        p, Ur, Pr = c if same[k] else reverse_curve(c)
+        np.testing.assert_array_equal(Uk, Ur)
+        np.testing.assert_array_equal(Pk, Pr)
+    bad = t.copy()
+    bad[3, 1] = bad[3, 0]
+    assert not circle_nets(C, x, y, r, bad, same, np.ones(n, dtype=bool))[0]
