@@ -228,17 +228,21 @@ class _Faces:
         v1, v2, cid, same = a[1], a[2], a[3], a[4]
         X1, X2 = self.vertex(v1), self.vertex(v2)
         c = self.g.curve(cid)
-        t1, t2 = c.param(X1), c.param(X2)
         closed = int(v1) == int(v2)
-        if same is False:
-            t1, t2 = t2, t1
-        if c.period is not None:
-            t2 = t1 + (t2 - t1) % c.period
-            if closed or t2 - t1 <= 1e-12:
-                t2 = t1 + c.period
-        elif c.bounds is not None and (closed or abs(t2 - t1) <= 1e-12 * (
-                c.bounds[1] - c.bounds[0])):
-            t1, t2 = c.bounds
+        bounds = c.bounds
+        if closed and c.period is None and bounds is not None:
+            t1, t2 = bounds  # (a closed bounded curve: its whole range, whatever
+            # its vertex's parameters, which are not sought)
+        else:
+            t1, t2 = c.param(X1), c.param(X2)
+            if same is False:
+                t1, t2 = t2, t1
+            if c.period is not None:
+                t2 = t1 + (t2 - t1) % c.period
+                if closed or t2 - t1 <= 1e-12:
+                    t2 = t1 + c.period
+            elif bounds is not None and abs(t2 - t1) <= 1e-12 * (bounds[1] - bounds[0]):
+                t1, t2 = bounds
         if not t2 > t1:
             raise Unsupported(f"edge #{i}: its vertices are in reverse order on its curve")
         curve = c.nurbs(t1, t2)
