@@ -286,3 +286,75 @@ def edge_gaps(Pw, p, q, U, V, u0, u1, v0, v1, t):
             cu = np.nan if (np.isnan(a) or np.isnan(cu)) else max(cu, a)
             cv = np.nan if (np.isnan(b) or np.isnan(cv)) else max(cv, b)
     return cu, cv
+
+
+@jit
+def _breakpoints(K, p):
+    """The distinct knots of the domain ``K[p : len(K) - p]``."""
+    k = K[p:K.shape[0] - p]
+    out = np.empty(k.shape[0])
+    n = 0
+    for i in range(k.shape[0]):
+        if i == 0 or k[i] != k[i - 1]:
+            out[n] = k[i]
+            n += 1
+    return out[:n]
+
+
+# corners of a cell's two triangles as columns of ``u0, u1, v0, v1``: A=(u0,v0)
+# B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 (AC): ABC, ACD; diagonal 1 (BD): ABD, BCD
+_CORNER_U = np.array([[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]], dtype=np.int64)
+_CORNER_V = np.array([2, 2, 3, 2, 3, 3], dtype=np.int64)
+
+
+@jit
+def grid_triangles(cells, dev, diag):
+    """``(tri (2N, 3, 2), dev (2N,))``: each cell's two triangles by its diagonal
+    ``diag`` (0: (u0,v0)-(u1,v1), 1: (u1,v0)-(u0,v1)), counter-clockwise in UV, and
+    their cell's deviation."""
+    n = cells.shape[0]
+    tri = np.empty((2 * n, 3, 2))
+    dev2 = np.empty(2 * n)
+    for c in range(n):
+        d = diag[c]
+        for h in range(6):
+            tri[2 * c + h // 3, h % 3, 0] = cells[c, _CORNER_U[d, h]]
+            tri[2 * c + h // 3, h % 3, 1] = cells[c, _CORNER_V[h]]
+        dev2[2 * c] = dev[c]
+        dev2[2 * c + 1] = dev[c]
+    return tri, dev2
+
+
+@jit
+def whole_grid(Pw, p, q, U, V, k, tol, target, exact_above, max_cells, max_small, pair,
+               weld_r, closed_eps, t):
+    """A face that is its whole surface on one uniform grid, in one call: the first
+    grid of :func:`small_grid` over the domain's breakpoints (``m = max(5, 2 max(p, q)
+    + 1)`` estimate samples), its triangles (:func:`grid_triangles`),
+    their vertices (:func:`grid_vertices`) and whether the surface is closed in u and
+    v (:func:`edge_gaps` at ``t`` within ``closed_eps``).  Returns ``(status, tri (2N,
+    3, 2), dev (2N,), cells (N, 4), welded, P, UV, inv, bnd, near, closed_u,
+    closed_v)``: for a status other than :data:`GRID_OK` empty arrays (the Python route
+    goes on); ``welded`` False when the grid lines are not strictly increasing (the
+    general weld then)."""
+    ub = _breakpoints(U, p)
+    vb = _breakpoints(V, q)
+    m = max(5, 2 * max(p, q) + 1)
+    u0 = U[p]
+    u1 = U[U.shape[0] - p - 1]
+    v0 = V[q]
+    v1 = V[V.shape[0] - q - 1]
+    status, u, v, cells, dev, diag, _, _, _, _ = small_grid(
+        Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells, max_small, u0,
+        u1, v0, v1, pair)
+    if status != GRID_OK:
+        return (status, np.empty((0, 3, 2)), np.empty(0), cells, False, np.empty((0, 3)),
+                np.empty((0, 2)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64),
+                False, False, False)
+    tri, dev2 = grid_triangles(cells, dev, diag)
+    eps = 1e-12 * max(u1 - u0, v1 - v0)
+    welded, P, UV, inv, bnd, near = grid_vertices(Pw, p, q, U, V, u, v, diag, u0, u1, v0,
+                                                  v1, eps, weld_r)
+    gu, gv = edge_gaps(Pw, p, q, U, V, u0, u1, v0, v1, t)
+    return (status, tri, dev2, cells, welded, P, UV, inv, bnd, near, gu <= closed_eps,
+            gv <= closed_eps)

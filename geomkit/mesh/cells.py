@@ -40,7 +40,7 @@ MAX_ROUNDS = 60
 them warns (:class:`~geomkit.errors.ToleranceNotMetWarning`).  Typical: 1-5."""
 
 
-_EDGE_T = np.linspace(0.0, 1.0, 17)  # samples along each domain edge
+EDGE_T = np.linspace(0.0, 1.0, 17)  # samples along each domain edge
 
 
 def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
@@ -62,7 +62,7 @@ def closed_directions(s: Surface, size: float) -> tuple[bool, bool]:
             return False, False
     (u0, u1), (v0, v1) = s.domain
     # the u0, u1, v0, v1 edges' samples and their largest differences in one call
-    cu, cv = edge_gaps(s.homogeneous, p, q, ku, kv, u0, u1, v0, v1, _EDGE_T)
+    cu, cv = edge_gaps(s.homogeneous, p, q, ku, kv, u0, u1, v0, v1, EDGE_T)
     return bool(cu <= eps), bool(cv <= eps)
 
 

@@ -16,7 +16,7 @@ from geomkit._kernels.tess import cell_deviation, cell_errors
 from geomkit._kernels.tess_lattice import edge_counts, fill_rings
 from geomkit._kernels.tess_lattice import split_counts as split_counts_kernel
 from geomkit._kernels.tess_grid import (GRID_FAILED, GRID_OK, GRID_REFUSED, grid_plan,
-                                       small_grid)
+                                       grid_triangles, small_grid)
 
 LEVELS = 24
 UNIT = 1 << LEVELS
@@ -318,10 +318,6 @@ def _tensor_cells(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return c.reshape(-1, 4)
 
 
-# corners of a cell's two triangles as columns of ``u0, u1, v0, v1``: A=(u0,v0)
-# B=(u1,v0) C=(u1,v1) D=(u0,v1); diagonal 0 (AC): ABC, ACD; diagonal 1 (BD): ABD, BCD
-_CORNER_U = np.array([[0, 1, 1, 0, 1, 0], [0, 1, 0, 1, 1, 0]])
-_CORNER_V = np.array([2, 2, 3, 2, 3, 3])
 
 
 def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
@@ -428,11 +424,11 @@ def planned_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, target: float,
 
 def _grid_triangles(cells, dev, diag):
     """``(tri_uv (2N, 3, 2), dev (2N,))``: each cell's two triangles by its diagonal,
-    counter-clockwise in UV, and their cell's deviation."""
-    tri = np.empty((len(cells), 6, 2))
-    tri[:, :, 0] = cells[np.arange(len(cells))[:, None], _CORNER_U[diag]]
-    tri[:, :, 1] = cells[:, _CORNER_V]
-    return tri.reshape(-1, 3, 2), dev.repeat(2)
+    counter-clockwise in UV, and their cell's deviation
+    (:func:`geomkit._kernels.tess_grid.grid_triangles`)."""
+    return grid_triangles(np.ascontiguousarray(cells, dtype=np.float64),
+                          np.ascontiguousarray(dev, dtype=np.float64),
+                          np.ascontiguousarray(diag, dtype=np.int64))
 
 
 def _has_pole(surface) -> bool:

@@ -61,23 +61,23 @@ Steps 1, 3 and 4 live in :mod:`geomkit.mesh.cells`, the vertex merging of step 7
 
 from __future__ import annotations
 
-from __future__ import annotations
-
 import time
 import warnings
 
 import numpy as np
 
 from geomkit.mesh import quadtree as qt
-from geomkit.mesh.cells import (CELL_TARGET, EXACT_ABOVE, adaptive_cells, breakpoints,
+from geomkit.mesh.cells import (CELL_TARGET, EDGE_T, EXACT_ABOVE, adaptive_cells, breakpoints,
                                 clip_rectangles, closed_directions, deviation,
                                 triangulate_pieces)
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
-from geomkit.mesh.weld import points, weld, weld_grid
+from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_grid
+from geomkit._kernels.tess_grid import GRID_OK, whole_grid
 from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
                                          packed_trims, planar_trimmed)
+from geomkit.tolerances import WELD_REL
 from geomkit.validate import as_int
 from geomkit.errors import FaceFailedWarning, InvalidInputError, MeshingError
 from geomkit.mesh.mesh import Mesh
@@ -273,6 +273,36 @@ def _box_grid(s: Surface, box, ub, vb, m: int, k: int, tol: float, size: float,
     return V, F[good], UV, dev[good], tri_uv[good], stats
 
 
+def _whole_grid(s: Surface, k: int, tol: float, size: float, t0: float):
+    """A face that is its whole surface as the first uniform grid of
+    :func:`geomkit.mesh.quadtree.uniform_grid` (``pair``), welded as
+    :func:`geomkit.mesh.weld.weld_grid` does, in one compiled call
+    (:func:`geomkit._kernels.tess_grid.whole_grid`); None when that grid is not kept
+    (the steps of :func:`_tessellate_one` go on)."""
+    (status, tri_uv, dev, cells, welded, P, UV, inv, bnd, near, closed_u,
+     closed_v) = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, k,
+                            float(tol), CELL_TARGET * tol, EXACT_ABOVE * tol, GRID_CELLS,
+                            qt.SMALL_GRID, True, WELD_REL * size, 1e-10 * size, EDGE_T)
+    if status != GRID_OK:
+        return None
+    if not welded:
+        V, F, UV, good = weld(s, tri_uv, size, near_uv=False)
+    else:
+        pairs = boundary_pairs(P, bnd, size) if near else ()
+        if len(pairs):
+            V, F, UV, good = merge(P, UV, inv, pairs)
+        else:  # distinct grid corners: every face kept
+            V, F, good = P, inv.reshape(-1, 3), None
+    dropped = 0 if good is None else len(good) - int(np.count_nonzero(good))
+    stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
+             "collapsed_dropped": dropped, "closed_u": bool(closed_u),
+             "closed_v": bool(closed_v), "uniform_grid": True,
+             "seconds": time.perf_counter() - t0}
+    if not dropped:  # every face kept: no copies
+        return V, F, UV, dev, tri_uv, stats
+    return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET, fallback: str | None = None,
                     planar=None, size: float | None = None, cross_knots: bool = False):
@@ -310,6 +340,10 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
         whole, trim = True, None
     if whole:
         trim = None
+    if whole and max_angle is None and max_edge is None:
+        face = _whole_grid(s, k, tol, size, t0)
+        if face is not None:
+            return face
     ub = breakpoints(s.knots_u, s.degree_u)
     vb = breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)

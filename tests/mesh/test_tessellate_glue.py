@@ -201,3 +201,46 @@ def test_planned_grid_is_the_grid_small_grid_measures():
                         np.ascontiguousarray(cells), m, Ec, box=(u0, u1, v0, v1))
             assert np.array_equal(got[1], (Ec[:, 1] < Ec[:, 0]).astype(np.int64))
     assert seen > 20
+
+
+def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
+    """``tess_grid.whole_grid`` (a whole face's first grid, its triangles, vertices and
+    closed directions in one call) against ``quadtree.uniform_grid``, ``weld.weld_grid``
+    and ``cells.closed_directions``, bit for bit, on every sample surface (poles, seams,
+    creases) and the faces of a part with cylinders and cones."""
+    from geomkit._kernels.tess_grid import GRID_OK, whole_grid
+    from geomkit.mesh.weld import boundary_pairs, merge, weld_grid
+    from geomkit.tolerances import WELD_REL
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        part = read_step(DATA / "parts" / "ug16_io1_ap214.stp").surfaces
+    kept = closed = 0
+    for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
+        ub = C.breakpoints(s.knots_u, s.degree_u)
+        vb = C.breakpoints(s.knots_v, s.degree_v)
+        m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+        size = s.size
+        for tol in (1e-2 * size, 1e-3 * size):
+            got = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, 6,
+                             tol, C.CELL_TARGET * tol, C.EXACT_ABOVE * tol, 4096,
+                             Q.SMALL_GRID, True, WELD_REL * size, 1e-10 * size, C.EDGE_T)
+            if got[0] != GRID_OK:
+                continue
+            want = Q.uniform_grid(s, ub, vb, m, 6, tol, C.CELL_TARGET * tol,
+                                  C.EXACT_ABOVE * tol, 4096, pair=True)
+            tri_uv, dev, cells, (u, v, diag) = want
+            for a, b in zip(got[1:4], (tri_uv, dev, cells)):
+                assert a.dtype == b.dtype and np.array_equal(a, b)
+            welded = weld_grid(s, u, v, diag, size)
+            assert got[4] == (welded is not None)
+            P, UV, inv, bnd, near = got[5:10]
+            pairs = boundary_pairs(P, bnd, size) if near else ()
+            mine = (merge(P, UV, inv, pairs) if len(pairs) else
+                    (P, inv.reshape(-1, 3), UV, np.ones(len(inv) // 3, dtype=bool)))
+            for a, b in zip(mine, welded):
+                assert a.dtype == b.dtype and np.array_equal(a, b)
+            assert (bool(got[10]), bool(got[11])) == C.closed_directions(s, size)
+            kept += 1
+            closed += bool(got[10] or got[11])
+    assert kept > 30 and closed > 3
