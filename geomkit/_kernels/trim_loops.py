@@ -166,6 +166,40 @@ def shifted_points(Q, w, d):
     return out, unit, finite
 
 
+@jit_exact
+def box_clip(P, u0, u1, v0, v1):
+    """A trim curve's control points ``P`` (n, 2) against the box ``[u0, u1] x [v0,
+    v1]``: ``(inside, Q, moved)``, ``inside`` whether every point lies in it (none
+    NaN), ``Q`` the points clipped as ``np.clip`` clips each column (NaN kept; the
+    point itself where it is not strictly beyond a bound, as numpy keeps it)
+    and ``moved`` the largest ``|Q - P|`` (NaN when one is): the numpy route of
+    :func:`geomkit.cad.loops.clip_to_domain` in one call."""
+    n = P.shape[0]
+    Q = np.empty((n, 2))
+    inside = True
+    moved = 0.0
+    nan = False
+    for i in range(n):
+        for k in range(2):
+            x = P[i, k]
+            lo = u0 if k == 0 else v0
+            hi = u1 if k == 0 else v1
+            if not (x >= lo and x <= hi):
+                inside = False
+            if x != x:
+                q = x
+            else:
+                q = lo if x < lo else x
+                q = hi if q > hi else q
+            Q[i, k] = q
+            d = abs(q - x)
+            if d != d:
+                nan = True
+            elif d > moved:
+                moved = d
+    return inside, Q, math.nan if nan else moved
+
+
 @jit
 def loop_check(Q, W, off, deg, U, uoff, per, close, box):
     """What :func:`geomkit.nurbs.trims.check_loop` tests, in one call over a loop

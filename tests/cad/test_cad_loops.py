@@ -214,3 +214,34 @@ def test_segment_spread_matches_numpy_route():
             got = segment_spread(s.homogeneous, p, q, s.knots_u, s.knots_v, *a, *b,
                                  u0, u1, v0, v1, 17)
             assert got == want
+
+
+def test_box_clip_is_the_numpy_route():
+    """clip_to_domain's and clip_in_3d's one call (trim_loops.box_clip) against the
+    numpy route it replaced: the in-domain test (col_range bounds / element-wise
+    comparisons), np.clip of each column (signed zeros, NaN, infinities, points on a
+    bound) and the largest move, bit for bit."""
+    from geomkit._kernels.ranges import col_range
+    from geomkit._kernels.trim_loops import box_clip
+
+    rng = np.random.default_rng(1)
+    for _ in range(5000):
+        n = int(rng.integers(1, 12))
+        u0, u1 = sorted(rng.choice([0.0, -0.0, 1.0, rng.uniform(-1, 1), rng.uniform(-1, 1)], 2))
+        v0, v1 = sorted(rng.choice([0.0, -0.0, 2.0, rng.uniform(-1, 1), rng.uniform(-1, 1)], 2))
+        if rng.random() < 0.5:
+            P = rng.choice([0.0, -0.0, u0, u1, v0, v1, np.nan, np.inf, -np.inf, 1e-300], (n, 2))
+        else:
+            P = rng.uniform(-1.5, 2.5, (n, 2))
+        lo, hi = col_range(P)
+        inside = bool(lo[0] >= u0 and hi[0] <= u1 and lo[1] >= v0 and hi[1] <= v1)
+        assert inside == bool(((P[:, 0] >= u0) & (P[:, 0] <= u1) & (P[:, 1] >= v0)
+                               & (P[:, 1] <= v1)).all())
+        with np.errstate(invalid="ignore"):
+            Q = np.column_stack([np.clip(P[:, 0], u0, u1), np.clip(P[:, 1], v0, v1)])
+            moved = float(np.abs(Q - P).max())
+        got_inside, got_Q, got_moved = box_clip(P, float(u0), float(u1), float(v0), float(v1))
+        assert got_inside == inside
+        np.testing.assert_array_equal(np.signbit(got_Q), np.signbit(Q))
+        np.testing.assert_array_equal(got_Q, Q)
+        assert got_moved == moved or (np.isnan(got_moved) and np.isnan(moved))
