@@ -212,7 +212,9 @@ _ID = re.compile(r"#(\d+)")
 class _Faces:
     def __init__(self, p: P21, geom: StepGeometry):
         self.p, self.g = p, geom
-        self._edges: dict = line_and_circle_edges(p)  # id -> its curve (see edge)
+        found: dict = {}  # the plain edge and vertex records' fields, read on the way
+        self._edges: dict = line_and_circle_edges(p, found)  # id -> its curve (see edge)
+        self._edge_fields, self._vertex_fields = found["EDGE_CURVE"], found["VERTEX_POINT"]
         self._samples: dict = {}  # (id(edge curve), n) -> its points
         self._face_recs: dict = {}  # face id -> (bounds, surface, same sense)
         ids = p.of_type("ORIENTED_EDGE")  # id -> (edge id, same sense), plain ones
@@ -224,8 +226,11 @@ class _Faces:
         e = self._edges.get(i)
         if e is not None:
             return e
-        _, a = self.g.rec(i, "EDGE_CURVE")
-        v1, v2, cid, same = a[1], a[2], a[3], a[4]
+        f = self._edge_fields.get(i)  # (ids and the sense of a plain record)
+        if f is None:
+            _, a = self.g.rec(i, "EDGE_CURVE")
+            f = a[1], a[2], a[3], a[4]
+        v1, v2, cid, same = f
         X1, X2 = self.vertex(v1), self.vertex(v2)
         c = self.g.curve(cid)
         closed = int(v1) == int(v2)
@@ -252,6 +257,9 @@ class _Faces:
         return e
 
     def vertex(self, i):
+        f = self._vertex_fields.get(int(i))  # (its point's id, of a plain record)
+        if f is not None:
+            return self.g.point(f[0])
         _, a = self.g.rec(i, "VERTEX_POINT")
         return self.g.point(a[1])
 

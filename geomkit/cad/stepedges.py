@@ -131,15 +131,20 @@ def _units(V):
     return V / np.where(ok, n, 1.0)[:, None], ok
 
 
-def line_and_circle_edges(p: P21) -> dict:
+def line_and_circle_edges(p: P21, found: dict | None = None) -> dict:
     """``{EDGE_CURVE id: (p, U, Pw)}`` of the file's plain line and circle edges, as
     :meth:`~geomkit.cad.stepbrep._Faces.edge` builds them (the curve run from the start
-    vertex to the end vertex, reversed when its sense is ``.F.``)."""
+    vertex to the end vertex, reversed when its sense is ``.F.``).  ``found``: a dict
+    given the :func:`fields` read on the way, of every plain ``EDGE_CURVE`` and of
+    their plain ``VERTEX_POINT``\ s (``{name: {id: fields}}``), for the other edges."""
     edges = []  # (id, start point, end point, curve kind, curve fields, same, closed)
     ids = p.of_type("EDGE_CURVE")
     ecs = [(i, a) for i, a in zip(ids, fields_of(p, ids, "EDGE_CURVE")) if a is not None]
     vids = list({v: None for _, a in ecs for v in a[:2]})
     vf = dict(zip(vids, fields_of(p, vids, "VERTEX_POINT")))
+    if found is not None:
+        found["EDGE_CURVE"] = dict(ecs)
+        found["VERTEX_POINT"] = {v: f for v, f in vf.items() if f is not None}
     cids = {"LINE": [], "CIRCLE": []}
     for _, a in ecs:
         name = p.names.get(a[2])
