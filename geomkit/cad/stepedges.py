@@ -136,7 +136,7 @@ def line_and_circle_edges(p: P21, found: dict | None = None) -> dict:
     :meth:`~geomkit.cad.stepbrep._Faces.edge` builds them (the curve run from the start
     vertex to the end vertex, reversed when its sense is ``.F.``).  ``found``: a dict
     given the :func:`fields` read on the way, of every plain ``EDGE_CURVE`` and of
-    their plain ``VERTEX_POINT``\ s (``{name: {id: fields}}``), for the other edges."""
+    their plain ``VERTEX_POINT`` records (``{name: {id: fields}}``), for the other edges."""
     edges = []  # (id, start point, end point, curve kind, curve fields, same, closed)
     ids = p.of_type("EDGE_CURVE")
     ecs = [(i, a) for i, a in zip(ids, fields_of(p, ids, "EDGE_CURVE")) if a is not None]
