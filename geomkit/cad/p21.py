@@ -226,7 +226,8 @@ def _items_fast(s: str):
             continue
         if pending is not None:
             return None
-        v = _atom(t)
+        c = t[0]  # (a letter or '_' starts no simple value: a keyword, or nothing)
+        v = _NOT if c.isalpha() or c == "_" else _atom(t)
         if v is not _NOT:
             cur.append(v)
         elif _WORD.fullmatch(t) is not None:
@@ -572,11 +573,13 @@ class P21:
         return [i for i, b in zip(ids, bodies) if want in b.upper()]
 
 
-def read_p21(path) -> P21:
-    """Cut a STEP file into records (:class:`P21`)."""
+def read_p21(path, data: bytes | None = None) -> P21:
+    """Cut a STEP file into records (:class:`P21`); ``data``: its bytes when already
+    read."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
-    return P21(raw.decode("latin-1"), str(path))
+    if data is None:
+        try:
+            data = path.read_bytes()
+        except OSError as exc:
+            raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
+    return P21(data.decode("latin-1"), str(path))

@@ -342,20 +342,20 @@ def read_step(path, skip_invalid: bool = False, skip_unsupported: bool = False,
         raise InvalidInputError(f"expected one of {', '.join(READERS)}, got {reader!r}",
                                 "reader")
     if not cache:
-        return _read_step(p, skip_invalid, skip_unsupported, reader)
+        return _read_step(p, skip_invalid, skip_unsupported, reader, data)
     return cached_read(data, ("step", str(p.resolve()), bool(skip_invalid),
                               bool(skip_unsupported), reader, HAVE_OCP),
-                       lambda: _read_step(p, skip_invalid, skip_unsupported, reader))
+                       lambda: _read_step(p, skip_invalid, skip_unsupported, reader, data))
 
 
-def _read_step(p: Path, skip_invalid, skip_unsupported, reader) -> IgesResult:
+def _read_step(p: Path, skip_invalid, skip_unsupported, reader, data=None) -> IgesResult:
     if reader == "occ":
         if not HAVE_OCP:
             raise MissingDependencyError(INSTALL_HINT)
         return _occ_isolated(p, skip_invalid, skip_unsupported, "")
     try:
         with gc_paused():
-            return read_native(p, skip_invalid, skip_unsupported)
+            return read_native(p, skip_invalid, skip_unsupported, data)
     except (Unsupported, UnreadFaces) as exc:
         if reader == "geomkit" or not HAVE_OCP:
             if isinstance(exc, UnreadFaces):

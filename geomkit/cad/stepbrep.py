@@ -450,15 +450,16 @@ def _malformed(source, where, exc) -> FileFormatError:
                            f"parameters ({type(exc).__name__}: {exc})")
 
 
-def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False):
+def read_native(path, skip_invalid: bool = False, skip_unsupported: bool = False,
+                data: bytes | None = None):
     """Every face of a STEP file's B-rep as a trimmed :class:`~geomkit.Surface`, read
     by geomkit alone (see the module); an :class:`~geomkit.cad.iges.reader.IgesResult`
     as :func:`geomkit.cad.step.read_step` returns.  Raises
     :class:`~geomkit.cad.loops.Unsupported` for a file it does not read (an
     assembly), :class:`UnreadFaces` for faces it cannot convert (unless
     ``skip_unsupported``), :class:`~geomkit.errors.FileFormatError` for a malformed
-    file."""
-    p = read_p21(path)
+    file.  ``data``: the file's bytes when already read."""
+    p = read_p21(path, data)
     try:
         unit, angle, unc = file_units(p)
         geom = StepGeometry(p, angle)
