@@ -261,6 +261,41 @@ def circle_frames(Z, Xd, C, r, X1, X2, same, closed):
 
 
 @jit
+def analytic_frame(O, A, X):
+    """The frame of :class:`geomkit.cad.brep.Analytic` as its numpy code made it: ``A``
+    over its norm, ``X - (X . A) A`` over its norm, ``Y = A x X`` (the dots
+    OpenBLAS's, :func:`_dot3`; no contraction): ``(code, A, X, Y, frame)`` with
+    ``frame`` ``O, X, Y, A`` (12,); ``code`` 1 / 2 when the norm of ``A`` / of the
+    made ``X`` is not positive (nothing else made: the caller names it), else 0."""
+    a0, a1, a2 = A[0], A[1], A[2]
+    n = math.sqrt(_dot3(a0, a1, a2, a0, a1, a2))
+    e = np.empty(0)
+    if not n > 0:
+        return 1, e, e, e, e
+    a0, a1, a2 = a0 / n, a1 / n, a2 / n
+    d = _dot3(X[0], X[1], X[2], a0, a1, a2)
+    x0, x1, x2 = X[0] - d * a0, X[1] - d * a1, X[2] - d * a2
+    m = math.sqrt(_dot3(x0, x1, x2, x0, x1, x2))
+    if not m > 0:
+        return 2, e, e, e, e
+    x0, x1, x2 = x0 / m, x1 / m, x2 / m
+    y0, y1, y2 = a1 * x2 - a2 * x1, a2 * x0 - a0 * x2, a0 * x1 - a1 * x0
+    Av = np.empty(3)
+    Xv = np.empty(3)
+    Yv = np.empty(3)
+    frame = np.empty(12)
+    Av[0], Av[1], Av[2] = a0, a1, a2
+    Xv[0], Xv[1], Xv[2] = x0, x1, x2
+    Yv[0], Yv[1], Yv[2] = y0, y1, y2
+    for c in range(3):
+        frame[c] = O[c]
+        frame[3 + c] = Xv[c]
+        frame[6 + c] = Yv[c]
+        frame[9 + c] = Av[c]
+    return 0, Av, Xv, Yv, frame
+
+
+@jit
 def axis2_x(Z, X, E):
     """The unit reference direction of an axis placement as the STEP reader computed
     it with numpy (``StepGeometry.axis2``, ISO 10303-42 ``build_axes``): ``X`` (None:

@@ -36,6 +36,7 @@ from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
 from geomkit.cad.loops import Unsupported
 from geomkit.cad.faceedges import KIND_CODE, Edge, analytic_pieces, edge_points
+from geomkit._kernels.arcs import analytic_frame
 from geomkit._kernels.pcurve_map import PLANE, local_points, residuals
 
 __all__ = ["Analytic", "analytic", "edge_loop_508", "curve_loop_141", "curve_loop_142",
@@ -56,17 +57,32 @@ def _unit(v):
     return v / n
 
 
+def _vec3(v):
+    """A float64 3-vector as a contiguous array (itself when it is one), else None."""
+    if isinstance(v, np.ndarray) and v.dtype == np.float64 and v.shape == (3,):
+        return np.ascontiguousarray(v)
+    return None
+
+
 class Analytic:
     """An analytic surface: frame ``O, X, Y, A`` and its kind's parameters."""
 
     def __init__(self, kind, O, A, X, R=0.0, r=0.0, alpha=0.0):
         self.kind, self.O = kind, np.asarray(O, float)
-        self.A = _unit(A)
-        X = np.asarray(X, float) - np.dot(X, self.A) * self.A
-        self.X = _unit(X)
-        self.Y = cross3(self.A, self.X)
+        O3, A3, X3 = (_vec3(v) for v in (self.O, A, X))
+        if O3 is not None and A3 is not None and X3 is not None:
+            # A and X made unit, X orthogonal to A, Y = A x X in one call (the
+            # values of the numpy route below)
+            code, self.A, self.X, self.Y, self.frame = analytic_frame(O3, A3, X3)
+            if code:
+                raise Unsupported("zero direction vector")
+        else:
+            self.A = _unit(A)
+            X = np.asarray(X, float) - np.dot(X, self.A) * self.A
+            self.X = _unit(X)
+            self.Y = cross3(self.A, self.X)
+            self.frame = np.concatenate([self.O, self.X, self.Y, self.A])
         self.R, self.r, self.alpha = R, r, alpha
-        self.frame = np.concatenate([self.O, self.X, self.Y, self.A])
         self.inverse = (_LOCAL_CODE[kind], self.frame, float(R), float(r),
                         math.tan(alpha))
         """The arguments of the compiled inverse (:func:`local_points`)."""

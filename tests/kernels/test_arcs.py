@@ -180,3 +180,39 @@ def test_circle_nets_are_the_edge_by_edge_arcs(seed):
     bad = t.copy()
     bad[3, 1] = bad[3, 0]
     assert not circle_nets(C, x, y, r, bad, same, np.ones(n, dtype=bool))[0]
+
+
+def test_analytic_frame_is_the_numpy_route():
+    """Analytic's frame in one call (``analytic_frame``) against the numpy code it
+    replaced (A and X - (X . A) A over their norms, Y = cross3(A, X), the frame
+    concatenated), bit for bit on random and near-degenerate directions, and the
+    refusal of a zero A or an X along A."""
+    from geomkit.cad.analytic import cross3, norm3
+    from geomkit.cad.brep import Analytic
+    from geomkit.cad.loops import Unsupported
+    from geomkit._kernels.arcs import analytic_frame
+
+    rng = np.random.default_rng(4)
+    for _ in range(3000):
+        O = rng.normal(size=3) * 10.0 ** rng.integers(-3, 4)
+        A = rng.normal(size=3) * 10.0 ** rng.integers(-8, 8)
+        X = rng.normal(size=3) if rng.random() < 0.7 else A * 3.0 + rng.normal(size=3) * 1e-9
+        if rng.random() < 0.2:
+            A[rng.integers(3)] = 0.0
+        a = A / norm3(A)
+        x = X - np.dot(X, a) * a
+        code, A2, X2, Y2, F = analytic_frame(O, A, X)
+        if not norm3(x) > 0:  # (X along A to rounding: refused both ways)
+            assert code == 2
+            continue
+        x = x / norm3(x)
+        y = cross3(a, x)
+        assert code == 0
+        for got, want in ((A2, a), (X2, x), (Y2, y), (F, np.concatenate([O, x, y, a]))):
+            np.testing.assert_array_equal(got, want)
+        s = Analytic("cylinder", O, A, X, R=1.0)
+        np.testing.assert_array_equal(s.frame, F)
+    assert analytic_frame(np.zeros(3), np.zeros(3), np.ones(3))[0] == 1
+    assert analytic_frame(np.zeros(3), np.array([0.0, 0, 2]), np.array([0.0, 0, 1]))[0] == 2
+    with pytest.raises(Unsupported, match="zero direction"):
+        Analytic("plane", np.zeros(3), np.zeros(3), np.ones(3))
