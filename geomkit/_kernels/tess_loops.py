@@ -1,4 +1,4 @@
-"""The closed trim loops of many faces in one call.
+"""The closed trim loops of many faces in one call, and their mesh vertices.
 
 Per face, :func:`.tess_trim.trim_polylines` makes the polylines of its trim pieces; here
 they are joined into closed loops (each piece after a loop's first drops its first row,
@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit
+from .surface import surface_points_range
 from .tess_trim import loop_rectangle_gap, trim_polylines
 
 
@@ -91,3 +92,21 @@ def face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece, face_loop, 
             gaps[lp, 0] = g
             gaps[lp, 1] = ga
     return pts[:n], start, gaps
+
+
+@jit
+def faces_points(Pw, pw_off, nets, U, u_off, V, v_off, uv, face_start):
+    """``S_f(uv)`` (n, 3) of the rows ``face_start[f]:face_start[f+1]`` of ``uv`` on
+    face ``f``'s surface (the flat nets of :func:`face_loops`), each point as
+    :func:`.surface.surface_points_range` makes it."""
+    out = np.empty((uv.shape[0], 3))
+    for f in range(face_start.shape[0] - 1):
+        a = face_start[f]
+        b = face_start[f + 1]
+        if b == a:
+            continue
+        Pf = np.ascontiguousarray(Pw[pw_off[f]:pw_off[f + 1]]).reshape(
+            (nets[f, 0], nets[f, 1], 4))
+        surface_points_range(a, b, Pf, nets[f, 2], nets[f, 3], U[u_off[f]:u_off[f + 1]],
+                             V[v_off[f]:v_off[f + 1]], uv, out)
+    return out

@@ -21,7 +21,9 @@ import time
 import numpy as np
 
 from geomkit.mesh.cells import triangle_coordinates
-from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, loop_polylines
+from geomkit._kernels.tess_loops import faces_points
+from geomkit.mesh.trim_polylines import (TrimPolylines, _starts, affine_map, flat_surfaces,
+                                         loop_polylines)
 from geomkit.nurbs.surface import Surface
 
 __all__ = ["planar_batch"]
@@ -49,7 +51,7 @@ def _triangulate(polys: np.ndarray):
 
 
 def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = False) -> dict:
-    """``{index: (uv (n, 2), faces (m, 3), seconds)}`` for the trimmed surfaces of
+    """``{index: (uv (n, 2), faces (m, 3), S(uv) (n, 3), seconds)}`` for the trimmed surfaces of
     ``surfaces`` that are affine maps of their parameters, their regions triangulated
     together (see the module docstring): faces counter-clockwise in UV, every
     boundary edge (trim polylines within ``chord_tol`` in 3-D, domain edges) kept, no
@@ -73,8 +75,10 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
         planes.append(i)
     if not planes:
         return out
+    flat = flat_surfaces([surfaces[i] for i in planes])
     try:  # every plane's trim polylines in one call
-        lines = loop_polylines([surfaces[i] for i in planes], chord_tol, True, cross_knots)
+        lines = loop_polylines([surfaces[i] for i in planes], chord_tol, True, cross_knots,
+                               flat=flat)
     except Exception:  # noqa: BLE001 - face by face below: the face path reports it
         lines = [None] * len(planes)
     for i, polylines in zip(planes, lines):
@@ -123,10 +127,22 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     vstart = np.searchsorted(uv_own, np.arange(n + 1))
     tstart = np.searchsorted(idx, np.arange(n + 1))
     F_all = inv.reshape(-1, 3) - vstart[idx][:, None]
+    # the vertices S(uv), every face's in one call (face j is planes[rank[j]])
+    rank = {i: r for r, i in enumerate(planes)}
+    sel = np.array([rank[faces[use[j]]] for j in range(n)], dtype=np.int64)
+    Pw, pw_off, nets, U, u_off, V, v_off, _ = flat
+    sub = (np.concatenate([Pw[pw_off[r]:pw_off[r + 1]] for r in sel.tolist()]),
+           _starts(pw_off[sel + 1] - pw_off[sel]), nets[sel],
+           np.concatenate([U[u_off[r]:u_off[r + 1]] for r in sel.tolist()]),
+           _starts(u_off[sel + 1] - u_off[sel]),
+           np.concatenate([V[v_off[r]:v_off[r + 1]] for r in sel.tolist()]),
+           _starts(v_off[sel + 1] - v_off[sel]))
+    P_all = faces_points(*sub, np.ascontiguousarray(uv_all), vstart)
     share = (time.perf_counter() - t0) / len(faces)
     for j in range(n):
         if failed[j] or tstart[j] == tstart[j + 1]:
             continue
-        out[faces[use[j]]] = (np.ascontiguousarray(uv_all[vstart[j]:vstart[j + 1]]),
-                              F_all[tstart[j]:tstart[j + 1]], share)
+        a, b = vstart[j], vstart[j + 1]
+        out[faces[use[j]]] = (np.ascontiguousarray(uv_all[a:b]), F_all[tstart[j]:tstart[j + 1]],
+                              P_all[a:b], share)
     return out

@@ -314,8 +314,8 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     if fallback is not None:
         return fallback_face(s, tol, max_angle, max_edge, k, trim_target, fallback)
     if planar:
-        uv, F, seconds = planar
-        return points(s, uv), F, uv, np.zeros(len(F)), uv[F], _planar_stats(seconds)
+        uv, F, P, seconds = planar
+        return P, F, uv, np.zeros(len(F)), uv[F], _planar_stats(seconds)
     t0 = time.perf_counter()
     size = s.size if size is None else size
     if not s.trim and max_angle is None and max_edge is None:

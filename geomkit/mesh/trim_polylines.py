@@ -205,25 +205,19 @@ def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bo
 
 
 def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
-                   packs=None) -> list:
+                   packs=None, flat=None) -> list:
     """Per surface ``(loops, gaps)``: the closed (k, 2) UV polylines of its trim loops
     (read only) and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`,
     every piece of every loop of every surface in one
     :func:`geomkit._kernels.tess_loops.face_loops` call (each piece from its knots, split
     until every 3-D chord is within ``chord_tol``; ``affine``: the surfaces are affine
     maps of their parameters, whose UV chords map to 3-D chords).  ``packs``: their
-    :func:`packed_trims`, if made."""
+    :func:`packed_trims`, ``flat``: :func:`flat_surfaces`, if made."""
     packs = packs or [packed_trims(s) for s in surfaces]
     if len(surfaces) == 1:
-        s = surfaces[0]
         CP, W, K, deg, cp_off, k_off, loop_first = packs[0]
         face_piece = np.array([0, len(deg)], dtype=np.int64)
         face_loop = np.array([0, len(loop_first) - 1], dtype=np.int64)
-        Pw = s.homogeneous.reshape(-1, 4)
-        U, V = s.knots_u, s.knots_v
-        pw_off = np.array([0, len(Pw)], dtype=np.int64)
-        u_off = np.array([0, len(U)], dtype=np.int64)
-        v_off = np.array([0, len(V)], dtype=np.int64)
     else:
         pieces = np.array([len(pk[3]) for pk in packs], dtype=np.int64)
         cps = np.array([len(pk[0]) for pk in packs], dtype=np.int64)
@@ -242,6 +236,31 @@ def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
                                + [k_base[-1:]])
         loop_first = np.concatenate([pk[6][:-1] + b for pk, b in
                                      zip(packs, face_piece.tolist())] + [face_piece[-1:]])
+    flat = flat_surfaces(surfaces) if flat is None else flat
+    pts, start, gaps = face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece,
+                                  face_loop, *flat, SEED_SPANS, chord_tol, not affine,
+                                  cross_knots)
+    pts.flags.writeable = False
+    bounds = start.tolist()
+    loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    fl = face_loop.tolist()
+    return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+
+
+def flat_surfaces(surfaces) -> tuple:
+    """The nets and knots of ``surfaces`` as flat arrays for the kernels that take many
+    faces: ``(Pw (n, 4), pw_off, nets, U, u_off, V, v_off, domains)``, face ``f``'s
+    homogeneous net the rows ``Pw[pw_off[f]:pw_off[f+1]]`` (row-major), ``nets[f] = (nu,
+    nv, p, q)``, its knots ``U[u_off[f]:u_off[f+1]]`` and ``V[...]``, ``domains[f] = (u0,
+    u1, v0, v1)``."""
+    if len(surfaces) == 1:
+        s = surfaces[0]
+        Pw = s.homogeneous.reshape(-1, 4)
+        U, V = s.knots_u, s.knots_v
+        pw_off = np.array([0, len(Pw)], dtype=np.int64)
+        u_off = np.array([0, len(U)], dtype=np.int64)
+        v_off = np.array([0, len(V)], dtype=np.int64)
+    else:
         Pw = np.concatenate([s.homogeneous.reshape(-1, 4) for s in surfaces])
         U = np.concatenate([s.knots_u for s in surfaces])
         V = np.concatenate([s.knots_v for s in surfaces])
@@ -252,14 +271,7 @@ def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
     nets = np.array([s.homogeneous.shape[:2] + (s.degree_u, s.degree_v) for s in surfaces],
                     dtype=np.int64)
     domains = np.array([s.domain[0] + s.domain[1] for s in surfaces], dtype=np.float64)
-    pts, start, gaps = face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece,
-                                  face_loop, Pw, pw_off, nets, U, u_off, V, v_off, domains,
-                                  SEED_SPANS, chord_tol, not affine, cross_knots)
-    pts.flags.writeable = False
-    bounds = start.tolist()
-    loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-    fl = face_loop.tolist()
-    return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+    return Pw, pw_off, nets, U, u_off, V, v_off, domains
 
 
 def _starts(counts: np.ndarray) -> np.ndarray:

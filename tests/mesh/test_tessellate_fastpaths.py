@@ -167,7 +167,8 @@ def ctc01():
 
 def test_planes_batch_matches_face_by_face(ctc01):
     """The trimmed planes of NIST CTC-01 triangulated together: for each, the same
-    vertices as the face-by-face triangulation of its region, as many triangles,
+    vertices as the face-by-face triangulation of its region (their points S(uv) bit
+    for bit), as many triangles,
     covering the region's area, every boundary edge kept; non-planes marked False."""
     from geomkit.mesh.planes import planar_batch
     from geomkit.mesh.trim_polylines import TrimPolylines, affine_map, planar_trimmed
@@ -180,9 +181,10 @@ def test_planes_batch_matches_face_by_face(ctc01):
     for i in planes:
         trim = TrimPolylines(S[i], 0.5 * tol, affine=True)
         uv0, F0 = planar_trimmed(trim)
-        uv, F, _ = out[i]
+        uv, F, P, _ = out[i]
         used = np.unique(F0)
         assert np.array_equal(uv, uv0[used]) and len(F) == len(F0), i
+        assert np.array_equal(P, W.points(S[i], uv)), i  # the batch's vertices S(uv)
         t = uv[F]
         a2 = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
             - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
