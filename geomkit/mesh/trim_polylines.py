@@ -35,7 +35,7 @@ class TrimPolylines:
     ``loops``: the closed (k, 2) polylines (read only), the domain rectangle left out
     when a loop is just that rectangle (``domain_loop``); ``polylines``: this surface's
     :func:`loop_polylines`, if the caller made them.  ``region`` (the trimmed region, a
-    prepared shapely geometry inside the domain) is built on first use.
+    shapely geometry inside the domain) is built on first use.
     """
 
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
@@ -88,8 +88,9 @@ class TrimPolylines:
                     poly = shapely.make_valid(shapely.Polygon(pts))
                     region = poly if region is None else shapely.symmetric_difference(region,
                                                                                       poly)
-            # the polylines are clipped to the domain: the region lies in the box
-            shapely.prepare(region)
+            # the polylines are clipped to the domain: the region lies in the box (not
+            # prepared: its users clip and overlay, which prepared geometry does not
+            # speed up)
             self._region = region
         return self._region
 
