@@ -363,8 +363,8 @@ def _swept_base(kind, srf, loops):
     if c.bounds is None:
         raise Unsupported(f"a swept {c.kind}: only B-spline and polyline curves are read")
     curve = c.nurbs(*c.bounds)
-    X = np.concatenate([e.points(33) for lp in loops for e in lp])
     if kind == "extrusion":
+        X = np.concatenate([e.points(33) for lp in loops for e in lp])
         V = srf[1]
         vv = float(V @ V)
         C = curve_eval(curve, np.linspace(*c.bounds, 257))
