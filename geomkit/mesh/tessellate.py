@@ -76,7 +76,7 @@ from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_grid
 from geomkit._kernels.tess_grid import GRID_OK, whole_grid
 from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
-                                         packed_trims, planar_trimmed)
+                                         line_rectangle, packed_trims, planar_trimmed)
 from geomkit.tolerances import WELD_REL
 from geomkit.validate import as_int
 from geomkit.errors import FaceFailedWarning, InvalidInputError, MeshingError
@@ -334,6 +334,16 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     # cell path drops that loop too, so the untrimmed paths give the same guarantee
     packed = packed_trims(s) if s.trim else None
     whole = not s.trim or domain_rectangle_only(s, trim_target * tol, packed)
+    if not whole and max_angle is None and max_edge is None:
+        # a loop of straight UV pieces around a rectangle: the box grid without polylines
+        box = line_rectangle(s, trim_target * tol, packed)
+        if box is not None:
+            gridded = _box_grid(s, box, breakpoints(s.knots_u, s.degree_u),
+                                breakpoints(s.knots_v, s.degree_v),
+                                max(5, 2 * max(s.degree_u, s.degree_v) + 1), k, tol, size,
+                                t0)
+            if gridded is not None:
+                return gridded
     trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed,
                                             cross_knots=cross_knots)
     if trim is not None and not trim.loops:

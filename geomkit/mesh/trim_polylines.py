@@ -118,22 +118,7 @@ class TrimPolylines:
         a swept face)."""
         if len(self.loops) != 1 or self.domain_loop:
             return None
-        pts = self.loops[0]
-        a0, b0 = np.minimum.reduce(pts)
-        a1, b1 = np.maximum.reduce(pts)
-        size_uv = max(a1 - a0, b1 - b0)
-        if not size_uv > 0:
-            return None
-        gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
-        hi = 1e-6 * size_uv
-        perimeter = a1 - a0 + b1 - b0
-        if not (gap <= hi and area_gap <= hi * perimeter):
-            return None
-        eps = min(hi, 1e-3 * self.chord_tol / max(speed_bound(self.surface), 1e-300))
-        eps = max(eps, 1e-12 * size_uv)
-        if not (gap <= eps and area_gap <= eps * perimeter):
-            return None
-        return float(a0), float(a1), float(b0), float(b1)
+        return _rectangle_of(self.loops[0], self.chord_tol, self.surface)
 
     def classify(self, lat, cells: np.ndarray) -> np.ndarray:
         """(N,) int8 for lattice cells: 0 outside the trimmed region, 1 inside, 2 cut
@@ -246,6 +231,56 @@ def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
     loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     fl = face_loop.tolist()
     return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+
+
+def _rectangle_of(pts, chord_tol: float, surface: Surface):
+    """:meth:`TrimPolylines.rectangle` of the closed polyline ``pts``."""
+    a0, b0 = np.minimum.reduce(pts)
+    a1, b1 = np.maximum.reduce(pts)
+    size_uv = max(a1 - a0, b1 - b0)
+    if not size_uv > 0:
+        return None
+    gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
+    hi = 1e-6 * size_uv
+    perimeter = a1 - a0 + b1 - b0
+    if not (gap <= hi and area_gap <= hi * perimeter):
+        return None
+    eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+    eps = max(eps, 1e-12 * size_uv)
+    if not (gap <= eps and area_gap <= eps * perimeter):
+        return None
+    return float(a0), float(a1), float(b0), float(b1)
+
+
+def line_rectangle(surface: Surface, chord_tol: float, packed) -> tuple | None:
+    """:meth:`TrimPolylines.rectangle` without the polylines, for a surface whose only
+    loop is made of straight UV pieces (degree 1, unit weights, distinct knots): their
+    polylines are the control points (clipped to the domain) with, at most, points added
+    on the segments between them, which lie between their ends (within rounding), so
+    the box, the points' distance from its edge lines and the enclosed area are the
+    control polygon's.  None for other pieces, or a loop near the domain rectangle
+    (which :class:`TrimPolylines` may drop as the domain's own edges): then the
+    polylines decide."""
+    CP, W, K, deg, cp_off, k_off, loop_first = packed
+    if len(loop_first) != 2 or not (deg == 1).all() or not (W == 1.0).all():
+        return None
+    for c in range(len(deg)):  # distinct knots: the control points are the vertices
+        kc = K[k_off[c] + 1:k_off[c + 1] - 1]
+        if not (kc[1:] > kc[:-1]).all():
+            return None
+    (u0, u1), (v0, v1) = surface.domain
+    pts = np.empty((len(CP) - len(deg) + 1, 2))
+    keep = np.ones(len(CP), dtype=bool)
+    keep[cp_off[1:-1]] = False  # each later piece's first point: the last one's end
+    q = CP[keep]
+    pts[:-1, 0] = np.minimum(np.maximum(q[:-1, 0], u0), u1)
+    pts[:-1, 1] = np.minimum(np.maximum(q[:-1, 1], v0), v1)
+    pts[-1] = pts[0]  # closed exactly
+    size_uv = max(u1 - u0, v1 - v0)
+    gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
+    if gap <= 1e-6 * size_uv and area_gap <= 1e-6 * size_uv * (u1 - u0 + v1 - v0):
+        return None  # near the domain rectangle: TrimPolylines' domain_loop test decides
+    return _rectangle_of(pts, chord_tol, surface)
 
 
 def flat_surfaces(surfaces) -> tuple:

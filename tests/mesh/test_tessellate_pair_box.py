@@ -172,3 +172,46 @@ def test_trimmed_grids_of_the_estimates_hold_tol_both_ways(euclid):
                      mesh.face_uv[keep])
     r = naive.sample_mesh_deviation(sub, S, n_faces=4000, n_worst=500, exact_above=tol)
     assert r["to_surface"] <= tol and r["to_mesh"] <= tol, r
+
+
+def test_line_rectangle_decides_as_the_polylines(catia, ctc01):
+    """``line_rectangle`` (the box from a loop of straight UV pieces' control points)
+    against ``TrimPolylines.rectangle`` (from the polylines) on every trimmed face of
+    two parts at two chord tolerances: the same box, bit for bit, wherever it answers
+    (CATIA's three swept faces); and None for a loop that cuts a corner of its box, a
+    curved piece, and a loop on the domain rectangle."""
+    from geomkit.mesh.trim_polylines import line_rectangle, packed_trims
+
+    found = 0
+    for S, tol in (catia, ctc01):
+        for s in [s for s in S if s.trim]:
+            for ct in (0.5 * tol, 0.05 * tol):
+                got = line_rectangle(s, ct, packed_trims(s))
+                if got is not None:
+                    assert got == TrimPolylines(s, ct, cross_knots=True).rectangle()
+                    found += 1
+    assert found >= 6
+    s = catia[0][0]
+    (u0, u1), (v0, v1) = s.domain
+    a0, a1 = u0 + 0.2 * (u1 - u0), u0 + 0.7 * (u1 - u0)
+    b0, b1 = v0 + 0.3 * (v1 - v0), v0 + 0.6 * (v1 - v0)
+
+    def loop(pts):
+        pts = np.asarray(pts, dtype=float)
+        CP = np.concatenate([pts[i:i + 2] for i in range(len(pts) - 1)])
+        n = len(pts) - 1
+        K = np.tile([0.0, 0.0, 1.0, 1.0], n)
+        off = np.arange(0, 2 * n + 1, 2, dtype=np.int64)
+        return (CP, np.ones(len(CP)), K, np.ones(n, dtype=np.int64), off, 2 * off,
+                np.array([0, n], dtype=np.int64))
+
+    box = [(a0, b0), (a1, b0), (a1, b1), (a0, b1), (a0, b0)]
+    assert line_rectangle(s, 0.5 * catia[1], loop(box)) == (a0, a1, b0, b1)
+    cut = [(a0, b0), (a1, b0), (a1, b1), (a0 + 0.1 * (a1 - a0), b1), (a0, b0 + 0.5 * (b1 - b0)),
+           (a0, b0)]
+    assert line_rectangle(s, 0.5 * catia[1], loop(cut)) is None
+    dom = [(u0, v0), (u1, v0), (u1, v1), (u0, v1), (u0, v0)]
+    assert line_rectangle(s, 0.5 * catia[1], loop(dom)) is None
+    CP, W, K, deg, co, ko, lf = loop(box)
+    assert line_rectangle(s, 0.5 * catia[1], (CP, W, K, deg + np.eye(len(deg), dtype=np.int64)[0],
+                                               co, ko, lf)) is None
