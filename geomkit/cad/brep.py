@@ -125,8 +125,11 @@ class Analytic:
         fv = AngleMap(b0, b1)
         if self.kind in ("cylinder", "cone"):
             ta = math.tan(self.alpha)
-            gen = line_curve(O + (self.R + a0 * ta) * X + a0 * A,
-                             O + (self.R + a1 * ta) * X + a1 * A, a0, a1)
+            o, x, ax = O.tolist(), X.tolist(), A.tolist()
+            # O + (R + a ta) X + a A at both ends, in floats (numpy's values)
+            ends = [[o[c] + (self.R + a * ta) * x[c] + a * ax[c] for c in range(3)]
+                    for a in (float(a0), float(a1))]
+            gen = line_curve(ends[0], ends[1], a0, a1)
             fu = None
         elif self.kind == "sphere":
             gen = arc_curve(O, X, A, self.R, a0, a1)
