@@ -247,9 +247,10 @@ def _number(b, a, e):
 
 
 @jit
-def read_coordinates(b, ends):
-    """``(values, counts, status, negative)`` of the records ``b[ends[r - 1]:ends[r]]`` (``ends[-1]``
-    taken as 0 for the first), each matched as ``NAME('label', (numbers))`` (the
+def read_coordinates(b, starts, ends):
+    """``(values, counts, status, negative)`` of the records ``b[starts[r]:ends[r]]``
+    (in a file's bytes, or one after another), each matched as
+    ``NAME('label', (numbers))`` (the
     readers' plain points and directions, :data:`geomkit.cad.p21._COORDS`): status 0
     with ``counts[r]`` (at most 3) values read exactly (:func:`_number`), 1 when the
     record is not of that form, 2 when ``float`` is to read its numbers (or
@@ -260,7 +261,7 @@ def read_coordinates(b, ends):
     status = np.zeros(n, np.int8)
     negative = np.zeros((n, 3), np.bool_)
     for r in range(n):
-        a = ends[r - 1] if r > 0 else 0
+        a = starts[r]
         e = ends[r]
         i = a
         while i < e and (65 <= b[i] <= 90 or 97 <= b[i] <= 122 or b[i] == 95):

@@ -510,10 +510,11 @@ class P21:
             pass
         ids = self.of_type(name)
         raw = self._raw
+        spans = raw.spans(ids) if isinstance(raw, Bodies) else None
         try:
-            t = CoordinateTable(ids, raw.many(ids) if isinstance(raw, Bodies)
-                                else [raw[i] for i in ids],
-                                lambda i: self._numbers_each(i, name))
+            t = CoordinateTable(ids, None if spans is not None else raw.many(ids)
+                                if isinstance(raw, Bodies) else [raw[i] for i in ids],
+                                lambda i: self._numbers_each(i, name), spans)
         except UnicodeEncodeError:
             t = None
         self._tables[name] = t

@@ -143,12 +143,23 @@ class Bodies:
     file's text when asked for (a reader asks for a part of them): a dict's reading
     methods; setting a body makes it a dict."""
 
-    __slots__ = ("_text", "_ids", "_row", "_a", "_e", "_dict")
+    __slots__ = ("_text", "_ids", "_row", "_a", "_e", "_dict", "_bytes")
 
-    def __init__(self, text: str, ids: list, a: list, e: list):
+    def __init__(self, text: str, ids: list, a: list, e: list, spans=None):
         self._text, self._ids, self._a, self._e = text, ids, a, e
         self._row = dict(zip(ids, range(len(ids))))  # (fewer than ids: one repeated)
         self._dict = None
+        self._bytes = spans  # (the text's Latin-1 bytes, the bodies' starts, ends)
+
+    def spans(self, ids):
+        """``(bytes, starts, ends)``: where the bodies of ``ids`` lie in the text's
+        bytes (``body(i) == text[starts[k]:ends[k]]``), or None (no bytes kept, or a
+        body set since)."""
+        if self._bytes is None or self._dict is not None:
+            return None
+        b, A, E = self._bytes
+        rows = np.fromiter(map(self._row.__getitem__, ids), np.int64, len(ids))
+        return b, A[rows], E[rows]
 
     def get(self, i, default=None):
         if self._dict is not None:
@@ -216,7 +227,8 @@ def _scan(text, b, start, stop, source, semis=None):
         return cut_records(text[start:stop], source) + (None, None)
     recs = recs[:n]
     ids = recs[:, ID].tolist()
-    raw = Bodies(text, ids, recs[:, BODY0].tolist(), recs[:, BODY1].tolist())
+    A, E = recs[:, BODY0], recs[:, BODY1]
+    raw = Bodies(text, ids, A.tolist(), E.tolist(), (b, A.astype(np.int64), E.astype(np.int64)))
     if len(raw) != n:  # an id defined twice: named record by record
         return cut_records(text[start:stop], source) + (None, None)
     rows = recs[firsts[:m]]

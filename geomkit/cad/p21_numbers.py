@@ -26,8 +26,9 @@ PLAIN, OTHER, BY_FLOAT = 0, 1, 2
 
 class CoordinateTable:
     """The numbers of the records ``ids`` (one entity name's) with bodies ``bodies``
-    (Latin-1 text); ``each(id)`` reads a record the kernel leaves to ``float`` (its
-    numbers or None), once here.
+    (Latin-1 text), or at ``spans`` ``(bytes, starts, ends)`` of the file (then
+    ``bodies`` is not read); ``each(id)`` reads a record the kernel leaves to
+    ``float`` (its numbers or None), once here.
 
     Attributes
     ----------
@@ -41,10 +42,14 @@ class CoordinateTable:
     __slots__ = ("row", "values", "_rows", "count", "status", "finite3", "_status",
                  "_count", "_k")
 
-    def __init__(self, ids, bodies, each):
-        buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
-        ends = np.cumsum(np.fromiter(map(len, bodies), np.int64, len(bodies)))
-        values, count, status, negative = read_coordinates(buf, ends)
+    def __init__(self, ids, bodies, each, spans=None):
+        if spans is None:
+            buf = np.frombuffer("".join(bodies).encode("latin-1"), np.uint8)
+            ends = np.cumsum(np.fromiter(map(len, bodies), np.int64, len(bodies)))
+            starts = np.concatenate([np.zeros(1, np.int64), ends[:-1]])
+        else:  # (the bodies where they lie in the file's bytes)
+            buf, starts, ends = spans
+        values, count, status, negative = read_coordinates(buf, starts, ends)
         if negative.any():
             values[negative] = -0.0
         for r in np.flatnonzero(status == BY_FLOAT).tolist():  # float's turn

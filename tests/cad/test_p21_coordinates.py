@@ -143,3 +143,29 @@ def test_kernel_numbers_are_floats():
             read += 1
             assert struct.pack("<d", v) == struct.pack("<d", float(s)), s
     assert read > len(texts) // 3
+
+
+@pytest.mark.parametrize("path", PARTS, ids=os.path.basename)
+def test_table_from_the_file_bytes_is_the_table_from_the_bodies(path):
+    """A CoordinateTable read where the records lie in the file's bytes (Bodies.spans,
+    what P21 uses) holds what one read from the joined bodies holds, row for row."""
+    from geomkit.cad.p21_numbers import CoordinateTable
+
+    p = read_p21(path)
+    for name in ("CARTESIAN_POINT", "DIRECTION", "VECTOR"):
+        ids = p.of_type(name)
+        spans = p._raw.spans(ids)
+        assert spans is not None
+        b, starts, ends = spans
+        bodies = p._raw.many(ids)
+        assert [b[a:e].tobytes().decode("latin-1") for a, e in zip(starts, ends)] == bodies
+
+        def each(i):
+            return _numbers(p, i, name)
+
+        ref = CoordinateTable(ids, bodies, each)
+        got = CoordinateTable(ids, None, each, spans)
+        np.testing.assert_array_equal(np.signbit(got.values), np.signbit(ref.values))
+        np.testing.assert_array_equal(got.values, ref.values)
+        assert (got.count, got.status, got.finite3, got.row) == \
+            (ref.count, ref.status, ref.finite3, ref.row)
