@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 from geomkit._kernels.pcurve_map import curve_at
 from geomkit._kernels.ranges import nearest_rows
-from geomkit._kernels.surface import invert_points
+from geomkit._kernels.surface import invert_points, surface_points
 from geomkit.tolerances import EDGE_TOL
 from geomkit.nurbs.surface import TrimCurve
 from geomkit.cad.loops import Unsupported
@@ -47,7 +47,11 @@ class SurfaceInverse:
         gv = int(min(128, max(16, 4 * np.count_nonzero(Kv[1:] != Kv[:-1]))))
         us, vs = np.linspace(u0, u1, gu), np.linspace(v0, v1, gv)
         self.grid = np.column_stack([np.repeat(us, gv), np.tile(vs, gu)])
-        self.points = base.evaluate(self.grid)
+        # base.evaluate's points: the grid lies in the domain (linspace's ends are its
+        # ends), which evaluate's check would clamp to, unchanged
+        self.points = np.empty((self.grid.shape[0], 3))
+        surface_points(base.homogeneous, base.degree_u, base.degree_v, base.knots_u,
+                       base.knots_v, self.grid, self.points)
         self._tree = None
 
     def nearest(self, X):
