@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .numba_ext.policy import jit_plain as jit, jit_inline
+from .numba_ext.policy import jit_exact, jit_plain as jit, jit_inline
 from .basis import (basis_funs_inline, ders_basis_funs_inline, ders_scratch,
                     find_span_inline)
 from .ranges import spread
@@ -184,6 +184,28 @@ def curve_at(Pw, p, U, t):
     ndu, left, right, a = ders_scratch(p)
     for i in range(t.shape[0]):
         X[i, 0], X[i, 1], X[i, 2] = _curve_point(Pw, p, U, t[i], dN, ndu, left, right, a)
+    return X
+
+
+@jit_exact
+def _even_param(i, step, t0):
+    """``i * step + t0`` rounded twice (numpy's ``arange * step + start``: no fused
+    multiply-add, whatever the caller's flags)."""
+    return float(i) * step + t0
+
+
+@jit
+def curve_at_even(Pw, p, U, t0, t1, n):
+    """:func:`curve_at` at ``n >= 2`` evenly spaced parameters of ``[t0, t1]``, the
+    reader's ``np.linspace`` values (each ``i * step + t0`` rounded twice, the last
+    ``t1``) made here: the same points in one call without the parameter array."""
+    X = np.empty((n, 3))
+    dN = np.empty((1, p + 1))
+    ndu, left, right, a = ders_scratch(p)
+    step = (t1 - t0) / (n - 1)
+    for i in range(n):
+        t = t1 if i == n - 1 else _even_param(i, step, t0)
+        X[i, 0], X[i, 1], X[i, 2] = _curve_point(Pw, p, U, t, dN, ndu, left, right, a)
     return X
 
 

@@ -23,7 +23,8 @@ from geomkit.cad.loops import Unsupported
 from geomkit.cad.uvmap import map_edge, map_pcurve
 from geomkit._kernels.ranges import col_range, spread
 from geomkit._kernels.pcurve_map import (CONE, CYLINDER, SPHERE, TORUS, curve_at,
-                                         edge_local, edge_turn, iso_ends, plane_piece)
+                                         curve_at_even, edge_local, edge_turn, iso_ends,
+                                         plane_piece)
 
 __all__ = ["Edge", "analytic_pieces", "edge_points", "KIND_CODE", "NS"]
 
@@ -76,6 +77,10 @@ class Edge:
                 # parameters bit for bit (the steps differ by a power of two), the
                 # points as edge_local evaluates them (curve_eval's to rounding)
                 X = dense[::(NS - 1) // (n - 1)]
+            elif n >= 2:  # (curve_eval's points at linspace, in one call)
+                p, U, Pw = self.curve
+                X = curve_at_even(np.ascontiguousarray(Pw, dtype=np.float64), int(p),
+                                  np.asarray(U, dtype=np.float64), self.t0, self.t1, n)
             else:  # (curve_eval's points, its per-call set-up left out)
                 p, U, Pw = self.curve
                 X = curve_at(np.ascontiguousarray(Pw, dtype=np.float64), int(p),

@@ -403,3 +403,26 @@ def test_spans_net_matches_numpy_route():
         assert got[0] == ok
         if ok:
             assert np.array_equal(got[1], knots) and np.array_equal(got[2], pts)
+
+
+def test_curve_at_even_is_curve_at_of_the_linspace():
+    """Edge.points' one call (curve_at_even: the linspace parameters made in the
+    kernel, each i * step + t0 rounded twice) against curve_at of the reader's
+    linspace, bit for bit, on random rational curves of degrees 1 to 5 with knots
+    of several scales and offsets, at the counts the readers take and others."""
+    from geomkit.cad.faceedges import _linspace
+    from geomkit._kernels.pcurve_map import curve_at, curve_at_even
+
+    rng = np.random.default_rng(9)
+    for _ in range(1000):
+        p = int(rng.integers(1, 6))
+        n = p + 1 + int(rng.integers(0, 6))
+        inner = np.sort(rng.uniform(0.0, 1.0, n - p - 1))
+        U = (np.concatenate([[0.0] * (p + 1), inner, [1.0] * (p + 1)])
+             * 10.0 ** rng.integers(-3, 4) + rng.normal() * 10.0 ** rng.integers(-2, 3))
+        w = rng.uniform(0.2, 3.0, n)
+        Pw = np.column_stack([rng.normal(size=(n, 3)) * w[:, None], w])
+        m = int(rng.choice([2, 3, 9, 17, 33, 65, 257, int(rng.integers(2, 100))]))
+        t0, t1 = float(U[p]), float(U[-p - 1])
+        np.testing.assert_array_equal(curve_at_even(Pw, p, U, t0, t1, m),
+                                      curve_at(Pw, p, U, _linspace(t0, t1, m)))
