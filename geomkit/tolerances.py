@@ -123,7 +123,7 @@ DEGENERATE_TRIANGLE
 DEGENERATE_TRIANGLE_SIN2
     Tessellation measure: a triangle with ``|ab x ac|^2 <= DEGENERATE_TRIANGLE_SIN2
     |ab|^2 |ac|^2`` (sine of its angle below 1e-12) is handled as its three edges
-    (:data:`geomkit._kernels.tess.DEGENERATE_REL2`).
+    (:data:`geomkit._kernels.triangles.DEGENERATE_REL2`).
 BOX_INFLATE
     Relative growth of every fitted box / k-DOP, absorbing rounding of the fit
     (:data:`geomkit._kernels.bvh.BOX_INFLATE`).
@@ -139,7 +139,7 @@ CERT_MARGIN, LOSS_TOL
 from geomkit._kernels.bvh import BOX_INFLATE
 from geomkit._kernels.bvh_query import PLANE_SLACK, SAT_EPS
 from geomkit._kernels.project_cert import CERT_MARGIN, LOSS_TOL
-from geomkit._kernels.tess import DEGENERATE_REL2 as DEGENERATE_TRIANGLE_SIN2
+from geomkit._kernels.triangles import DEGENERATE_REL2 as DEGENERATE_TRIANGLE_SIN2
 from geomkit._kernels.triangles import DEGENERATE_REL as DEGENERATE_TRIANGLE
 
 # NURBS model

@@ -11,8 +11,8 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import surface_derivs, surface_point
-from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _dist3, _run,
-                   foot_step, point_triangle_distance)
+from .tess import FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _run, foot_step
+from .triangles import _dist3, point_triangle_distance
 
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
 

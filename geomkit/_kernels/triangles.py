@@ -1,4 +1,5 @@
-"""Exact triangle–triangle kernels: intersection test and minimum distance.
+"""Exact triangle kernels: the closest point of a triangle to a point, and the
+triangle–triangle intersection test and minimum distance.
 
 Both kernels share one predicate, the *closed segment / closed triangle* crossing
 test (:func:`segment_hits_triangle`), built on orientation determinants:
@@ -25,7 +26,7 @@ i.e. when the triangles touch to within ~1e-16 of their size.
 the 9 edge/edge pairs and the 6 vertex/face pairs, which is the exact distance of
 two disjoint triangles (a closest pair always involves an edge pair or a vertex
 and a face interior).  Vertex/face distances come from
-:func:`geomkit._kernels.tess.point_triangle_distance` (the one point–triangle
+:func:`point_triangle_distance` (the one point–triangle
 routine in geomkit) as a filter; the plane foot is taken as closest point only when
 that pair beats every edge pair *and* the foot lies inside the face (otherwise the
 closest point is on an edge and an edge pair already has it).
@@ -33,10 +34,126 @@ closest point is on an edge and an edge pair already has it).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .numba_ext.policy import jit
-from .tess import point_triangle_distance
+from .numba_ext.policy import jit, jit_inline
+
+@jit_inline
+def _dist3(a0, a1, a2, b0, b1, b2):
+    d0 = a0 - b0
+    d1 = a1 - b1
+    d2 = a2 - b2
+    return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+@jit
+def _seg_closest(px, py, pz, ax, ay, az, bx, by, bz):
+    """Closest point of segment ab: returns (squared distance, parameter)."""
+    d0 = bx - ax
+    d1 = by - ay
+    d2 = bz - az
+    ll = d0 * d0 + d1 * d1 + d2 * d2
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - ax) * d0 + (py - ay) * d1 + (pz - az) * d2) / ll
+        t = min(1.0, max(0.0, t))
+    ex = ax + t * d0 - px
+    ey = ay + t * d1 - py
+    ez = az + t * d2 - pz
+    return ex * ex + ey * ey + ez * ez, t
+
+
+DEGENERATE_REL2 = 1e-24
+"""A triangle with ``|ab x ac|^2 <= DEGENERATE_REL2 |ab|^2 |ac|^2`` (sine of its angle at
+a below 1e-12) is handled as its three edges by :func:`closest_on_triangle`."""
+
+
+@jit
+def _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """:func:`closest_on_triangle` of a degenerate triangle: the nearest of its edges."""
+    e0, t0 = _seg_closest(px, py, pz, ax, ay, az, bx, by, bz)
+    e1, t1 = _seg_closest(px, py, pz, bx, by, bz, cx, cy, cz)
+    e2, t2 = _seg_closest(px, py, pz, ax, ay, az, cx, cy, cz)
+    if e0 <= e1 and e0 <= e2:
+        return math.sqrt(e0), t0, 0.0
+    if e1 <= e2:
+        return math.sqrt(e1), 1.0 - t1, t1
+    return math.sqrt(e2), 0.0, t2
+
+
+@jit
+def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """Closest point of the triangle abc to p (Ericson, Real-Time Collision Detection
+    5.1.5, closest-feature regions).
+
+    Returns ``(distance, s, w)``: the closest point is ``a + s (b - a) + w (c - a)``.
+    A degenerate (collinear) triangle is handled as the nearest of its edges.
+    """
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    if not (nx * nx + ny * ny + nz * nz
+            > DEGENERATE_REL2 * (abx * abx + aby * aby + abz * abz)
+            * (acx * acx + acy * acy + acz * acz)):
+        # collinear or coincident corners: with contracted (fused) products the
+        # region tests below do not cancel exactly and could send the point into
+        # the "interior" with arbitrary barycentrics (b == c gave distances off by
+        # hundreds); the nearest of the three edges is exact
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return _dist3(px, py, pz, ax, ay, az), 0.0, 0.0
+    bpx, bpy, bpz = px - bx, py - by, pz - bz
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return _dist3(px, py, pz, bx, by, bz), 1.0, 0.0
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0 and d1 - d3 > 0.0:
+        s = d1 / (d1 - d3)
+        return _dist3(px, py, pz, ax + s * abx, ay + s * aby, az + s * abz), s, 0.0
+    cpx, cpy, cpz = px - cx, py - cy, pz - cz
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return _dist3(px, py, pz, cx, cy, cz), 0.0, 1.0
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0 and d2 - d6 > 0.0:
+        w = d2 / (d2 - d6)
+        return _dist3(px, py, pz, ax + w * acx, ay + w * acy, az + w * acz), 0.0, w
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0 and (d4 - d3) + (d5 - d6) > 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return (_dist3(px, py, pz, bx + w * (cx - bx), by + w * (cy - by), bz + w * (cz - bz)),
+                1.0 - w, w)
+    den = va + vb + vc
+    if not den > 0.0:  # degenerate after all: nearest of its three edges
+        return _closest_on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
+    s = vb / den
+    w = vc / den
+    return (_dist3(px, py, pz, ax + abx * s + acx * w, ay + aby * s + acy * w,
+                   az + abz * s + acz * w), s, w)
+
+
+@jit_inline
+def point_triangle_distance(px, py, pz, T):
+    """Euclidean distance from a point to the 3-D triangle T (3, 3)."""
+    return closest_on_triangle(px, py, pz, T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1],
+                               T[1, 2], T[2, 0], T[2, 1], T[2, 2])[0]
+
+
+@jit_inline
+def point_triangle_closest(px, py, pz, V, a, b, c):
+    """:func:`closest_on_triangle` for the triangle ``V[a], V[b], V[c]``."""
+    return closest_on_triangle(px, py, pz, V[a, 0], V[a, 1], V[a, 2], V[b, 0], V[b, 1],
+                               V[b, 2], V[c, 0], V[c, 1], V[c, 2])
+
 
 DEGENERATE_REL = 1e-14
 """Relative contact tolerance used only for zero-area (degenerate) triangles."""

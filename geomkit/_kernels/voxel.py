@@ -24,7 +24,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline, prun
-from .tess import point_triangle_closest
+from .triangles import point_triangle_closest
 
 CROSSED = 1
 """The triangle crosses the voxel (it also reaches outside it)."""

@@ -330,7 +330,7 @@ def test_closest_on_degenerate_triangles_is_the_segment_distance(order):
     """Triangles with coincident or collinear corners (poles make them): the distance
     equals the exact point-to-segment distance (closed form), in every corner order;
     contracted products once sent b == c into the interior branch (errors ~100)."""
-    from geomkit._kernels.tess import closest_on_triangle
+    from geomkit._kernels.triangles import closest_on_triangle
 
     rng = np.random.default_rng(7)
     for _ in range(300):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import geomkit
-from geomkit._kernels.tess import point_triangle_distance
+from geomkit._kernels.triangles import point_triangle_distance
 from geomkit.errors import InvalidInputError
 from geomkit.query.voxel import CROSSED, ENCLOSED, VoxelGrid
 
