@@ -65,8 +65,9 @@ def _lines(b, counts):
 
 
 @jit
-def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, u0, u1, v0, v1):
-    """The grid of the estimates: ``(status, u, v, cells, first, E, cu, cv)``, the
+def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold):
+    """The grid of the estimates (``fold``: the edge lines whose sags the estimates
+    take, :func:`.tess._cell_errors_box_range`'s ``bu0, bu1, bv0, bv1``): ``(status, u, v, cells, first, E, cu, cv)``, the
     grid lines, cells (N, 4) and each cell's diagonal of the smaller estimate
     (:data:`GRID_OK`), or :data:`GRID_BIG` / :data:`GRID_REFUSED` with empty ones; the
     root spans' estimates ``E`` and children counts ``cu``, ``cv`` (but for a refusal
@@ -82,7 +83,8 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, u0, u1, v0, v
     roots = _tensor(ub, vb)
     nr = roots.shape[0]
     E = np.empty((nr, 5))
-    _cell_errors_box_range(0, nr, Pw, p, q, U, V, roots, m, u0, u1, v0, v1, E)
+    _cell_errors_box_range(0, nr, Pw, p, q, U, V, roots, m, fold[0], fold[1], fold[2],
+                           fold[3], E)
     e = np.empty(nr)
     for i in range(nr):
         e[i] = min(E[i, 0], E[i, 1]) if not (np.isnan(E[i, 0]) or np.isnan(E[i, 1])) \
@@ -117,8 +119,8 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, u0, u1, v0, v
         v = _lines(vb, cv)
         cells = _tensor(u, v)
         Ec = np.empty((cells.shape[0], 5))
-        _cell_errors_box_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, u0, u1, v0, v1,
-                               Ec)
+        _cell_errors_box_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, fold[0], fold[1],
+                               fold[2], fold[3], Ec)
     n = cells.shape[0]
     first = np.empty(n, dtype=np.int64)
     for i in range(n):
@@ -127,21 +129,21 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, u0, u1, v0, v
 
 
 @jit
-def grid_plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, u0, u1, v0, v1):
+def grid_plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, fold):
     """The grid :func:`small_grid` would measure, unmeasured: ``(ok, u, v, cells,
     first)``, each cell's diagonal the one of the smaller estimate; not ``ok`` (empty
     arrays) when it would exceed ``max_cells``."""
     status, u, v, cells, first, _, _, _ = _plan(Pw, p, q, U, V, ub, vb, m, target,
-                                                max_cells, max_cells, u0, u1, v0, v1)
+                                                max_cells, max_cells, fold)
     return status == GRID_OK, u, v, cells, first
 
 
 @jit
 def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells,
-               max_small, u0, u1, v0, v1, pair):
+               max_small, u0, u1, v0, v1, pair, fold):
     """The first grid of :func:`geomkit.mesh.quadtree.uniform_grid` (``u0, u1, v0, v1``:
-    its box, or the domain; the measurement's feet stay in it, its edges' sags are
-    folded into the estimates):
+    its box, or the domain, where the measurement's feet stay; ``fold``: the edge lines
+    whose sags the estimates take, NaN for none):
     ``(status, u, v, cells, dev, diag, E, cu, cv, worst)``: status :data:`GRID_OK` with
     the grid lines, cells (N, 4), each cell's measured deviation and better diagonal;
     :data:`GRID_FAILED` with the same and the largest deviation ``worst`` (NaN if one
@@ -149,7 +151,7 @@ def small_grid(Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells
     refusal before them) the root spans' estimates ``E`` and the children counts per
     span row ``cu`` and column ``cv``, for the Python route to go on from."""
     status, u, v, cells, first, E, cu, cv = _plan(Pw, p, q, U, V, ub, vb, m, target,
-                                                  max_cells, max_small, u0, u1, v0, v1)
+                                                  max_cells, max_small, fold)
     if status != GRID_OK:
         return status, u, v, cells, np.empty(0), first, E, cu, cv, np.nan
     n = cells.shape[0]
@@ -332,7 +334,8 @@ def whole_grid(Pw, p, q, U, V, k, tol, target, exact_above, max_cells, max_small
     grid of :func:`small_grid` over the domain's breakpoints (``m = max(5, 2 max(p, q)
     + 1)`` estimate samples), its triangles (:func:`grid_triangles`),
     their vertices (:func:`grid_vertices`) and whether the surface is closed in u and
-    v (:func:`edge_gaps` at ``t`` within ``closed_eps``).  Returns ``(status, tri (2N,
+    v (:func:`edge_gaps` at ``t`` within ``closed_eps``; the estimates take the sags of
+    the domain's edges but for a closed direction's, which is a seam, not a boundary).  Returns ``(status, tri (2N,
     3, 2), dev (2N,), cells (N, 4), welded, P, UV, inv, bnd, near, closed_u,
     closed_v)``: for a status other than :data:`GRID_OK` empty arrays (the Python route
     goes on); ``welded`` False when the grid lines are not strictly increasing (the
@@ -344,17 +347,20 @@ def whole_grid(Pw, p, q, U, V, k, tol, target, exact_above, max_cells, max_small
     u1 = U[U.shape[0] - p - 1]
     v0 = V[q]
     v1 = V[V.shape[0] - q - 1]
+    gu, gv = edge_gaps(Pw, p, q, U, V, u0, u1, v0, v1, t)
+    closed_u = gu <= closed_eps
+    closed_v = gv <= closed_eps
+    fold = np.array([np.nan if closed_u else u0, np.nan if closed_u else u1,
+                     np.nan if closed_v else v0, np.nan if closed_v else v1])
     status, u, v, cells, dev, diag, _, _, _, _ = small_grid(
         Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells, max_small, u0,
-        u1, v0, v1, pair)
+        u1, v0, v1, pair, fold)
     if status != GRID_OK:
         return (status, np.empty((0, 3, 2)), np.empty(0), cells, False, np.empty((0, 3)),
                 np.empty((0, 2)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64),
-                False, False, False)
+                False, closed_u, closed_v)
     tri, dev2 = grid_triangles(cells, dev, diag)
     eps = 1e-12 * max(u1 - u0, v1 - v0)
     welded, P, UV, inv, bnd, near = grid_vertices(Pw, p, q, U, V, u, v, diag, u0, u1, v0,
                                                   v1, eps, weld_r)
-    gu, gv = edge_gaps(Pw, p, q, U, V, u0, u1, v0, v1, t)
-    return (status, tri, dev2, cells, welded, P, UV, inv, bnd, near, gu <= closed_eps,
-            gv <= closed_eps)
+    return status, tri, dev2, cells, welded, P, UV, inv, bnd, near, closed_u, closed_v

@@ -322,7 +322,7 @@ def _tensor_cells(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
                  target: float, exact_above: float, max_cells: int, box=None,
-                 pair: bool = False):
+                 pair: bool = False, closed=(False, False)):
     """One tensor grid of cells for a surface whose first estimate asks for few cells.
 
     Each root span gets ``nu x nv`` equal children from :func:`split_counts` of its
@@ -343,7 +343,8 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     feet stay in it.  The estimates include the sag of the box's edges, or of the
     domain's without a box (``cell_errors``' ``box``: the normal gap misses a boundary
     that bends in the tangent plane, as a cone's rim does, which the measurement
-    sees).  ``pair``: the grid is the face (untrimmed, or ``box``):
+    sees), but for the edges of a direction the surface is ``closed`` in that the grid
+    spans: a seam, not a boundary (:func:`fold_lines`).  ``pair``: the grid is the face (untrimmed, or ``box``):
     cells are measured with ``cell_deviation``'s ``pair``.
     """
     nsu, nsv = len(ub) - 1, len(vb) - 1
@@ -357,9 +358,11 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     u0, u1, v0, v1 = (*surface.domain[0], *surface.domain[1]) if box is None else box
     # the first grid in one compiled call (the same grid): kept when it is small and
     # passes; else the steps below go on from its estimates (and its measurement)
+    fold = fold_lines(surface, box, closed)
     status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
         Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
-        int(max_cells), SMALL_GRID, float(u0), float(u1), float(v0), float(v1), bool(pair))
+        int(max_cells), SMALL_GRID, float(u0), float(u1), float(v0), float(v1), bool(pair),
+        fold)
     if status == GRID_REFUSED:
         return None
     if status == GRID_OK:
@@ -385,7 +388,7 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
             v = _lines(vb, cv)
             cells = _tensor_cells(u, v)
             Ec = np.empty((len(cells), 5))
-            cell_errors(Pw, p, q, U, V, cells, m, Ec, box=(u0, u1, v0, v1))
+            cell_errors(Pw, p, q, U, V, cells, m, Ec, box=fold)
         first = (Ec[:, 1] < Ec[:, 0]).astype(np.int64)
         M = np.empty((len(cells), 2))
         cell_deviation(Pw, p, q, U, V, cells, first, k, u0, u1, v0, v1, exact_above, tol, M,
@@ -408,17 +411,29 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     return _grid_triangles(cells, dev, diag) + (cells, (u, v, diag))
 
 
+def fold_lines(surface, box, closed) -> np.ndarray:
+    """``(u0, u1, v0, v1)``: the edge lines of ``box`` (else the domain) whose sags the
+    grid estimates take, NaN (none) in a direction the surface is ``closed`` in
+    (``(closed_u, closed_v)``) where the grid spans the whole domain: those edges are the
+    seam, across which the mesh goes on."""
+    (d0, d1), (e0, e1) = surface.domain
+    a0, a1, b0, b1 = (d0, d1, e0, e1) if box is None else box
+    nan = float("nan")
+    fu = (nan, nan) if closed[0] and a0 == d0 and a1 == d1 else (a0, a1)
+    fv = (nan, nan) if closed[1] and b0 == e0 and b1 == e1 else (b0, b1)
+    return np.array(fu + fv, dtype=np.float64)
+
+
 def planned_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, target: float,
-                 max_cells: int):
+                 max_cells: int, closed=(False, False)):
     """The first grid :func:`uniform_grid` would measure (the root spans' children from
     the estimates, :func:`geomkit._kernels.tess_grid.grid_plan`), unmeasured: ``(cells,
     diag)``, each cell's diagonal the one of the smaller estimate; None above
     ``max_cells``.  For a trimmed face, whose kept triangles are measured once clipped."""
-    (u0, u1), (v0, v1) = surface.domain
     ok, _, _, cells, diag = grid_plan(surface.homogeneous, surface.degree_u,
                                       surface.degree_v, surface.knots_u, surface.knots_v,
-                                      ub, vb, m, float(target), int(max_cells), u0, u1, v0,
-                                      v1)
+                                      ub, vb, m, float(target), int(max_cells),
+                                      fold_lines(surface, None, closed))
     return (cells, diag) if ok else None
 
 

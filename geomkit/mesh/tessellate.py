@@ -152,8 +152,9 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     cells take over."""
     target = CELL_TARGET * tol
     grouped = True
+    closed = closed_directions(s, size)
     for _ in range(PLANNED_TRIES):
-        plan = qt.planned_grid(s, ub, vb, m, target, GRID_CELLS)
+        plan = qt.planned_grid(s, ub, vb, m, target, GRID_CELLS, closed)
         if plan is None:
             return None
         cells, diag = plan
@@ -167,7 +168,7 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     else:
         grouped = False
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                               GRID_CELLS)
+                               GRID_CELLS, closed=closed)
         if grid is None:
             return None
         tri_uv, dev, cells, _ = grid
@@ -181,7 +182,6 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     if not len(tri_uv):
         return None
     V, F, UV, good = weld(s, tri_uv, size, near_uv=bool(len(cut)))
-    closed = closed_directions(s, size)
     stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
              "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
@@ -256,14 +256,14 @@ def _box_grid(s: Surface, box, ub, vb, m: int, k: int, tol: float, size: float,
     a0, a1, b0, b1 = box
     ub = np.concatenate([[a0], ub[(ub > a0) & (ub < a1)], [a1]])
     vb = np.concatenate([[b0], vb[(vb > b0) & (vb < b1)], [b1]])
+    closed = closed_directions(s, size)
     grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                           GRID_CELLS, box=box, pair=True)
+                           GRID_CELLS, box=box, pair=True, closed=closed)
     if grid is None:
         return None
     tri_uv, dev, cells, (u, v, diag) = grid
     welded = weld_grid(s, u, v, diag, size)
     V, F, UV, good = welded if welded is not None else weld(s, tri_uv, size, near_uv=False)
-    closed = closed_directions(s, size)
     (u0, u1), (v0, v1) = s.domain
     stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
              "collapsed_dropped": int(np.count_nonzero(~good)),
@@ -358,14 +358,14 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     vb = breakpoints(s.knots_v, s.degree_v)
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     if whole and max_angle is None and max_edge is None:
+        closed = closed_directions(s, size)
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                               GRID_CELLS, pair=True)
+                               GRID_CELLS, pair=True, closed=closed)
         if grid is not None:
             tri_uv, dev, cells, (u, v, diag) = grid
             welded = weld_grid(s, u, v, diag, size)
             V, F, UV, good = welded if welded is not None else \
                 weld(s, tri_uv, size, near_uv=False)
-            closed = closed_directions(s, size)
             dropped = len(good) - int(np.count_nonzero(good))
             stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
                      "collapsed_dropped": dropped,

@@ -133,10 +133,11 @@ def _grid_both_ways(s, tol, pair, monkeypatch, box=None):
         vb = np.concatenate([[b0], vb[(vb > b0) & (vb < b1)], [b1]])
     m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     args = (s, ub, vb, m, 6, tol, C.CELL_TARGET * tol, C.EXACT_ABOVE * tol, 4096)
-    got = Q.uniform_grid(*args, box=box, pair=pair)
+    closed = C.closed_directions(s, s.size)
+    got = Q.uniform_grid(*args, box=box, pair=pair, closed=closed)
     with monkeypatch.context() as mp:
         mp.setattr(Q, "SMALL_GRID", -1)  # every grid by the Python steps
-        want = Q.uniform_grid(*args, box=box, pair=pair)
+        want = Q.uniform_grid(*args, box=box, pair=pair, closed=closed)
     return got, want
 
 
@@ -179,17 +180,19 @@ def test_planned_grid_is_the_grid_small_grid_measures():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         part = read_step(DATA / "parts" / "euclid_screw_ap214.step").surfaces
-    seen = 0
+    seen = folded = 0
     for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
         ub = C.breakpoints(s.knots_u, s.degree_u)
         vb = C.breakpoints(s.knots_v, s.degree_v)
         m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
         (u0, u1), (v0, v1) = s.domain
+        closed = C.closed_directions(s, s.size)
+        fold = Q.fold_lines(s, None, closed)
         for tol in (1e-1 * s.size, 1e-3 * s.size):
             st, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
                 s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, ub, vb, m, 6,
-                tol, C.CELL_TARGET * tol, tol, 4096, 4096, u0, u1, v0, v1, True)
-            got = Q.planned_grid(s, ub, vb, m, C.CELL_TARGET * tol, 4096)
+                tol, C.CELL_TARGET * tol, tol, 4096, 4096, u0, u1, v0, v1, True, fold)
+            got = Q.planned_grid(s, ub, vb, m, C.CELL_TARGET * tol, 4096, closed)
             if st not in (GRID_OK, GRID_FAILED):
                 assert got is None
                 continue
@@ -198,9 +201,10 @@ def test_planned_grid_is_the_grid_small_grid_measures():
             # the diagonal of the smaller estimate (the domain's edge sags folded in)
             Ec = np.empty((len(cells), 5))
             cell_errors(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                        np.ascontiguousarray(cells), m, Ec, box=(u0, u1, v0, v1))
+                        np.ascontiguousarray(cells), m, Ec, box=tuple(fold))
             assert np.array_equal(got[1], (Ec[:, 1] < Ec[:, 0]).astype(np.int64))
-    assert seen > 20
+            folded += int(np.isnan(fold).any())
+    assert seen > 20 and folded > 2
 
 
 def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
@@ -228,7 +232,8 @@ def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
             if got[0] != GRID_OK:
                 continue
             want = Q.uniform_grid(s, ub, vb, m, 6, tol, C.CELL_TARGET * tol,
-                                  C.EXACT_ABOVE * tol, 4096, pair=True)
+                                  C.EXACT_ABOVE * tol, 4096, pair=True,
+                                  closed=C.closed_directions(s, size))
             tri_uv, dev, cells, (u, v, diag) = want
             for a, b in zip(got[1:4], (tri_uv, dev, cells)):
                 assert a.dtype == b.dtype and np.array_equal(a, b)
