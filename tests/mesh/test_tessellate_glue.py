@@ -169,6 +169,17 @@ def test_small_grid_kernel_matches_the_python_steps(monkeypatch):
     assert kinds == {"refused", "small", "big"}
 
 
+def _grid_cases(part_name):
+    """``(surface, ub, vb, m)`` of every sample surface and every face of a real part:
+    the domain's breakpoints and the estimates' samples as the tessellator takes them."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        part = read_step(DATA / "parts" / part_name).surfaces
+    for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
+        yield (s, C.breakpoints(s.knots_u, s.degree_u), C.breakpoints(s.knots_v, s.degree_v),
+               max(5, 2 * max(s.degree_u, s.degree_v) + 1))
+
+
 def test_planned_grid_is_the_grid_small_grid_measures():
     """``quadtree.planned_grid`` (the trimmed faces' grid of the estimates) against the
     grid :func:`geomkit._kernels.tess_grid.small_grid` measures: the same cells, bit for
@@ -177,14 +188,8 @@ def test_planned_grid_is_the_grid_small_grid_measures():
     from geomkit._kernels.tess import cell_errors
     from geomkit._kernels.tess_grid import GRID_FAILED, GRID_OK, small_grid
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        part = read_step(DATA / "parts" / "euclid_screw_ap214.step").surfaces
     seen = folded = 0
-    for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
-        ub = C.breakpoints(s.knots_u, s.degree_u)
-        vb = C.breakpoints(s.knots_v, s.degree_v)
-        m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    for s, ub, vb, m in _grid_cases("euclid_screw_ap214.step"):
         (u0, u1), (v0, v1) = s.domain
         closed = C.closed_directions(s, s.size)
         fold = Q.fold_lines(s, None, closed)
@@ -216,14 +221,8 @@ def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
     from geomkit.mesh.weld import boundary_pairs, merge, weld_grid
     from geomkit.tolerances import WELD_REL
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        part = read_step(DATA / "parts" / "ug16_io1_ap214.stp").surfaces
     kept = closed = 0
-    for s in [s for n in samples.names() for s in samples.load(n)] + list(part):
-        ub = C.breakpoints(s.knots_u, s.degree_u)
-        vb = C.breakpoints(s.knots_v, s.degree_v)
-        m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
+    for s, ub, vb, m in _grid_cases("ug16_io1_ap214.stp"):
         size = s.size
         for tol in (1e-2 * size, 1e-3 * size):
             got = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, 6,
