@@ -335,11 +335,12 @@ def whole_grid(Pw, p, q, U, V, k, tol, target, exact_above, max_cells, max_small
     + 1)`` estimate samples), its triangles (:func:`grid_triangles`),
     their vertices (:func:`grid_vertices`) and whether the surface is closed in u and
     v (:func:`edge_gaps` at ``t`` within ``closed_eps``; the estimates take the sags of
-    the domain's edges but for a closed direction's, which is a seam, not a boundary).  Returns ``(status, tri (2N,
-    3, 2), dev (2N,), cells (N, 4), welded, P, UV, inv, bnd, near, closed_u,
-    closed_v)``: for a status other than :data:`GRID_OK` empty arrays (the Python route
-    goes on); ``welded`` False when the grid lines are not strictly increasing (the
-    general weld then)."""
+    the domain's edges but for a closed direction's, which is a seam, not a boundary).
+    Returns ``(status, tri (2N, 3, 2), dev (2N,), cells (N, 4), welded, P, UV, inv,
+    bnd, near, closed_u, closed_v, first)``: for a status other than :data:`GRID_OK`
+    empty arrays and ``first``, :func:`small_grid`'s ``(status, E, cu, cv, worst)``
+    for the Python route to go on from; ``welded`` False when the grid lines are not
+    strictly increasing (the general weld then)."""
     ub = _breakpoints(U, p)
     vb = _breakpoints(V, q)
     m = max(5, 2 * max(p, q) + 1)
@@ -352,15 +353,17 @@ def whole_grid(Pw, p, q, U, V, k, tol, target, exact_above, max_cells, max_small
     closed_v = gv <= closed_eps
     fold = np.array([np.nan if closed_u else u0, np.nan if closed_u else u1,
                      np.nan if closed_v else v0, np.nan if closed_v else v1])
-    status, u, v, cells, dev, diag, _, _, _, _ = small_grid(
+    status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
         Pw, p, q, U, V, ub, vb, m, k, tol, target, exact_above, max_cells, max_small, u0,
         u1, v0, v1, pair, fold)
+    first = (status, E, cu, cv, worst)
     if status != GRID_OK:
         return (status, np.empty((0, 3, 2)), np.empty(0), cells, False, np.empty((0, 3)),
                 np.empty((0, 2)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64),
-                False, closed_u, closed_v)
+                False, closed_u, closed_v, first)
     tri, dev2 = grid_triangles(cells, dev, diag)
     eps = 1e-12 * max(u1 - u0, v1 - v0)
     welded, P, UV, inv, bnd, near = grid_vertices(Pw, p, q, U, V, u, v, diag, u0, u1, v0,
                                                   v1, eps, weld_r)
-    return status, tri, dev2, cells, welded, P, UV, inv, bnd, near, closed_u, closed_v
+    return (status, tri, dev2, cells, welded, P, UV, inv, bnd, near, closed_u, closed_v,
+            first)

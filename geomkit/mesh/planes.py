@@ -24,7 +24,6 @@ from geomkit.mesh.cells import triangle_coordinates
 from geomkit._kernels.tess_loops import faces_points
 from geomkit.mesh.trim_polylines import (TrimPolylines, _starts, affine_map, flat_surfaces,
                                          loop_polylines)
-from geomkit.nurbs.surface import Surface
 
 __all__ = ["planar_batch"]
 
@@ -127,17 +126,12 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     vstart = np.searchsorted(uv_own, np.arange(n + 1))
     tstart = np.searchsorted(idx, np.arange(n + 1))
     F_all = inv.reshape(-1, 3) - vstart[idx][:, None]
-    # the vertices S(uv), every face's in one call (face j is planes[rank[j]])
+    # the vertices S(uv), every face's in one call: uv_all holds the triangulated
+    # planes' blocks in the order of `planes` (faces and use keep it), the others none
     rank = {i: r for r, i in enumerate(planes)}
-    sel = np.array([rank[faces[use[j]]] for j in range(n)], dtype=np.int64)
-    Pw, pw_off, nets, U, u_off, V, v_off, _ = flat
-    sub = (np.concatenate([Pw[pw_off[r]:pw_off[r + 1]] for r in sel.tolist()]),
-           _starts(pw_off[sel + 1] - pw_off[sel]), nets[sel],
-           np.concatenate([U[u_off[r]:u_off[r + 1]] for r in sel.tolist()]),
-           _starts(u_off[sel + 1] - u_off[sel]),
-           np.concatenate([V[v_off[r]:v_off[r + 1]] for r in sel.tolist()]),
-           _starts(v_off[sel + 1] - v_off[sel]))
-    P_all = faces_points(*sub, np.ascontiguousarray(uv_all), vstart)
+    counts = np.zeros(len(planes), dtype=np.int64)
+    counts[[rank[faces[use[j]]] for j in range(n)]] = np.diff(vstart)
+    P_all = faces_points(*flat[:7], np.ascontiguousarray(uv_all), _starts(counts))
     share = (time.perf_counter() - t0) / len(faces)
     for j in range(n):
         if failed[j] or tstart[j] == tstart[j + 1]:

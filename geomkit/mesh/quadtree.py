@@ -322,7 +322,7 @@ def _tensor_cells(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: float,
                  target: float, exact_above: float, max_cells: int, box=None,
-                 pair: bool = False, closed=(False, False)):
+                 pair: bool = False, closed=(False, False), first=None):
     """One tensor grid of cells for a surface whose first estimate asks for few cells.
 
     Each root span gets ``nu x nv`` equal children from :func:`split_counts` of its
@@ -344,7 +344,10 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
     domain's without a box (``cell_errors``' ``box``: the normal gap misses a boundary
     that bends in the tangent plane, as a cone's rim does, which the measurement
     sees), but for the edges of a direction the surface is ``closed`` in that the grid
-    spans: a seam, not a boundary (:func:`fold_lines`).  ``pair``: the grid is the face (untrimmed, or ``box``):
+    spans: a seam, not a boundary (:func:`fold_lines`).  ``first``: the first grid's
+    ``(status, E, cu, cv, worst)`` from :func:`geomkit._kernels.tess_grid.small_grid`
+    when the caller has measured it (the grid kept is not: a status other than
+    ``GRID_OK``), to go on from.  ``pair``: the grid is the face (untrimmed, or ``box``):
     cells are measured with ``cell_deviation``'s ``pair``.
     """
     nsu, nsv = len(ub) - 1, len(vb) - 1
@@ -352,17 +355,19 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         return None
     Pw, p, q, U, V = (surface.homogeneous, surface.degree_u, surface.degree_v,
                       surface.knots_u, surface.knots_v)
-    roots = _tensor_cells(ub, vb)
     start = 0
-    # the measurement's feet and the estimates' edge sags: the box's, else the domain's
+    # the measurement's feet: the box's, else the domain's (the edge sags: fold_lines)
     u0, u1, v0, v1 = (*surface.domain[0], *surface.domain[1]) if box is None else box
     # the first grid in one compiled call (the same grid): kept when it is small and
     # passes; else the steps below go on from its estimates (and its measurement)
     fold = fold_lines(surface, box, closed)
-    status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
-        Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
-        int(max_cells), SMALL_GRID, float(u0), float(u1), float(v0), float(v1), bool(pair),
-        fold)
+    if first is None:
+        status, u, v, cells, dev, diag, E, cu, cv, worst = small_grid(
+            Pw, p, q, U, V, ub, vb, m, k, float(tol), float(target), float(exact_above),
+            int(max_cells), SMALL_GRID, float(u0), float(u1), float(v0), float(v1),
+            bool(pair), fold)
+    else:
+        status, E, cu, cv, worst = first
     if status == GRID_REFUSED:
         return None
     if status == GRID_OK:
@@ -382,7 +387,7 @@ def uniform_grid(surface, ub: np.ndarray, vb: np.ndarray, m: int, k: int, tol: f
         if int(cu.sum()) * int(cv.sum()) > max_cells:
             return None
         if cu.max() == 1 and cv.max() == 1:  # the root spans themselves
-            u, v, cells, Ec = ub, vb, roots, E
+            u, v, cells, Ec = ub, vb, _tensor_cells(ub, vb), E
         else:
             u = _lines(ub, cu)
             v = _lines(vb, cv)

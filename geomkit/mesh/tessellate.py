@@ -159,7 +159,7 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
             return None
         cells, diag = plan
         tri_uv, _ = qt._grid_triangles(cells, np.zeros(len(cells)), diag)
-        cells, cut, tri_uv, _, cuv, cown = _clip_grid(trim, cells, tri_uv, None)
+        cut, tri_uv, _, cuv, cown = _clip_grid(trim, cells, tri_uv, None)
         tri_uv, dev, worst = _grouped(s, tri_uv, cuv, cown, k, tol)
         if tri_uv is not None:
             break
@@ -172,7 +172,7 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
         if grid is None:
             return None
         tri_uv, dev, cells, _ = grid
-        cells, cut, tri_uv, dev, cuv, cown = _clip_grid(trim, cells, tri_uv, dev)
+        cut, tri_uv, dev, cuv, cown = _clip_grid(trim, cells, tri_uv, dev)
         if cuv is not None:
             cdev = deviation(s, cuv, k, tol)
             if not (cdev <= tol).all():
@@ -190,8 +190,8 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
 
 
 def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):
-    """A grid's cells (N, 4) against the trimmed region: ``(cells, cut, tri_uv, dev,
-    cuv, cown)``, the indices of the cut cells, the two triangles (and deviations, if
+    """A grid's cells (N, 4) against the trimmed region: ``(cut, tri_uv, dev, cuv,
+    cown)``, the indices of the cut cells, the two triangles (and deviations, if
     given) of each cell inside, the cut cells' pieces triangulated and the piece of each
     (None when no cell is cut)."""
     state = trim.classify_uv(cells)
@@ -206,7 +206,7 @@ def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):
         cuv, cown = triangulate_pieces(clip_rectangles(
             cells[cut], trim, float(np.add.reduce((inside[:, 1] - inside[:, 0])
                                                   * (inside[:, 3] - inside[:, 2])))))
-    return cells, cut, tri_uv, dev, cuv, cown
+    return cut, tri_uv, dev, cuv, cown
 
 
 def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
@@ -277,14 +277,14 @@ def _whole_grid(s: Surface, k: int, tol: float, size: float, t0: float):
     """A face that is its whole surface as the first uniform grid of
     :func:`geomkit.mesh.quadtree.uniform_grid` (``pair``), welded as
     :func:`geomkit.mesh.weld.weld_grid` does, in one compiled call
-    (:func:`geomkit._kernels.tess_grid.whole_grid`); None when that grid is not kept
-    (the steps of :func:`_tessellate_one` go on)."""
-    (status, tri_uv, dev, cells, welded, P, UV, inv, bnd, near, closed_u,
-     closed_v) = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, k,
-                            float(tol), CELL_TARGET * tol, EXACT_ABOVE * tol, GRID_CELLS,
-                            qt.SMALL_GRID, True, WELD_REL * size, 1e-10 * size, EDGE_T)
+    (:func:`geomkit._kernels.tess_grid.whole_grid`): ``(face, None)``, or ``(None,
+    (closed, first))`` when that grid is not kept (uniform_grid goes on from it)."""
+    (status, tri_uv, dev, cells, welded, P, UV, inv, bnd, near, closed_u, closed_v,
+     first) = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, k,
+                         float(tol), CELL_TARGET * tol, EXACT_ABOVE * tol, GRID_CELLS,
+                         qt.SMALL_GRID, True, WELD_REL * size, 1e-10 * size, EDGE_T)
     if status != GRID_OK:
-        return None
+        return None, ((bool(closed_u), bool(closed_v)), first)
     if not welded:
         V, F, UV, good = weld(s, tri_uv, size, near_uv=False)
     else:
@@ -293,11 +293,17 @@ def _whole_grid(s: Surface, k: int, tol: float, size: float, t0: float):
             V, F, UV, good = merge(P, UV, inv, pairs)
         else:  # distinct grid corners: every face kept
             V, F, good = P, inv.reshape(-1, 3), None
+    return _grid_face(V, F, UV, dev, tri_uv, good, cells,
+                      (bool(closed_u), bool(closed_v)), t0), None
+
+
+def _grid_face(V, F, UV, dev, tri_uv, good, cells, closed, t0: float):
+    """A whole face's uniform grid as the face's part of the mesh: the faces ``good``
+    (None: all) kept, and its stats."""
     dropped = 0 if good is None else len(good) - int(np.count_nonzero(good))
     stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
-             "collapsed_dropped": dropped, "closed_u": bool(closed_u),
-             "closed_v": bool(closed_v), "uniform_grid": True,
-             "seconds": time.perf_counter() - t0}
+             "collapsed_dropped": dropped, "closed_u": closed[0], "closed_v": closed[1],
+             "uniform_grid": True, "seconds": time.perf_counter() - t0}
     if not dropped:  # every face kept: no copies
         return V, F, UV, dev, tri_uv, stats
     return V, F[good], UV, dev[good], tri_uv[good], stats
@@ -334,14 +340,14 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     # cell path drops that loop too, so the untrimmed paths give the same guarantee
     packed = packed_trims(s) if s.trim else None
     whole = not s.trim or domain_rectangle_only(s, trim_target * tol, packed)
+    ub = breakpoints(s.knots_u, s.degree_u)
+    vb = breakpoints(s.knots_v, s.degree_v)
+    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
     if not whole and max_angle is None and max_edge is None:
         # a loop of straight UV pieces around a rectangle: the box grid without polylines
         box = line_rectangle(s, trim_target * tol, packed)
         if box is not None:
-            gridded = _box_grid(s, box, breakpoints(s.knots_u, s.degree_u),
-                                breakpoints(s.knots_v, s.degree_v),
-                                max(5, 2 * max(s.degree_u, s.degree_v) + 1), k, tol, size,
-                                t0)
+            gridded = _box_grid(s, box, ub, vb, m, k, tol, size, t0)
             if gridded is not None:
                 return gridded
     trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed,
@@ -351,29 +357,19 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
     if whole:
         trim = None
     if whole and max_angle is None and max_edge is None:
-        face = _whole_grid(s, k, tol, size, t0)
+        face, again = _whole_grid(s, k, tol, size, t0)
         if face is not None:
             return face
-    ub = breakpoints(s.knots_u, s.degree_u)
-    vb = breakpoints(s.knots_v, s.degree_v)
-    m = max(5, 2 * max(s.degree_u, s.degree_v) + 1)
-    if whole and max_angle is None and max_edge is None:
-        closed = closed_directions(s, size)
+        closed, first = again
+        # the first grid failed or is big: the Python steps go on from it
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
-                               GRID_CELLS, pair=True, closed=closed)
+                               GRID_CELLS, pair=True, closed=closed, first=first)
         if grid is not None:
             tri_uv, dev, cells, (u, v, diag) = grid
             welded = weld_grid(s, u, v, diag, size)
             V, F, UV, good = welded if welded is not None else \
                 weld(s, tri_uv, size, near_uv=False)
-            dropped = len(good) - int(np.count_nonzero(good))
-            stats = {"cells": int(len(cells)), "cut_cells": 0, "rounds": 1,
-                     "collapsed_dropped": dropped,
-                     "closed_u": closed[0], "closed_v": closed[1], "uniform_grid": True,
-                     "seconds": time.perf_counter() - t0}
-            if not dropped:  # every face kept: no copies
-                return V, F, UV, dev, tri_uv, stats
-            return V, F[good], UV, dev[good], tri_uv[good], stats
+            return _grid_face(V, F, UV, dev, tri_uv, good, cells, closed, t0)
     if trim is not None and max_angle is None and max_edge is None:
         box = trim.rectangle()
         if box is not None:

@@ -216,23 +216,32 @@ def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
     """``tess_grid.whole_grid`` (a whole face's first grid, its triangles, vertices and
     closed directions in one call) against ``quadtree.uniform_grid``, ``weld.weld_grid``
     and ``cells.closed_directions``, bit for bit, on every sample surface (poles, seams,
-    creases) and the faces of a part with cylinders and cones."""
+    creases) and the faces of a part with cylinders and cones; where its first grid is
+    not kept, uniform_grid going on from it (``first``) as from its own."""
     from geomkit._kernels.tess_grid import GRID_OK, whole_grid
     from geomkit.mesh.weld import boundary_pairs, merge, weld_grid
     from geomkit.tolerances import WELD_REL
 
-    kept = closed = 0
+    kept = closed = went_on = 0
     for s, ub, vb, m in _grid_cases("ug16_io1_ap214.stp"):
         size = s.size
         for tol in (1e-2 * size, 1e-3 * size):
             got = whole_grid(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, 6,
                              tol, C.CELL_TARGET * tol, C.EXACT_ABOVE * tol, 4096,
                              Q.SMALL_GRID, True, WELD_REL * size, 1e-10 * size, C.EDGE_T)
-            if got[0] != GRID_OK:
-                continue
             want = Q.uniform_grid(s, ub, vb, m, 6, tol, C.CELL_TARGET * tol,
                                   C.EXACT_ABOVE * tol, 4096, pair=True,
                                   closed=C.closed_directions(s, size))
+            if got[0] != GRID_OK:  # the Python steps go on from the kernel's first grid
+                again = Q.uniform_grid(s, ub, vb, m, 6, tol, C.CELL_TARGET * tol,
+                                       C.EXACT_ABOVE * tol, 4096, pair=True,
+                                       closed=(bool(got[10]), bool(got[11])), first=got[12])
+                assert (again is None) == (want is None)
+                if want is not None:
+                    for a, b in zip(again[:3] + again[3], want[:3] + want[3]):
+                        assert a.dtype == b.dtype and np.array_equal(a, b)
+                went_on += 1
+                continue
             tri_uv, dev, cells, (u, v, diag) = want
             for a, b in zip(got[1:4], (tri_uv, dev, cells)):
                 assert a.dtype == b.dtype and np.array_equal(a, b)
@@ -247,4 +256,4 @@ def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
             assert (bool(got[10]), bool(got[11])) == C.closed_directions(s, size)
             kept += 1
             closed += bool(got[10] or got[11])
-    assert kept > 30 and closed > 3
+    assert kept > 30 and closed > 3 and went_on > 3

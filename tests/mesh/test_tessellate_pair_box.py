@@ -215,3 +215,22 @@ def test_line_rectangle_decides_as_the_polylines(catia, ctc01):
     CP, W, K, deg, co, ko, lf = loop(box)
     assert line_rectangle(s, 0.5 * catia[1], (CP, W, K, deg + np.eye(len(deg), dtype=np.int64)[0],
                                                co, ko, lf)) is None
+
+
+def test_a_model_no_one_here_wrote_holds_tol_both_ways(impeller):
+    """pyiges' impeller (277 trimmed faces from another CAD system): meshed with the
+    grids of the estimates on most faces, every face within tol both ways by
+    independent two-sided sampling (exact projection onto the faces, the exact trim
+    curves' points against the mesh)."""
+    S = impeller.surfaces
+    B = np.array([s.bounds for s in S])
+    tol = 1e-2 * float(np.linalg.norm(B[:, 1].max(axis=0) - B[:, 0].min(axis=0)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mesh = tessellate(S, tol)
+    routes = [st for st in mesh.stats["surfaces"]]
+    assert sum(bool(st.get("trimmed_grid")) for st in routes) > 50
+    assert sum(bool(st.get("uniform_grid")) for st in routes) > 5
+    assert mesh.max_deviation <= tol
+    r = naive.sample_mesh_deviation(mesh, S, n_faces=3000, n_worst=400, exact_above=tol)
+    assert r["to_surface"] <= tol and r["to_mesh"] <= tol, r
