@@ -7,7 +7,9 @@ triangle is within ``tol`` (steps 1, 3 and 4 of :mod:`geomkit.mesh.tessellate`).
   clipping (:meth:`geomkit.mesh.trim_polylines.TrimPolylines.classify`) and the fallback's
   staircase (:mod:`geomkit.mesh.fallback`) share the rounds.
 * :func:`clip_triangulate` -- cut cells clipped to the trimmed region and triangulated
-  by the constrained Delaunay rule (GEOS via shapely).
+  by the constrained Delaunay rule (GEOS via shapely); :func:`clip_grid_cells` the
+  same for a grid's rectangles, compiled (:mod:`geomkit._kernels.tess_clip`), GEOS
+  taking the cells the kernel leaves.
 * :func:`deviation` -- the measurement of step 4.
 """
 
@@ -22,6 +24,7 @@ import numpy as np
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.weld import points, weld
 from geomkit._kernels.tess import triangle_deviation
+from geomkit._kernels.tess_clip import CLIP_LEFT, clip_cells, ring_directions
 from geomkit._kernels.tess_grid import edge_gaps
 from geomkit._kernels.tess_lattice import cell_triangles
 from geomkit.errors import ToleranceNotMetWarning
@@ -160,6 +163,52 @@ def clip_rectangles(c: np.ndarray, trim, inside_area: float):
             <= 1e-9 * cut_area:
         return pieces
     return shapely.intersection(shapely.box(c[:, 0], c[:, 2], c[:, 1], c[:, 3]), region)
+
+
+def clip_grid_cells(c: np.ndarray, trim, inside_area: float):
+    """The trimmed region in the axis-aligned cells ``c`` (n, 4) ``u0, u1, v0, v1``
+    triangulated by the constrained Delaunay rule: UV triangles (t, 3, 2)
+    counter-clockwise and the cell of each, in cell order.  The compiled clip
+    (:func:`geomkit._kernels.tess_clip.clip_cells`) takes the cells it can; GEOS
+    (:func:`clip_rectangles`) the others.  Kept when the pieces, with the cells wholly
+    inside (``inside_area``), add up to the even-odd area of the rings; else every
+    cell goes through GEOS's overlay."""
+    rings = trim.rings()
+    sizes = np.array([len(r) for r in rings], dtype=np.int64)
+    starts = np.zeros(len(rings) + 1, dtype=np.int64)
+    np.add.accumulate(sizes, out=starts[1:])
+    P = np.ascontiguousarray(np.concatenate(rings) if len(rings) > 1 else rings[0],
+                             dtype=np.float64)
+    dirs = ring_directions(P, starts)
+    tri, own, status, area = clip_cells(np.ascontiguousarray(c, dtype=np.float64), P,
+                                        starts, dirs)
+    # the region's area: each ring's shoelace sum in its walking direction
+    x, y = P[:, 0], P[:, 1]
+    cross = x[:-1] * y[1:] - x[1:] * y[:-1]
+    ring_of = np.repeat(np.arange(len(rings)), sizes - 1)
+    keep = np.ones(len(cross), dtype=bool)
+    keep[starts[1:-1] - 1] = False  # the step from one ring's last point to the next's
+    region_area = 0.5 * float(np.dot(np.bincount(ring_of, cross[keep], len(rings)), dirs))
+    cut_area = float(np.add.reduce((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))
+    left = np.nonzero(status == CLIP_LEFT)[0]
+    total = inside_area + float(np.add.reduce(area))
+    if len(left):
+        import shapely
+
+        pieces = shapely.lib.clip_by_rect(trim.region, c[left, 0], c[left, 2], c[left, 1],
+                                          c[left, 3])
+        if not np.logical_and.reduce(shapely.is_valid(pieces)):
+            return triangulate_pieces(clip_rectangles(c, trim, inside_area))
+        total += float(np.add.reduce(shapely.area(pieces)))
+    if abs(total - region_area) > 1e-9 * cut_area:
+        return triangulate_pieces(clip_rectangles(c, trim, inside_area))
+    if len(left):
+        gtri, gown = triangulate_pieces(pieces)
+        tri = np.concatenate([tri, gtri])
+        own = np.concatenate([own, left[gown]])
+        order = np.argsort(own, kind="stable")
+        tri, own = tri[order], own[order]
+    return tri, own
 
 
 def triangulate_pieces(pieces):

@@ -68,8 +68,7 @@ import numpy as np
 
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.cells import (CELL_TARGET, EDGE_T, EXACT_ABOVE, adaptive_cells, breakpoints,
-                                clip_rectangles, closed_directions, deviation,
-                                triangulate_pieces)
+                                clip_grid_cells, closed_directions, deviation)
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_grid
@@ -203,9 +202,8 @@ def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):
     cuv = cown = None
     if len(cut):
         inside = cells[state == 1]
-        cuv, cown = triangulate_pieces(clip_rectangles(
-            cells[cut], trim, float(np.add.reduce((inside[:, 1] - inside[:, 0])
-                                                  * (inside[:, 3] - inside[:, 2])))))
+        cuv, cown = clip_grid_cells(cells[cut], trim, float(np.add.reduce(
+            (inside[:, 1] - inside[:, 0]) * (inside[:, 3] - inside[:, 2]))))
     return cut, tri_uv, dev, cuv, cown
 
 
