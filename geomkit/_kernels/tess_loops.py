@@ -110,3 +110,126 @@ def faces_points(Pw, pw_off, nets, U, u_off, V, v_off, uv, face_start):
         surface_points_range(a, b, Pf, nets[f, 2], nets[f, 3], U[u_off[f]:u_off[f + 1]],
                              V[v_off[f]:v_off[f + 1]], uv, out)
     return out
+
+
+@jit
+def _face_rings(f, start, face_loop, kept, rect, shell, out, sizes, r):
+    """Face ``f``'s rings (see :func:`plane_rings`) as loop numbers into ``out``
+    (-1: the domain rectangle) and their sizes into ``sizes``, from row ``r``: the
+    next row, or -1 when a ring has fewer than 4 points."""
+    if rect[f]:
+        out[r] = -1
+        sizes[r] = 5
+        r += 1
+    else:
+        out[r] = shell[f]
+        sizes[r] = start[shell[f] + 1] - start[shell[f]]
+        r += 1
+    for lp in range(face_loop[f], face_loop[f + 1]):
+        if kept[lp] and (rect[f] or lp != shell[f]):
+            out[r] = lp
+            sizes[r] = start[lp + 1] - start[lp]
+            r += 1
+    for i in range(r):
+        if sizes[i] < 4:
+            return -1
+    return r
+
+
+@jit
+def plane_rings(pts, start, face_loop, kept, rect, shell, domains):
+    """The rings of each face's trimmed region as one polygon with holes, for shapely's
+    vectorised constructors.  Face ``f`` (loops ``face_loop[f]:face_loop[f+1]``, loop
+    ``l``'s closed polyline ``pts[start[l]:start[l+1]]``): when ``rect[f]``, the domain
+    rectangle ``(u0, v0), (u1, v0), (u1, v1), (u0, v1), (u0, v0)`` of ``domains[f] =
+    (u0, u1, v0, v1)`` then its loops with ``kept[l]``, in order; else loop ``shell[f]``
+    then its other kept loops, in order.  A face with a ring of fewer than 4 points is
+    left out.
+
+    Returns ``(coords (n, 2), ring_size (R,), ring_face (R,), faces (F,))``: the kept
+    faces' rings one after another, each ring's face as its rank in ``faces`` (the
+    faces kept, ascending)."""
+    nf = face_loop.shape[0] - 1
+    most = 1
+    for f in range(nf):
+        most = max(most, face_loop[f + 1] - face_loop[f] + 1)
+    ring = np.empty(most, dtype=np.int64)
+    size = np.empty(most, dtype=np.int64)
+    nr = 0
+    npt = 0
+    nk = 0
+    ok = np.zeros(nf, dtype=np.bool_)
+    for f in range(nf):
+        r = _face_rings(f, start, face_loop, kept, rect, shell, ring, size, 0)
+        if r < 0:
+            continue
+        ok[f] = True
+        nk += 1
+        nr += r
+        for i in range(r):
+            npt += size[i]
+    coords = np.empty((npt, 2))
+    ring_size = np.empty(nr, dtype=np.int64)
+    ring_face = np.empty(nr, dtype=np.int64)
+    faces = np.empty(nk, dtype=np.int64)
+    k = 0
+    q = 0
+    n = 0
+    for f in range(nf):
+        if not ok[f]:
+            continue
+        r = _face_rings(f, start, face_loop, kept, rect, shell, ring, size, 0)
+        faces[k] = f
+        for i in range(r):
+            ring_size[q] = size[i]
+            ring_face[q] = k
+            q += 1
+            lp = ring[i]
+            if lp < 0:
+                u0 = domains[f, 0]
+                u1 = domains[f, 1]
+                v0 = domains[f, 2]
+                v1 = domains[f, 3]
+                coords[n, 0] = u0
+                coords[n, 1] = v0
+                coords[n + 1, 0] = u1
+                coords[n + 1, 1] = v0
+                coords[n + 2, 0] = u1
+                coords[n + 2, 1] = v1
+                coords[n + 3, 0] = u0
+                coords[n + 3, 1] = v1
+                coords[n + 4, 0] = u0
+                coords[n + 4, 1] = v0
+                n += 5
+            else:
+                for j in range(start[lp], start[lp + 1]):
+                    coords[n, 0] = pts[j, 0]
+                    coords[n, 1] = pts[j, 1]
+                    n += 1
+        k += 1
+    return coords, ring_size, ring_face, faces
+
+
+@jit
+def loop_areas(pts, start):
+    """``(area2 (L,), err (L,))``: ``|sum x_i y_(i+1) - sum x_(i+1) y_i|`` over each closed
+    polyline ``pts[start[l]:start[l+1]]`` (twice its shoelace area; each sum in order)
+    and a bound of the rounding error of that value computed in any order of the sums,
+    the other's too (``4 (k + 2) 2^-53`` times the sum of the terms' magnitudes, twice
+    the standard bound of a sum of ``k`` products)."""
+    nl = start.shape[0] - 1
+    area = np.empty(nl)
+    err = np.empty(nl)
+    for lp in range(nl):
+        a = 0.0
+        b = 0.0
+        m = 0.0
+        for i in range(start[lp], start[lp + 1] - 1):
+            x = pts[i, 0] * pts[i + 1, 1]
+            y = pts[i + 1, 0] * pts[i, 1]
+            a += x
+            b += y
+            m += abs(x) + abs(y)
+        area[lp] = abs(a - b)
+        err[lp] = 4.0 * (start[lp + 1] - start[lp] + 2) * 2.0 ** -53 * m
+    return area, err

@@ -21,9 +21,10 @@ import time
 import numpy as np
 
 from geomkit.mesh.cells import triangle_coordinates
-from geomkit._kernels.tess_loops import faces_points
-from geomkit.mesh.trim_polylines import (TrimPolylines, _starts, affine_map, flat_surfaces,
-                                         loop_polylines)
+from geomkit._kernels.tess_loops import faces_points, loop_areas, plane_rings
+from geomkit.mesh.trim_polylines import (TrimPolylines, domain_loops, flat_surfaces, is_affine,
+                                         largest_loop, loop_points)
+from geomkit.nurbs.trims import starts
 
 __all__ = ["planar_batch"]
 
@@ -62,43 +63,30 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     import shapely
 
     t0 = time.perf_counter()
-    faces, rings = [], []
     out = {}
     planes = []
     for i, s in enumerate(surfaces):
         if not s.trim:
             continue
-        if affine_map(s, s.size if sizes is None else sizes[i]) is None:
+        if not is_affine(s, s.size if sizes is None else sizes[i]):
             out[i] = False  # not a plane: the face-by-face path need not ask again
             continue
         planes.append(i)
     if not planes:
         return out
-    flat = flat_surfaces([surfaces[i] for i in planes])
-    try:  # every plane's trim polylines in one call
-        lines = loop_polylines([surfaces[i] for i in planes], chord_tol, True, cross_knots,
-                               flat=flat)
-    except Exception:  # noqa: BLE001 - face by face below: the face path reports it
-        lines = [None] * len(planes)
-    for i, polylines in zip(planes, lines):
-        try:
-            trim = TrimPolylines(surfaces[i], chord_tol, affine=True, cross_knots=cross_knots,
-                                 polylines=polylines)
-        except Exception:  # noqa: BLE001 - the face-by-face path reports it
-            continue
-        r = trim.rings()
-        if min(len(p) for p in r) < 4:  # not a ring: left to the face-by-face path
-            continue
-        faces.append(i)
-        rings.append(r)
+    P = [surfaces[i] for i in planes]
+    flat = flat_surfaces(P)
+    try:  # every plane's trim polylines and rings in one call each
+        coords, ring_size, ring_face, kept = _rings(P, chord_tol, cross_knots, flat)
+        faces = [planes[f] for f in kept.tolist()]
+    except Exception:  # noqa: BLE001 - face by face: the face path reports a failure
+        faces, coords, ring_size, ring_face = _rings_one_by_one(surfaces, planes, chord_tol,
+                                                                cross_knots)
     if not faces:
         return out
-    ring_sizes = [len(p) for r in rings for p in r]
-    coords = np.concatenate([p for r in rings for p in r])
-    ring_geoms = shapely.linearrings(coords, indices=np.repeat(np.arange(len(ring_sizes)),
-                                                                ring_sizes))
-    owner = np.repeat(np.arange(len(faces)), [len(r) for r in rings])
-    polys = shapely.polygons(ring_geoms, indices=owner)
+    ring_geoms = shapely.linearrings(coords, indices=np.repeat(np.arange(len(ring_size)),
+                                                                ring_size))
+    polys = shapely.polygons(ring_geoms, indices=ring_face)
     ok = shapely.is_valid(polys) & ~shapely.is_empty(polys)
     use = np.nonzero(ok)[0]
     if not len(use):
@@ -131,7 +119,7 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     rank = {i: r for r, i in enumerate(planes)}
     counts = np.zeros(len(planes), dtype=np.int64)
     counts[[rank[faces[use[j]]] for j in range(n)]] = np.diff(vstart)
-    P_all = faces_points(*flat[:7], np.ascontiguousarray(uv_all), _starts(counts))
+    P_all = faces_points(*flat[:7], np.ascontiguousarray(uv_all), starts(counts))
     share = (time.perf_counter() - t0) / len(faces)
     for j in range(n):
         if failed[j] or tstart[j] == tstart[j + 1]:
@@ -140,3 +128,62 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
         out[faces[use[j]]] = (np.ascontiguousarray(uv_all[a:b]), F_all[tstart[j]:tstart[j + 1]],
                               P_all[a:b], share)
     return out
+
+
+def _rings(P, chord_tol: float, cross_knots: bool, flat) -> tuple:
+    """The rings of the planes ``P`` (surfaces with trims) for shapely's constructors,
+    from every plane's trim polylines in one call (:func:`loop_points`):
+    ``(coords, ring_size, ring_face, kept)`` of :func:`~geomkit._kernels.tess_loops.
+    plane_rings`, each face's rings those of ``TrimPolylines(...).rings()``: the loops
+    that are not the domain rectangle (:func:`domain_loops`, asked only of a plane with
+    a loop within its ``1e-6`` bound), the rectangle first when a loop was it, else the
+    loop of the largest area (:func:`loop_areas`, the areas' rounding bounded: when two
+    are too close to tell, :func:`largest_loop` decides as ``rings()`` does)."""
+    pts, start, gaps, face_loop = loop_points(P, chord_tol, True, cross_knots, flat=flat)
+    d = flat[7]
+    hi = 1e-6 * np.maximum(d[:, 1] - d[:, 0], d[:, 3] - d[:, 2])
+    perimeter = d[:, 1] - d[:, 0] + d[:, 3] - d[:, 2]
+    nloops = np.diff(face_loop)
+    of = np.repeat(np.arange(len(P)), nloops)  # each loop's face
+    kept = np.ones(len(gaps), dtype=bool)
+    near = (gaps[:, 0] <= hi[of]) & (gaps[:, 1] <= (hi * perimeter)[of])
+    fl = face_loop.tolist()
+    for f in np.unique(of[near]).tolist():  # (rare) the face's own test decides
+        a, b = fl[f], fl[f + 1]
+        kept[a:b] = [not x for x in domain_loops(P[f], chord_tol, gaps[a:b].tolist())]
+    rect = np.add.reduceat(kept.astype(np.int64), face_loop[:-1]) < nloops
+    shell = face_loop[:-1].copy()
+    multi = np.nonzero(~rect & (nloops > 1))[0].tolist()
+    if multi:
+        area, err = loop_areas(pts, start)
+        for f in multi:
+            a, b = fl[f], fl[f + 1]
+            k = int(np.argmax(area[a:b]))
+            low = area[a + k] - err[a + k]
+            others = np.delete(np.arange(a, b), k)
+            if not (area[others] + err[others] < low).all():  # too close to tell
+                bounds = start[a:b + 1].tolist()
+                k = largest_loop([pts[x:y] for x, y in zip(bounds[:-1], bounds[1:])])
+            shell[f] = a + k
+    return plane_rings(pts, start, face_loop, kept, rect, shell, d)
+
+
+def _rings_one_by_one(surfaces, planes, chord_tol: float, cross_knots: bool) -> tuple:
+    """:func:`_rings` face by face (``TrimPolylines(...).rings()``), a face whose
+    polylines raise left out: ``(faces, coords, ring_size, ring_face)``."""
+    faces, rings = [], []
+    for i in planes:
+        try:
+            r = TrimPolylines(surfaces[i], chord_tol, affine=True,
+                              cross_knots=cross_knots).rings()
+        except Exception:  # noqa: BLE001 - the face-by-face path reports it
+            continue
+        if min(len(p) for p in r) < 4:  # not a ring: left to the face-by-face path
+            continue
+        faces.append(i)
+        rings.append(r)
+    if not faces:
+        return faces, None, None, None
+    ring_size = [len(p) for r in rings for p in r]
+    return (faces, np.concatenate([p for r in rings for p in r]), ring_size,
+            np.repeat(np.arange(len(faces)), [len(r) for r in rings]))

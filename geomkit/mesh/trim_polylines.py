@@ -24,8 +24,33 @@ from geomkit._kernels.tess_loops import face_loops
 from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
                                        speed_bound_of)
 from geomkit.nurbs.surface import Surface
-from geomkit.nurbs.trims import loop_pack
+from geomkit.nurbs.trims import packed_loops, packed_trims, starts
 
+
+
+def domain_loops(surface: Surface, chord_tol: float, gaps) -> list[bool]:
+    """Whether each trim loop of ``surface`` is its domain rectangle, from the loops'
+    ``(gap, area_gap)`` (:func:`geomkit._kernels.tess_trim.loop_rectangle_gap` of their
+    polylines): within ``eps`` (UV) of the domain's edges and of its area.  The sliver
+    between them is within ``eps * speed_bound`` of the loop in 3-D, at most 1e-3 of the
+    chord tolerance (files round their pcurves: OCC's closed torus face ends 2e-10 short
+    of 2 pi); ``eps`` is at most ``1e-6`` of the domain's size (a loop failing that
+    fails ``eps`` too: the bound is computed only for a loop that passes it)."""
+    (u0, u1), (v0, v1) = surface.domain
+    size_uv = max(u1 - u0, v1 - v0)
+    hi = 1e-6 * size_uv
+    eps = None
+    perimeter = u1 - u0 + v1 - v0
+    out = []
+    for gap, area_gap in gaps:
+        if not (gap <= hi and area_gap <= hi * perimeter):
+            out.append(False)
+            continue
+        if eps is None:  # the bound of the surface's speed, only when needed
+            eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
+            eps = max(eps, 1e-12 * size_uv)
+        out.append(gap <= eps and area_gap <= eps * perimeter)
+    return out
 
 
 class TrimPolylines:
@@ -44,31 +69,17 @@ class TrimPolylines:
         self.cross_knots = cross_knots  # segments may run across smooth knots
         self.chord_tol = chord_tol
         self.affine = affine  # S maps UV chords to 3-D chords: sample the curve only
-        (u0, u1), (v0, v1) = surface.domain
         self.loops = []
-        self.domain_loop = False
-        # a loop within `eps` (UV) of the domain's edges is the domain rectangle: the
-        # sliver between them is within eps * speed_bound of the loop in 3-D, at most
-        # 1e-3 of the chord tolerance (files round their pcurves: OCC's closed torus
-        # face ends 2e-10 short of 2 pi)
-        size_uv = max(u1 - u0, v1 - v0)
-        hi = 1e-6 * size_uv  # eps is at most this: a loop failing it fails eps too
-        eps = None
-        perimeter = u1 - u0 + v1 - v0
+        self.domain_loop = False  # a loop was the domain rectangle (:func:`domain_loops`)
         if polylines is None:
             polylines = loop_polylines([surface], chord_tol, affine, cross_knots,
                                        None if packed is None else [packed])[0]
-        for pts, (gap, area_gap) in zip(*polylines):
-            if not (gap <= hi and area_gap <= hi * perimeter):
-                self.loops.append(pts)
-                continue
-            if eps is None:  # the bound of the surface's speed, only when needed
-                eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
-                eps = max(eps, 1e-12 * size_uv)
-            if gap <= eps and area_gap <= eps * perimeter:
+        loops, gaps = polylines
+        for pts, is_domain in zip(loops, domain_loops(surface, chord_tol, gaps)):
+            if is_domain:
                 self.domain_loop = True
-                continue
-            self.loops.append(pts)
+            else:
+                self.loops.append(pts)
         self._region = None
         self._packed_rings = None
 
@@ -105,8 +116,7 @@ class TrimPolylines:
             return [np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1], [u0, v0]])] + loops
         if len(loops) == 1:
             return loops
-        area = [abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1])) for p in loops]
-        k = int(np.argmax(area))
+        k = largest_loop(loops)
         return [loops[k]] + loops[:k] + loops[k + 1:]
 
     def rectangle(self):
@@ -146,6 +156,13 @@ class TrimPolylines:
             classify_cells(P, starts, n_cut, np.ascontiguousarray(uv, dtype=np.float64),
                            state)
         return state
+
+
+def largest_loop(loops) -> int:
+    """The index of the loop of the largest shoelace area (the first of equal ones),
+    each area ``|x[:-1] . y[1:] - x[1:] . y[:-1]|`` by numpy's dot products."""
+    area = [abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1])) for p in loops]
+    return int(np.argmax(area))
 
 
 def _polygon(rings):
@@ -193,44 +210,41 @@ def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bo
 def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
                    packs=None, flat=None) -> list:
     """Per surface ``(loops, gaps)``: the closed (k, 2) UV polylines of its trim loops
-    (read only) and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`,
-    every piece of every loop of every surface in one
-    :func:`geomkit._kernels.tess_loops.face_loops` call (each piece from its knots, split
-    until every 3-D chord is within ``chord_tol``; ``affine``: the surfaces are affine
-    maps of their parameters, whose UV chords map to 3-D chords).  ``packs``: their
-    :func:`packed_trims`, ``flat``: :func:`flat_surfaces`, if made."""
-    packs = packs or [packed_trims(s) for s in surfaces]
+    (read only) and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`
+    (:func:`loop_points`, split by surface and loop)."""
+    pts, start, gaps, face_loop = loop_points(surfaces, chord_tol, affine, cross_knots,
+                                              packs, flat)
+    bounds = start.tolist()
+    loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    fl = face_loop.tolist()
+    return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+
+
+def loop_points(surfaces, chord_tol: float, affine: bool, cross_knots: bool, packs=None,
+                flat=None) -> tuple:
+    """``(pts (n, 2) read only, start (L+1,), gaps (L, 2), face_loop (len(surfaces)+1,))``:
+    the closed UV polylines of the trim loops of ``surfaces`` (loop ``l``:
+    ``pts[start[l]:start[l+1]]``, surface ``f``'s loops ``face_loop[f]:face_loop[f+1]``)
+    and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`, every piece of
+    every loop of every surface in one :func:`geomkit._kernels.tess_loops.face_loops` call
+    (each piece from its knots, split until every 3-D chord is within ``chord_tol``;
+    ``affine``: the surfaces are affine maps of their parameters, whose UV chords map to
+    3-D chords).  ``packs``: ``[packed_trims(s)]`` of a single surface, ``flat``:
+    :func:`flat_surfaces`, if made."""
     if len(surfaces) == 1:
-        CP, W, K, deg, cp_off, k_off, loop_first = packs[0]
+        CP, W, K, deg, cp_off, k_off, loop_first = packs[0] if packs else \
+            packed_trims(surfaces[0])
         face_piece = np.array([0, len(deg)], dtype=np.int64)
         face_loop = np.array([0, len(loop_first) - 1], dtype=np.int64)
-    else:
-        pieces = np.array([len(pk[3]) for pk in packs], dtype=np.int64)
-        cps = np.array([len(pk[0]) for pk in packs], dtype=np.int64)
-        kns = np.array([len(pk[2]) for pk in packs], dtype=np.int64)
-        face_piece = _starts(pieces)
-        face_loop = _starts(np.array([len(pk[6]) - 1 for pk in packs], dtype=np.int64))
-        cp_base, k_base = _starts(cps), _starts(kns)
-        CP = np.concatenate([pk[0] for pk in packs])
-        W = np.concatenate([pk[1] for pk in packs])
-        K = np.concatenate([pk[2] for pk in packs])
-        deg = np.concatenate([pk[3] for pk in packs])
-        # each face's offsets (from 0) moved to its place; the last end once
-        cp_off = np.concatenate([pk[4][:-1] + b for pk, b in zip(packs, cp_base.tolist())]
-                                + [cp_base[-1:]])
-        k_off = np.concatenate([pk[5][:-1] + b for pk, b in zip(packs, k_base.tolist())]
-                               + [k_base[-1:]])
-        loop_first = np.concatenate([pk[6][:-1] + b for pk, b in
-                                     zip(packs, face_piece.tolist())] + [face_piece[-1:]])
+    else:  # every loop's kept pack, concatenated once
+        CP, W, K, deg, cp_off, k_off, loop_first, face_loop = packed_loops(surfaces)
+        face_piece = loop_first[face_loop]
     flat = flat_surfaces(surfaces) if flat is None else flat
     pts, start, gaps = face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece,
                                   face_loop, *flat, SEED_SPANS, chord_tol, not affine,
                                   cross_knots)
     pts.flags.writeable = False
-    bounds = start.tolist()
-    loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-    fl = face_loop.tolist()
-    return [(loops[a:b], gaps[a:b].tolist()) for a, b in zip(fl[:-1], fl[1:])]
+    return pts, start, gaps, face_loop
 
 
 def _rectangle_of(pts, chord_tol: float, surface: Surface):
@@ -300,46 +314,14 @@ def flat_surfaces(surfaces) -> tuple:
         Pw = np.concatenate([s.homogeneous.reshape(-1, 4) for s in surfaces])
         U = np.concatenate([s.knots_u for s in surfaces])
         V = np.concatenate([s.knots_v for s in surfaces])
-        pw_off = _starts(np.array([s.homogeneous.shape[0] * s.homogeneous.shape[1]
+        pw_off = starts(np.array([s.homogeneous.shape[0] * s.homogeneous.shape[1]
                                    for s in surfaces], dtype=np.int64))
-        u_off = _starts(np.array([len(s.knots_u) for s in surfaces], dtype=np.int64))
-        v_off = _starts(np.array([len(s.knots_v) for s in surfaces], dtype=np.int64))
+        u_off = starts(np.array([len(s.knots_u) for s in surfaces], dtype=np.int64))
+        v_off = starts(np.array([len(s.knots_v) for s in surfaces], dtype=np.int64))
     nets = np.array([s.homogeneous.shape[:2] + (s.degree_u, s.degree_v) for s in surfaces],
                     dtype=np.int64)
     domains = np.array([s.domain[0] + s.domain[1] for s in surfaces], dtype=np.float64)
     return Pw, pw_off, nets, U, u_off, V, v_off, domains
-
-
-def _starts(counts: np.ndarray) -> np.ndarray:
-    """``[0, c0, c0 + c1, ...]`` (len(counts) + 1,) int64."""
-    out = np.zeros(len(counts) + 1, dtype=np.int64)
-    np.add.accumulate(counts, out=out[1:])
-    return out
-
-
-def packed_trims(surface: Surface):
-    """The trim pieces of ``surface``, every loop's in order, as flat arrays for the
-    kernels: ``(CP (n, 2), W (n,), K (k,), deg (m,), cp_off (m+1,), k_off (m+1,),
-    loop_first (loops+1,))``, piece ``c``'s control points ``CP[cp_off[c]:cp_off[c+1]]``
-    (weights ``W``), its knots ``K[k_off[c]:k_off[c+1]]``, loop ``i``'s pieces
-    ``loop_first[i]:loop_first[i+1]``.  Built from each loop's pack, kept with the
-    loop (:func:`geomkit.nurbs.trims.loop_pack`: the reader has made it when it
-    checked the loop); a single loop's arrays are its pack's own (read only here)."""
-    packs = [loop_pack(loop) for loop in surface.trim]
-    if len(packs) == 1:
-        CP, W, cp_off, deg, K, k_off = packs[0]
-        return CP, W, K, deg, cp_off, k_off, np.array([0, len(deg)], dtype=np.int64)
-    cp_off = [packs[0][2]]
-    k_off = [packs[0][5]]
-    first = [0]
-    for pk in packs:
-        first.append(first[-1] + len(pk[3]))
-    for pk in packs[1:]:
-        cp_off.append(pk[2][1:] + cp_off[-1][-1])
-        k_off.append(pk[5][1:] + k_off[-1][-1])
-    return (np.concatenate([pk[0] for pk in packs]), np.concatenate([pk[1] for pk in packs]),
-            np.concatenate([pk[4] for pk in packs]), np.concatenate([pk[3] for pk in packs]),
-            np.concatenate(cp_off), np.concatenate(k_off), np.array(first, dtype=np.int64))
 
 
 def speed_bound(s: Surface) -> float:
@@ -393,8 +375,8 @@ def affine_map(s: Surface, size: float):
     P = s.control_points
     nu, nv = P.shape[:2]
     if nu == 2 and nv == 2:  # the bilinear patch (degree 1): the parallelogram test
-        return _bilinear_affine(P.tolist(), float(s.knots_u[1]), float(s.knots_u[2]),
-                                float(s.knots_v[1]), float(s.knots_v[2]), size)
+        oab = _bilinear_affine(P.tolist(), s.knots_u.tolist(), s.knots_v.tolist(), size)
+        return None if oab is None else _not_degenerate(*(np.array(x) for x in oab))
     gu = _greville(s.knots_u, s.degree_u, nu)
     gv = _greville(s.knots_v, s.degree_v, nv)
     du, dv = gu[-1] - gu[0], gv[-1] - gv[0]
@@ -424,13 +406,15 @@ def _not_degenerate(o, a, b):
     return o, a, b
 
 
-def _bilinear_affine(P, gu0, gu1, gv0, gv1, size):
-    """:func:`affine_map` of a 2 x 2 net ``P`` (nested lists of floats) at the
-    Greville abscissae ``gu0, gu1`` / ``gv0, gv1``: ``a``, ``b`` the edges, ``o`` the
-    origin, refused when the twist (the net's departure from a parallelogram) exceeds
-    ``AFFINE_REL * size``.  Float by float, the operations numpy did on the rows (the
-    same values, without a numpy call per 3-vector)."""
+def _bilinear_affine(P, ku, kv, size):
+    """:func:`affine_map`'s ``(o, a, b)`` (lists of floats) of a 2 x 2 net ``P`` (nested
+    lists of floats) of knots ``ku``, ``kv`` (lists; the Greville abscissae are
+    ``ku[1], ku[2]`` / ``kv[1], kv[2]``) before the degeneracy test: ``a``, ``b`` the
+    edges, ``o`` the origin; None when the twist (the net's departure from a
+    parallelogram) exceeds ``AFFINE_REL * size``.  Float by float, the operations numpy
+    did on the rows (the same values, without a numpy call per 3-vector)."""
     (p00, p01), (p10, p11) = P
+    gu0, gu1, gv0, gv1 = ku[1], ku[2], kv[1], kv[2]
     du, dv = gu1 - gu0, gv1 - gv0
     a = [(p10[i] - p00[i]) / du for i in range(3)]
     b = [(p01[i] - p00[i]) / dv for i in range(3)]
@@ -440,7 +424,41 @@ def _bilinear_affine(P, gu0, gu1, gv0, gv1, size):
     # numpy's max(t) > lim: NaN propagates through the max (and then fails the test)
     if t[0] == t[0] and t[1] == t[1] and t[2] == t[2] and max(t) > lim:
         return None
-    return _not_degenerate(np.array(o), np.array(a), np.array(b))
+    return o, a, b
+
+
+DEGENERATE_MARGIN = 1e-9
+""":func:`is_affine` decides :func:`_not_degenerate`'s test in Python floats when the
+two sides differ by more than this relative margin (rounding differences from numpy's
+dot products are ~1e-16); closer, numpy's own test decides."""
+
+
+def is_affine(s: Surface, size: float) -> bool:
+    """``affine_map(s, size) is not None``, the same answer on every surface, with fewer
+    numpy calls on the common nets: unequal weights refused from a list of them, a
+    2 x 2 net tested in Python floats (:func:`_bilinear_affine`; the degeneracy test
+    too, unless its two sides lie within :data:`DEGENERATE_MARGIN` of each other:
+    then numpy's, as :func:`affine_map` makes it).  Other nets: :func:`affine_map`."""
+    w = s.weights
+    if w is not None:  # finite and > 0 (the surface's invariant): min and max decide
+        wl = w.ravel().tolist()
+        if max(wl) != min(wl):
+            return False
+    P = s.control_points
+    if P.shape[0] != 2 or P.shape[1] != 2:
+        return affine_map(s, size) is not None
+    oab = _bilinear_affine(P.tolist(), s.knots_u.tolist(), s.knots_v.tolist(), size)
+    if oab is None:
+        return False
+    _, (a0, a1, a2), (b0, b1, b2) = oab
+    n0, n1, n2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+    lhs = n0 * n0 + n1 * n1 + n2 * n2
+    rhs = 1e-24 * (a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2)
+    if lhs > rhs * (1.0 + DEGENERATE_MARGIN):
+        return True
+    if lhs < rhs * (1.0 - DEGENERATE_MARGIN):
+        return False
+    return _not_degenerate(*(np.array(x) for x in oab)) is not None
 
 
 def planar_trimmed(trim: TrimPolylines):

@@ -1,0 +1,149 @@
+"""The trimmed planes' rings in one pass (:func:`geomkit.mesh.planes._rings`, kernels
+``geomkit._kernels.tess_loops.plane_rings`` and ``loop_areas``), the packing of every
+loop of many surfaces at once (:func:`geomkit.nurbs.trims.packed_loops`) and the plane
+test with fewer numpy calls (:func:`geomkit.mesh.trim_polylines.is_affine`), each
+against the route it replaced: the rings of ``TrimPolylines(...).rings()`` face by face
+(:func:`geomkit.mesh.planes._rings_one_by_one`), bit for bit; each surface's
+:func:`packed_trims` concatenated with its offsets moved, bit for bit; and
+``affine_map(s, size) is not None``, the same answer.  On the trimmed faces of five
+real parts (planes with arcs and several loops, cylinders, cones, tori, B-splines)
+and on made-up cases: a loop that is the domain rectangle, two holes of one area,
+loops of equal area, nets near the degeneracy threshold."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from geomkit._kernels.tess_loops import loop_areas
+from geomkit.cad.step import read_step
+from geomkit.mesh.planes import _rings, _rings_one_by_one, planar_batch
+from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, flat_surfaces, is_affine,
+                                         loop_points)
+from geomkit.nurbs.surface import Surface
+from geomkit.nurbs.trims import packed_loops, packed_trims
+
+from helpers.paths import DATA
+
+PARTS = ["proe_as1_ap203.stp", "nist_ftc_07_ap242.stp", "nist_ctc_01_ap242.stp",
+         "euclid_screw_ap214.step", "sw2013_featuretype_ap214.step"]
+
+
+@pytest.fixture(scope="module", params=PARTS)
+def part(request):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        S = read_step(DATA / "parts" / request.param, cache=False).surfaces
+    B = np.array([s.bounds for s in S])
+    return S, 1e-3 * float(np.linalg.norm(B[:, 1].max(0) - B[:, 0].min(0)))
+
+
+def _same_rings(P, chord_tol):
+    got = _rings(P, chord_tol, True, flat_surfaces(P))
+    faces, coords, ring_size, ring_face = _rings_one_by_one(P, range(len(P)), chord_tol, True)
+    coords2, ring_size2, ring_face2, kept = got
+    assert kept.tolist() == faces
+    assert np.array_equal(coords2, coords)  # bit for bit (no signed-zero case here)
+    assert np.array_equal(np.signbit(coords2), np.signbit(coords))
+    assert ring_size2.tolist() == list(ring_size)
+    assert ring_face2.tolist() == ring_face.tolist()
+
+
+def _old_glue(packs):
+    """The concatenation of per-surface packs as loop_polylines made it before."""
+    starts = lambda c: np.concatenate([[0], np.cumsum(c)]).astype(np.int64)  # noqa: E731
+    face_piece = starts([len(pk[3]) for pk in packs])
+    cp_base = starts([len(pk[0]) for pk in packs])
+    k_base = starts([len(pk[2]) for pk in packs])
+    return (np.concatenate([pk[0] for pk in packs]), np.concatenate([pk[1] for pk in packs]),
+            np.concatenate([pk[2] for pk in packs]), np.concatenate([pk[3] for pk in packs]),
+            np.concatenate([pk[4][:-1] + b for pk, b in zip(packs, cp_base)] + [cp_base[-1:]]),
+            np.concatenate([pk[5][:-1] + b for pk, b in zip(packs, k_base)] + [k_base[-1:]]),
+            np.concatenate([pk[6][:-1] + b for pk, b in zip(packs, face_piece)]
+                           + [face_piece[-1:]]),
+            starts([len(pk[6]) - 1 for pk in packs]))
+
+
+def test_packed_loops_match_the_surfaces_packs(part):
+    S, _ = part
+    T = [s for s in S if s.trim]
+    for sel in (T, T[:1], T[1:4], T[::3]):
+        got = packed_loops(sel)
+        want = _old_glue([packed_trims(s) for s in sel])
+        for a, b in zip(got, want):
+            assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_is_affine_matches_affine_map_on_parts(part):
+    S, _ = part
+    for s in S:
+        assert is_affine(s, s.size) == (affine_map(s, s.size) is not None)
+
+
+def _net(P, W=None):
+    return Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], np.array(P, dtype=float), W)
+
+
+def test_is_affine_matches_affine_map_on_made_up_nets():
+    rng = np.random.default_rng(7)
+    nets = []
+    for _ in range(300):
+        o, a, b = rng.standard_normal((3, 3)) * 10.0 ** rng.uniform(-3, 3)
+        twist = rng.choice([0.0, 1e-13, 1e-9, 1e-3]) * rng.standard_normal(3)
+        nets.append([[o, o + b], [o + a, o + a + b + twist]])
+    for _ in range(300):  # nearly parallel edges: sin^2 around the 1e-24 threshold
+        o, a = rng.standard_normal((2, 3))
+        e = rng.standard_normal(3)
+        b = 2.0 * a + 10.0 ** rng.uniform(-13.5, -11.5) * e
+        nets.append([[o, o + b], [o + a, o + a + b]])
+    o, a = rng.standard_normal((2, 3))
+    nets += [[[o, o], [o + a, o + a]], [[o, o], [o, o]], [[o, o + a], [o + a, o + 2 * a]]]
+    for P in nets:
+        for W in (None, [[2.0, 2.0], [2.0, 2.0]], [[1.0, 2.0], [1.0, 1.0]]):
+            s = _net(P, W)
+            assert is_affine(s, s.size) == (affine_map(s, s.size) is not None)
+
+
+def test_rings_match_trim_polylines_rings(part):
+    S, tol = part
+    P = [s for s in S if s.trim and affine_map(s, s.size) is not None]
+    assert P
+    _same_rings(P, 0.5 * tol)
+
+
+def _square_face(loops):
+    P = np.array([[[0, 0, 0], [0, 2, 0]], [[3, 0, 0], [3, 2, 1e-30]]], dtype=float)
+    return Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], P, trim=[np.array(x, dtype=float)
+                                                                  for x in loops])
+
+
+def _box(a0, a1, b0, b1):
+    return [[a0, b0], [a1, b0], [a1, b1], [a0, b1], [a0, b0]]
+
+
+def test_rings_match_on_made_up_planes():
+    faces = [
+        _square_face([_box(0, 1, 0, 1), _box(0.2, 0.4, 0.2, 0.4)]),  # the domain loop, a hole
+        _square_face([_box(0.2, 0.4, 0.2, 0.4), _box(0.6, 0.8, 0.6, 0.8)]),  # equal areas
+        _square_face([_box(0.5, 0.7, 0.5, 0.7), _box(0.1, 0.9, 0.1, 0.9),
+                      _box(0.2, 0.4, 0.2, 0.4)]),  # the shell second
+        _square_face([_box(1e-9, 1, 0, 1)]),  # near the domain: speed_bound decides
+        _square_face([_box(0.1, 0.9, 0.1, 0.9)]),
+    ]
+    _same_rings(faces, 1e-3)
+    for s in faces:  # and the batch's triangles are those of the face's own region
+        out = planar_batch([s, s], 1e-3, cross_knots=True)
+        assert set(out) <= {0, 1}
+
+
+def test_loop_areas_bound_their_rounding(part):
+    S, tol = part
+    P = [s for s in S if s.trim]
+    pts, start, _, _ = loop_points(P, 0.5 * tol, False, True)
+    area, err = loop_areas(pts, start)
+    for lp in range(len(area)):
+        p = pts[start[lp]:start[lp + 1]]
+        exact = abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1]))
+        assert abs(area[lp] - exact) <= err[lp]
