@@ -4,7 +4,8 @@
 * :func:`weld` -- triangles given by their UV corners become vertices and faces: equal
   UVs merged (and, optionally, UVs within rounding of each other: trim crossings
   computed in two cells), then vertices on the domain boundary that coincide in 3-D
-  (poles, closed seams); the triangles that collapse are dropped.
+  (poles, closed seams); the triangles that collapse are dropped (compiled:
+  :mod:`geomkit._kernels.tess_weld`).
 * :func:`weld_grid` -- the same for a tensor grid of cells, from the grid's indices.
 """
 
@@ -15,7 +16,7 @@ import numpy as np
 from geomkit.tolerances import WELD_REL
 from geomkit._kernels.surface import surface_points_range, surface_points
 from geomkit._kernels.tess_grid import grid_vertices
-from geomkit._kernels.tess_weld import close_pairs
+from geomkit._kernels.tess_weld import close_pairs, unique_uv, weld_merge
 from geomkit.nurbs.surface import Surface
 
 SERIAL_POINTS = 2048
@@ -42,53 +43,19 @@ def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
     """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
     UVs within rounding of each other: trim crossings computed in two cells), then
     coincident boundary vertices in 3-D (poles, seams); drops the triangles that
-    collapse."""
-    flat = tri_uv.reshape(-1, 2)
+    collapse.  The sort, the pairs and the merge are compiled
+    (:func:`geomkit._kernels.tess_weld.unique_uv`, :func:`~geomkit._kernels.tess_weld.weld_merge`);
+    the surface points come between them."""
     (u0, u1), (v0, v1) = s.domain
     # crossing points computed in two neighbouring cells may differ by rounding
     dom = max(u1 - u0, v1 - v0)
-    z = np.ascontiguousarray(flat).view(np.complex128).ravel()  # (u, v) as u + iv
-    uz, inv = sorted_unique(z)  # complex sorts by u, then v
-    uniq = uz.view(np.float64).reshape(-1, 2)  # (real, imag) rows: the (u, v) back
-    pairs = [near_pairs(uniq, 1e-13 * dom)] if near_uv else []
-    P = points(s, uniq)
-    eps = 1e-12 * dom
-    bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
-                     | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
-    if len(bnd):
-        pairs.append(boundary_pairs(P, bnd, size))
-    pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
-    return merge(P, uniq, inv, pairs)
+    uniq, inv, pairs = unique_uv(np.ascontiguousarray(tri_uv.reshape(-1, 2), dtype=np.float64),
+                                 near_uv, 1e-13 * dom, _NEAR_DIRECTION)
+    return weld_merge(points(s, uniq), uniq, inv, pairs, u0, u1, v0, v1, 1e-12 * dom,
+                      WELD_REL * size, _WELD_DIRECTION)
 
 
-def sorted_unique(z):
-    """``np.unique(z, return_inverse=True)`` for a 1-D array without NaN (UV
-    parameters), as numpy computes it (sort, first of each run of equal values, the
-    running count as the inverse) without its wrapper's checks: a few microseconds a
-    call, which is a weld's cost on a small face."""
-    perm = z.argsort()
-    aux = z[perm]
-    first = np.empty(len(aux), dtype=bool)
-    if len(aux):
-        first[0] = True
-        np.not_equal(aux[1:], aux[:-1], out=first[1:])
-    inv = np.empty(len(aux), dtype=np.intp)
-    inv[perm] = np.add.accumulate(first, dtype=np.intp) - 1
-    return aux[first], inv
-
-
-def near_pairs(Q, r):
-    """Pairs of the rows of ``Q`` (n, 2) within ``r``, by their projections on an
-    oblique unit direction, sorted (:func:`geomkit._kernels.tess_weld.close_pairs`; a
-    pair within ``r`` projects within ``r``, the window's rounding margin as in
-    :func:`boundary_pairs`)."""
-    if len(Q) < 2:
-        return np.empty((0, 2), np.int64)
-    return close_pairs(np.ascontiguousarray(Q, dtype=np.float64), _NEAR_DIRECTION, r,
-                       2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None))
-
-
-_NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes
+_NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes: UV pairs
 
 
 def merge(P, uniq, inv, pairs):

@@ -1,6 +1,7 @@
 """The mesh path's shortcuts around numpy's and shapely's wrappers against the calls
-they replaced, bit for bit: :func:`geomkit.mesh.weld.sorted_unique` against
-``np.unique(z, return_inverse=True)`` (complex UV keys, repeats, signed zeros), and
+they replaced, bit for bit: the weld's :func:`geomkit._kernels.tess_weld.unique_uv`
+against ``np.unique(z, return_inverse=True)`` of complex UV keys (repeats; of equal
+signed zeros either may stand for both), and
 :func:`geomkit.mesh.trim_polylines._polygon` against ``shapely.Polygon(shell,
 holes)`` (WKB equal; a ring of fewer than 4 points as the class makes it, or
 its error)."""
@@ -12,19 +13,23 @@ import pytest
 import shapely
 
 from geomkit.mesh.trim_polylines import _polygon
-from geomkit.mesh.weld import sorted_unique
+from geomkit._kernels.tess_weld import unique_uv
 
 
-def test_sorted_unique_is_numpys_unique():
+def test_unique_uv_is_numpys_unique():
     rng = np.random.default_rng(7)
     for n in (0, 1, 2, 3, 17, 500, 4000):
-        for _ in range(10):
+        for k in range(10):
             uv = rng.integers(0, 9, (n, 2)) * 0.25
-            uv[rng.random((n, 2)) < 0.1] = -0.0
+            if k % 2:
+                uv[rng.random((n, 2)) < 0.1] = -0.0
             z = np.ascontiguousarray(uv).view(np.complex128).ravel()
             want, winv = np.unique(z, return_inverse=True)
-            got, inv = sorted_unique(z)
-            assert got.tobytes() == want.tobytes()
+            got, inv, _ = unique_uv(uv, False, 0.0, np.array([0.6, 0.8]))
+            got = np.ascontiguousarray(got).view(np.complex128).ravel()
+            assert np.array_equal(got, want)
+            if not k % 2:
+                assert got.tobytes() == want.tobytes()
             assert np.array_equal(inv, winv.ravel())
 
 

@@ -22,6 +22,7 @@ from geomkit.mesh import quadtree as qt
 from geomkit import samples
 from geomkit import tolerances as tols
 from geomkit.mesh.tessellate import tessellate
+from geomkit._kernels.tess_weld import unique_uv
 
 from helpers.paths import DATA
 
@@ -115,8 +116,9 @@ def test_boundary_pairs_match_brute_force():
 
 
 def test_near_uv_pairs_match_brute_force():
-    """The weld's near-UV pairs (trim crossings computed in two cells) with the
-    projection pre-test against all pairs within r."""
+    """The weld's distinct UVs (numpy's unique of u + iv, with its inverse) and their
+    near pairs (trim crossings computed in two cells) with the projection pre-test
+    against all pairs within r."""
     rng = np.random.default_rng(11)
     for trial in range(40):
         n = int(rng.integers(2, 80))
@@ -129,8 +131,13 @@ def test_near_uv_pairs_match_brute_force():
             i = rng.choice(n, size=k, replace=False)
             j = rng.choice(n, size=k, replace=False)
             Q[j] = Q[i] + rng.normal(size=(k, 2)) * r * rng.choice([0.0, 0.3, 3.0], size=(k, 1))
-        got = {tuple(sorted(p)) for p in W.near_pairs(Q, r).tolist()}
-        d = np.linalg.norm(Q[:, None] - Q[None], axis=2)
+        uniq, inv, pairs = unique_uv(Q, True, r, W._NEAR_DIRECTION)
+        assert np.array_equal(uniq[inv], Q)
+        # numpy's unique of u + iv: the same rows in the same order
+        assert np.array_equal(uniq.copy().view(np.complex128).ravel(),
+                              np.unique(Q.view(np.complex128).ravel()))
+        got = {tuple(sorted(p)) for p in pairs.tolist()}
+        d = np.linalg.norm(uniq[:, None] - uniq[None], axis=2)
         want = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(d <= r, 1)))}
         assert got == want, trial
 
@@ -303,3 +310,52 @@ def test_split_counts_kernel_matches_the_numpy_formulas():
             got = qt.split_counts(E[:, 0], E[:, 1], E[:, 2], target, max_parts=mp)
             want = _split_counts_numpy(E[:, 0], E[:, 1], E[:, 2], target, mp)
             assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def _weld_numpy(s, tri_uv, size, near_uv):
+    """The weld in numpy steps and brute-force pairs (the route the compiled one
+    replaced)."""
+    (u0, u1), (v0, v1) = s.domain
+    dom = max(u1 - u0, v1 - v0)
+    z = np.ascontiguousarray(tri_uv.reshape(-1, 2)).view(np.complex128).ravel()
+    uz, inv = np.unique(z, return_inverse=True)
+    uniq = uz.view(np.float64).reshape(-1, 2)
+    pairs = []
+    if near_uv:
+        d = np.linalg.norm(uniq[:, None] - uniq[None], axis=2)
+        pairs.append(np.argwhere(np.triu(d <= 1e-13 * dom, 1)))
+    P = W.points(s, uniq)
+    eps = 1e-12 * dom
+    bnd = np.nonzero((uniq[:, 0] <= u0 + eps) | (uniq[:, 0] >= u1 - eps)
+                     | (uniq[:, 1] <= v0 + eps) | (uniq[:, 1] >= v1 - eps))[0]
+    if len(bnd) >= 2:
+        d = np.linalg.norm(P[bnd][:, None] - P[bnd][None], axis=2)
+        pairs.append(bnd[np.argwhere(np.triu(d <= tols.WELD_REL * size, 1))])
+    pairs = np.concatenate(pairs).reshape(-1, 2) if pairs else np.empty((0, 2), np.int64)
+    return W.merge(P, uniq, inv.ravel(), pairs)
+
+
+@pytest.mark.parametrize("name", ["sphere", "torus", "crease", "plate_with_hole"])
+def test_weld_matches_numpy_steps(name):
+    """The compiled weld against numpy's unique, brute-force pairs and the component
+    merge, bit for bit: a grid over the domain (poles and seams weld in 3-D), with
+    corners moved within rounding (near-UV pairs) and collapsed triangles."""
+    rng = np.random.default_rng(3)
+    for s in samples.load(name):
+        (u0, u1), (v0, v1) = s.domain
+        u = np.linspace(u0, u1, 9)
+        v = np.linspace(v0, v1, 7)
+        a = np.stack(np.meshgrid(u[:-1], v[:-1], indexing="ij"), -1).reshape(-1, 2)
+        b = np.stack(np.meshgrid(u[1:], v[:-1], indexing="ij"), -1).reshape(-1, 2)
+        c = np.stack(np.meshgrid(u[1:], v[1:], indexing="ij"), -1).reshape(-1, 2)
+        d = np.stack(np.meshgrid(u[:-1], v[1:], indexing="ij"), -1).reshape(-1, 2)
+        tri = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+        nudge = rng.random(tri.shape[:2]) < 0.1
+        tri[nudge] += 1e-15 * max(u1 - u0, v1 - v0)
+        tri[:3, 1] = tri[:3, 0]  # collapsed
+        for near in (False, True):
+            got = W.weld(s, tri, s.size, near_uv=near)
+            want = _weld_numpy(s, tri, s.size, near)
+            for g, w in zip(got, want):
+                assert g.dtype == w.dtype or g.dtype.kind == w.dtype.kind
+                assert np.array_equal(g, w), (name, near)
