@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit
+from .numba_ext.policy import jit, jit_exact
 from .surface import surface_points_range
 from .tess_trim import loop_rectangle_gap, trim_polylines
 
@@ -233,3 +233,64 @@ def loop_areas(pts, start):
         area[lp] = abs(a - b)
         err[lp] = 4.0 * (start[lp + 1] - start[lp] + 2) * 2.0 ** -53 * m
     return area, err
+
+
+@jit_exact
+def polygon_meshes(tri, idx, n):
+    """Indexed meshes of triangles given by their corners, ``tri`` (T, 3, 2) of polygon
+    ``idx`` (T,) (ascending, below ``n``): triangles of zero area dropped (twice the
+    signed area ``a_u b_v - a_v b_u`` of the edges from the first corner, without
+    contraction: numpy's values), the others counter-clockwise (a clockwise one's
+    corners reversed), each polygon's distinct corners sorted by u, then v (a stable
+    sort; equal corners merged into the first in that order).
+
+    Returns ``(uv (N, 2), faces (M, 3), vstart (n+1,), tstart (n+1,))``: polygon ``j``'s
+    vertices ``uv[vstart[j]:vstart[j+1]]`` and its triangles ``faces[tstart[j]:
+    tstart[j+1]]``, indices into its own vertices."""
+    T = tri.shape[0]
+    corner = np.empty((3 * T, 2))  # the kept triangles' corners, in their order
+    own = np.empty(T, dtype=np.int64)
+    m = 0
+    for t in range(T):
+        a0 = tri[t, 1, 0] - tri[t, 0, 0]
+        a1 = tri[t, 1, 1] - tri[t, 0, 1]
+        b0 = tri[t, 2, 0] - tri[t, 0, 0]
+        b1 = tri[t, 2, 1] - tri[t, 0, 1]
+        area2 = a0 * b1 - a1 * b0
+        if area2 == 0:
+            continue
+        for c in range(3):
+            k = 2 - c if area2 < 0 else c
+            corner[3 * m + c, 0] = tri[t, k, 0]
+            corner[3 * m + c, 1] = tri[t, k, 1]
+        own[m] = idx[t]
+        m += 1
+    uv = np.empty((3 * m, 2))
+    faces = np.empty((m, 3), dtype=np.int64)
+    vstart = np.zeros(n + 1, dtype=np.int64)
+    tstart = np.zeros(n + 1, dtype=np.int64)
+    nv = 0
+    t0 = 0
+    for j in range(n):
+        t1 = t0
+        while t1 < m and own[t1] == j:
+            t1 += 1
+        vstart[j] = nv
+        tstart[j] = t0
+        if t1 > t0:
+            us = corner[3 * t0:3 * t1, 0]
+            vs = corner[3 * t0:3 * t1, 1]
+            o1 = np.argsort(vs, kind="mergesort")  # by v, then stably by u: by (u, v)
+            order = o1[np.argsort(us[o1], kind="mergesort")]
+            first = nv
+            for r in range(order.shape[0]):
+                i = order[r]
+                if r == 0 or us[i] != uv[nv - 1, 0] or vs[i] != uv[nv - 1, 1]:
+                    uv[nv, 0] = us[i]
+                    uv[nv, 1] = vs[i]
+                    nv += 1
+                faces[t0 + i // 3, i % 3] = nv - 1 - first
+        t0 = t1
+    vstart[n] = nv
+    tstart[n] = m
+    return uv[:nv], faces, vstart, tstart

@@ -21,7 +21,8 @@ import time
 import numpy as np
 
 from geomkit.mesh.cells import triangle_coordinates
-from geomkit._kernels.tess_loops import faces_points, loop_areas, plane_rings
+from geomkit._kernels.tess_loops import (faces_points, loop_areas, plane_rings,
+                                        polygon_meshes)
 from geomkit.mesh.trim_polylines import (TrimPolylines, domain_loops, flat_surfaces, is_affine,
                                          largest_loop, loop_points)
 from geomkit.nurbs.trims import starts
@@ -92,41 +93,24 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     if not len(use):
         return out
     tri, idx, failed = _triangulate(polys[use])
-    # counter-clockwise, no triangle of zero area (as planar_trimmed)
-    a = tri[:, 1] - tri[:, 0]
-    b = tri[:, 2] - tri[:, 0]
-    area2 = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    keep = area2 != 0
-    tri, idx, area2 = tri[keep], idx[keep], area2[keep]
-    flip = area2 < 0
-    tri[flip] = tri[flip][:, ::-1]
-    # unique corners per polygon, sorted by (polygon, u, v)
-    corners = tri.reshape(-1, 2)
-    cown = np.repeat(idx, 3)
-    order = np.lexsort((corners[:, 1], corners[:, 0], cown))
-    c, o = corners[order], cown[order]
-    new = np.ones(len(c), dtype=bool)
-    new[1:] = (o[1:] != o[:-1]) | (c[1:, 0] != c[:-1, 0]) | (c[1:, 1] != c[:-1, 1])
-    inv = np.empty(len(c), dtype=np.int64)
-    inv[order] = np.cumsum(new) - 1
-    uv_all, uv_own = c[new], o[new]
+    # counter-clockwise, no triangle of zero area (as planar_trimmed); each polygon's
+    # vertices sorted by (u, v)
     n = len(use)
-    vstart = np.searchsorted(uv_own, np.arange(n + 1))
-    tstart = np.searchsorted(idx, np.arange(n + 1))
-    F_all = inv.reshape(-1, 3) - vstart[idx][:, None]
+    uv_all, F_all, vstart, tstart = polygon_meshes(tri, idx, n)
     # the vertices S(uv), every face's in one call: uv_all holds the triangulated
     # planes' blocks in the order of `planes` (faces and use keep it), the others none
     rank = {i: r for r, i in enumerate(planes)}
+    used = [faces[j] for j in use.tolist()]
     counts = np.zeros(len(planes), dtype=np.int64)
-    counts[[rank[faces[use[j]]] for j in range(n)]] = np.diff(vstart)
-    P_all = faces_points(*flat[:7], np.ascontiguousarray(uv_all), starts(counts))
+    counts[[rank[i] for i in used]] = np.diff(vstart)
+    P_all = faces_points(*flat[:7], uv_all, starts(counts))
     share = (time.perf_counter() - t0) / len(faces)
-    for j in range(n):
-        if failed[j] or tstart[j] == tstart[j + 1]:
+    vs, ts, fail = vstart.tolist(), tstart.tolist(), failed.tolist()
+    for j, i in enumerate(used):
+        if fail[j] or ts[j] == ts[j + 1]:
             continue
-        a, b = vstart[j], vstart[j + 1]
-        out[faces[use[j]]] = (np.ascontiguousarray(uv_all[a:b]), F_all[tstart[j]:tstart[j + 1]],
-                              P_all[a:b], share)
+        a, b = vs[j], vs[j + 1]
+        out[i] = (uv_all[a:b], F_all[ts[j]:ts[j + 1]], P_all[a:b], share)
     return out
 
 

@@ -1,5 +1,8 @@
 """The trimmed planes' rings in one pass (:func:`geomkit.mesh.planes._rings`, kernels
-``geomkit._kernels.tess_loops.plane_rings`` and ``loop_areas``), the packing of every
+``geomkit._kernels.tess_loops.plane_rings`` and ``loop_areas``), their triangles as
+indexed meshes in one kernel (``tess_loops.polygon_meshes``, against the numpy route
+it replaced, bit for bit: random triangles with repeated corners, zero areas and
+signed zeros, and the parts' planes), the packing of every
 loop of many surfaces at once (:func:`geomkit.nurbs.trims.packed_loops`) and the plane
 test with fewer numpy calls (:func:`geomkit.mesh.trim_polylines.is_affine`), each
 against the route it replaced: the rings of ``TrimPolylines(...).rings()`` face by face
@@ -17,9 +20,9 @@ import warnings
 import numpy as np
 import pytest
 
-from geomkit._kernels.tess_loops import loop_areas
+from geomkit._kernels.tess_loops import loop_areas, polygon_meshes
 from geomkit.cad.step import read_step
-from geomkit.mesh.planes import _rings, _rings_one_by_one, planar_batch
+from geomkit.mesh.planes import _rings, _rings_one_by_one, _triangulate, planar_batch
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, flat_surfaces, is_affine,
                                          loop_points)
 from geomkit.nurbs.surface import Surface
@@ -147,3 +150,61 @@ def test_loop_areas_bound_their_rounding(part):
         p = pts[start[lp]:start[lp + 1]]
         exact = abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1]))
         assert abs(area[lp] - exact) <= err[lp]
+
+
+def _numpy_meshes(tri, idx, n):
+    """The triangles' indexed meshes as planar_batch made them in numpy before."""
+    tri = tri.copy()
+    a = tri[:, 1] - tri[:, 0]
+    b = tri[:, 2] - tri[:, 0]
+    area2 = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    keep = area2 != 0
+    tri, idx, area2 = tri[keep], idx[keep], area2[keep]
+    flip = area2 < 0
+    tri[flip] = tri[flip][:, ::-1]
+    corners = tri.reshape(-1, 2)
+    cown = np.repeat(idx, 3)
+    order = np.lexsort((corners[:, 1], corners[:, 0], cown))
+    c, o = corners[order], cown[order]
+    new = np.ones(len(c), dtype=bool)
+    new[1:] = (o[1:] != o[:-1]) | (c[1:, 0] != c[:-1, 0]) | (c[1:, 1] != c[:-1, 1])
+    inv = np.empty(len(c), dtype=np.int64)
+    inv[order] = np.cumsum(new) - 1
+    uv, own = c[new], o[new]
+    vstart = np.searchsorted(own, np.arange(n + 1))
+    tstart = np.searchsorted(idx, np.arange(n + 1))
+    return uv, inv.reshape(-1, 3) - vstart[idx][:, None], vstart, tstart
+
+
+def _same_meshes(tri, idx, n):
+    got = polygon_meshes(tri, idx, n)
+    want = _numpy_meshes(tri, idx, n)
+    for g, w in zip(got, want):
+        assert g.shape == w.shape and np.array_equal(g, w)
+    assert np.array_equal(np.signbit(got[0]), np.signbit(want[0]))
+
+
+def test_polygon_meshes_match_numpy_on_made_up_triangles():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        n = int(rng.integers(1, 6))
+        pts = rng.integers(-3, 4, size=(12, 2)).astype(float) * rng.choice([1.0, 0.1, 1e-9])
+        pts[rng.random(12) < 0.2] *= -1.0  # signed zeros among the corners
+        T = int(rng.integers(0, 40))
+        tri = pts[rng.integers(0, 12, size=(T, 3))]  # shared, repeated and collinear corners
+        idx = np.sort(rng.integers(0, n, size=T))
+        _same_meshes(tri, idx, n)
+
+
+def test_polygon_meshes_match_numpy_on_parts(part):
+    import shapely
+
+    S, tol = part
+    P = [s for s in S if s.trim and affine_map(s, s.size) is not None]
+    coords, ring_size, ring_face, kept = _rings(P, 0.5 * tol, True, flat_surfaces(P))
+    rings = shapely.linearrings(coords, indices=np.repeat(np.arange(len(ring_size)),
+                                                          ring_size))
+    polys = shapely.polygons(rings, indices=ring_face)
+    polys = polys[shapely.is_valid(polys)]
+    tri, idx, _ = _triangulate(polys)
+    _same_meshes(tri, idx, len(polys))
