@@ -13,10 +13,11 @@ even-odd rule, and every piece is triangulated by the constrained Delaunay rule:
   triangulation (as GEOS's ``constrained_delaunay_triangles`` makes it: ear clipping
   then flips; ties between cocircular points may be broken the other way).
 
-A cell the walk cannot take surely is left to the caller (status :data:`CLIP_LEFT`):
-a ring wholly inside the closed cell, no chain at all, two chain ends at one point of
-the edge, pieces whose edges meet other than at their shared corners (rings that
-cross or touch, spurs), or a piece with no ear (rounding).  Crossing points are
+A cell no ring runs through (rings that touch it at most) is wholly in or out, by the
+even-odd rule at its centre.  A cell the walk cannot take surely is left to the
+caller (its status says why): a ring wholly inside the closed cell, two chain ends at
+one point of the edge, pieces whose edges meet other than at their shared corners
+(rings that cross or touch, spurs), or a piece with no ear (rounding).  Crossing points are
 computed from the segment in the ring's walking order and the cell edge's exact
 coordinate, so two cells sharing an edge get the same point.
 """
@@ -27,11 +28,35 @@ import numpy as np
 
 from .numba_ext.policy import jit, jit_inline
 
+# a cell's status: taken, or left to the caller and why
 CLIP_DONE = 0
-CLIP_LEFT = 1
+CLIP_RING_INSIDE = 1  # a ring reaches the cell with no vertex outside it
+CLIP_WALK = 2  # two chain ends at one point of the edge, or the walk meets a chain twice
+CLIP_ORIENTATION = 3  # a piece turns clockwise
+CLIP_TOUCH = 4  # the pieces' edges meet other than at consecutive corners
+CLIP_NO_EAR = 5  # ear clipping found no ear (rounding)
 # diagonals flip only when the fourth point is inside the circle by more than this
 # fraction of the incircle determinant's magnitude: cocircular corners stay as made
 INCIRCLE_REL = 1e-12
+# a vertex where the ring turns back within this angle (radians) is a spur's tip
+SPUR_REL = 1e-12
+# small loops are sought between edges at most this many edges apart
+LOOP_SPAN = 4
+
+
+@jit_inline
+def _ring_holds(P, a, b, px, py):
+    """Whether the closed ring ``P[a:b]`` holds (px, py): an odd count of its edges
+    crossing the ray from it towards +u."""
+    inside = False
+    for k in range(a, b - 1):
+        y1 = P[k, 1]
+        y2 = P[k + 1, 1]
+        if (y1 > py) != (y2 > py):
+            x = P[k, 0] + (py - y1) * (P[k + 1, 0] - P[k, 0]) / (y2 - y1)
+            if px < x:
+                inside = not inside
+    return inside
 
 
 @jit
@@ -51,20 +76,126 @@ def ring_directions(P, starts):
         py = P[starts[i], 1]
         depth = 0
         for j in range(nr):
-            if j == i:
-                continue
-            inside = False
-            for k in range(starts[j], starts[j + 1] - 1):
-                y1 = P[k, 1]
-                y2 = P[k + 1, 1]
-                if (y1 > py) != (y2 > py):
-                    x = P[k, 0] + (py - y1) * (P[k + 1, 0] - P[k, 0]) / (y2 - y1)
-                    if px < x:
-                        inside = not inside
-            if inside:
+            if j != i and _ring_holds(P, starts[j], starts[j + 1], px, py):
                 depth += 1
         out[i] = 1 if (a > 0.0) == (depth % 2 == 0) else -1
     return out
+
+
+@jit
+def _drop_spur(Q, k):
+    """One spur tip or repeated vertex of the cyclic ring ``Q[:k]`` removed: the new
+    count (``k`` when there is none)."""
+    for j in range(k):
+        a = (j - 1) % k
+        c = (j + 1) % k
+        ax = Q[j, 0] - Q[a, 0]
+        ay = Q[j, 1] - Q[a, 1]
+        bx = Q[c, 0] - Q[j, 0]
+        by = Q[c, 1] - Q[j, 1]
+        same = ax == 0.0 and ay == 0.0
+        fold = ax * bx + ay * by < 0.0 and abs(ax * by - ay * bx) <= SPUR_REL * np.sqrt(
+            (ax * ax + ay * ay) * (bx * bx + by * by))
+        if same or fold:
+            for t in range(j, k - 1):
+                Q[t] = Q[t + 1]
+            return k - 1
+    return k
+
+
+@jit
+def _drop_small_loop(Q, k, tiny, buf):
+    """One small loop of the cyclic ring ``Q[:k]`` cut off: where edge ``i`` properly
+    crosses edge ``i + d`` (``2 <= d <= LOOP_SPAN``) and the loop between them encloses
+    at most ``tiny``, the vertices between become the crossing point.  The new count."""
+    for i in range(k):
+        ax, ay = Q[i, 0], Q[i, 1]
+        bx, by = Q[(i + 1) % k, 0], Q[(i + 1) % k, 1]
+        for d in range(2, min(LOOP_SPAN, k - 2) + 1):
+            j = (i + d) % k
+            cx, cy = Q[j, 0], Q[j, 1]
+            ex, ey = Q[(j + 1) % k, 0], Q[(j + 1) % k, 1]
+            d1 = _orient(cx, cy, ex, ey, ax, ay)
+            d2 = _orient(cx, cy, ex, ey, bx, by)
+            d3 = _orient(ax, ay, bx, by, cx, cy)
+            d4 = _orient(ax, ay, bx, by, ex, ey)
+            if not ((d1 > 0.0) != (d2 > 0.0) and d1 != 0.0 and d2 != 0.0
+                    and (d3 > 0.0) != (d4 > 0.0) and d3 != 0.0 and d4 != 0.0):
+                continue
+            t = d1 / (d1 - d2)
+            x = ax + t * (bx - ax)
+            y = ay + t * (by - ay)
+            s = 0.0  # the loop X, Q[i+1], ..., Q[j]
+            px, py = x, y
+            for e in range(1, d + 1):
+                qx, qy = Q[(i + e) % k, 0], Q[(i + e) % k, 1]
+                s += px * qy - qx * py
+                px, py = qx, qy
+            s += px * y - x * py
+            if abs(0.5 * s) > tiny:
+                continue
+            m = 0
+            for e in range(k - d):  # Q[j+1], ..., Q[i], then X
+                buf[m] = Q[(j + 1 + e) % k]
+                m += 1
+            buf[m, 0] = x
+            buf[m, 1] = y
+            m += 1
+            for e in range(m):
+                Q[e] = buf[e]
+            return m
+    return k
+
+
+@jit
+def clean_rings(P, starts, tiny):
+    """The closed rings ``P[starts[i]:starts[i+1]]`` without their spurs and small loops,
+    as GEOS's valid form of the region has them: a vertex where the ring turns straight
+    back (its two edges opposed, their cross product within :data:`SPUR_REL` of the
+    product of their lengths) goes, so does a vertex equal to the one before it, and a
+    loop of at most ``tiny`` area closed by two edges that cross is cut at the crossing;
+    repeated until none is left; a ring left with fewer than three vertices goes.  Trim
+    pieces overshoot or overlap where they join (by 1e-9 to 1e-7 of the domain): the
+    region changes by at most ``tiny`` a loop.  ``(P, starts)``, new arrays."""
+    nr = starts.shape[0] - 1
+    out = np.empty_like(P)
+    ostarts = np.empty_like(starts)
+    ostarts[0] = 0
+    Q = np.empty_like(P)
+    buf = np.empty_like(P)
+    n = 0
+    nk = 0
+    for r in range(nr):
+        k = starts[r + 1] - starts[r] - 1  # distinct vertices (the last repeats the first)
+        for i in range(k):
+            Q[i] = P[starts[r] + i]
+        while k >= 3:
+            k2 = _drop_spur(Q, k)
+            if k2 == k and k >= 5:
+                k2 = _drop_small_loop(Q, k, tiny, buf)
+            if k2 == k:
+                break
+            k = k2
+        if k < 3:
+            continue  # nothing but spurs: no area, no ring
+        for j in range(k):
+            out[n] = Q[j]
+            n += 1
+        out[n] = Q[0]
+        n += 1
+        nk += 1
+        ostarts[nk] = n
+    return out[:n], ostarts[:nk + 1]
+
+
+@jit
+def _even_odd(P, starts, px, py):
+    """Whether (px, py) is inside the region the closed rings bound (even-odd rule)."""
+    inside = False
+    for r in range(starts.shape[0] - 1):
+        if _ring_holds(P, starts[r], starts[r + 1], px, py):
+            inside = not inside
+    return inside
 
 
 @jit_inline
@@ -521,7 +652,7 @@ def clip_cells(cells, P, starts, dirs):
     region of the closed rings ``P[starts[i]:starts[i+1]]`` (walked in ``dirs``, see
     :func:`ring_directions`) and triangulated: ``(tri (t, 3, 2) counter-clockwise, cell
     (t,) of each, status (n,), area (n,))``: status :data:`CLIP_DONE` with the pieces'
-    area, or :data:`CLIP_LEFT` for the caller (its triangles are not in ``tri``)."""
+    area, or why the cell is left to the caller (its triangles are not in ``tri``)."""
     nr = starts.shape[0] - 1
     bbox = np.empty((nr, 4))
     for r in range(nr):
@@ -542,7 +673,7 @@ def clip_cells(cells, P, starts, dirs):
     pstart = np.empty(nseg + 2, dtype=np.int64)
     out = np.empty((16 * cells.shape[0] + 16, 3, 2))
     owner = np.empty(out.shape[0], dtype=np.int64)
-    status = np.full(cells.shape[0], CLIP_LEFT, dtype=np.int8)
+    status = np.full(cells.shape[0], CLIP_DONE, dtype=np.int8)
     area = np.zeros(cells.shape[0])
     tri = np.empty((64, 3), dtype=np.int64)
     nxt = np.empty(64, dtype=np.int64)
@@ -554,12 +685,23 @@ def clip_cells(cells, P, starts, dirs):
         u0, u1, v0, v1 = cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3]
         nc, npt, pts, ok = _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce,
                                    sin_, sout)
-        if not ok or nc == 0:
-            continue
-        npiece, poly, ok = _pieces(pts, nc, cs, ce, sin_, sout, u0, u1, v0, v1, poly,
-                                   pstart)
         if not ok:
+            status[c] = CLIP_RING_INSIDE
             continue
+        if nc == 0:  # rings at most touch the cell: all of it is in or out
+            if not _even_odd(P, starts, 0.5 * (u0 + u1), 0.5 * (v0 + v1)):
+                continue
+            for k in range(4):
+                poly[k, 0], poly[k, 1] = _corner(k, u0, u1, v0, v1)
+            pstart[0] = 0
+            pstart[1] = 4
+            npiece = 1
+        else:
+            npiece, poly, ok = _pieces(pts, nc, cs, ce, sin_, sout, u0, u1, v0, v1, poly,
+                                       pstart)
+            if not ok:
+                status[c] = CLIP_WALK
+                continue
         # pieces lying on the cell's edge (a ring along it, the region outside) drop
         k = 0
         keep = 0
@@ -591,10 +733,12 @@ def clip_cells(cells, P, starts, dirs):
             area[c] += 0.5 * s
         if k < 0:
             area[c] = 0.0
+            status[c] = CLIP_ORIENTATION
             continue
         pstart[keep] = k
         if not _simple(poly, pstart, keep):
             area[c] = 0.0
+            status[c] = CLIP_TOUCH
             continue
         start = nout
         ok = True
@@ -625,6 +769,7 @@ def clip_cells(cells, P, starts, dirs):
         if not ok:
             nout = start
             area[c] = 0.0
+            status[c] = CLIP_NO_EAR
             continue
         status[c] = CLIP_DONE
     return out[:nout], owner[:nout], status, area
