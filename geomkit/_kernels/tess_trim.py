@@ -455,3 +455,22 @@ def speed_bound_of(P, Pw, p, q, U, V):
                 h = min(h, d)
         total += 4.0 * deg * ratio * D / h
     return total
+
+
+@jit
+def speed_bounds(P, Pw, pw_off, nets, U, u_off, V, v_off, faces):
+    """:func:`speed_bound_of` of each face ``faces[i]`` of flat nets (face ``f``: the
+    rows ``pw_off[f]:pw_off[f+1]`` of its Cartesian control points ``P`` (n, 3) and
+    homogeneous ones ``Pw`` (n, 4), ``nets[f] = (nu, nv, p, q)``, knots
+    ``U[u_off[f]:u_off[f+1]]``, ``V[v_off[f]:v_off[f+1]]``), in one call."""
+    out = np.empty(faces.shape[0])
+    for i in range(faces.shape[0]):
+        f = faces[i]
+        a = pw_off[f]
+        b = pw_off[f + 1]
+        shape = (nets[f, 0], nets[f, 1])
+        out[i] = speed_bound_of(np.ascontiguousarray(P[a:b]).reshape(shape + (3,)),
+                                np.ascontiguousarray(Pw[a:b]).reshape(shape + (4,)),
+                                nets[f, 2], nets[f, 3], U[u_off[f]:u_off[f + 1]],
+                                V[v_off[f]:v_off[f + 1]])
+    return out

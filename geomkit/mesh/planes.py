@@ -23,8 +23,9 @@ import numpy as np
 from geomkit.mesh.cells import triangle_coordinates
 from geomkit._kernels.tess_loops import (faces_points, loop_areas, plane_rings,
                                         polygon_meshes)
-from geomkit.mesh.trim_polylines import (TrimPolylines, domain_loops, flat_surfaces, is_affine,
-                                         largest_loop, loop_points)
+from geomkit._kernels.tess_trim import speed_bounds
+from geomkit.mesh.trim_polylines import (TrimPolylines, domain_eps, flat_surfaces, is_affine,
+                                         largest_loop, loop_points, within)
 from geomkit.nurbs.trims import starts
 
 __all__ = ["planar_batch"]
@@ -119,25 +120,33 @@ def _rings(P, chord_tol: float, cross_knots: bool, flat) -> tuple:
     from every plane's trim polylines in one call (:func:`loop_points`):
     ``(coords, ring_size, ring_face, kept)`` of :func:`~geomkit._kernels.tess_loops.
     plane_rings`, each face's rings those of ``TrimPolylines(...).rings()``: the loops
-    that are not the domain rectangle (:func:`domain_loops`, asked only of a plane with
-    a loop within its ``1e-6`` bound), the rectangle first when a loop was it, else the
+    that are not the domain rectangle (:func:`domain_loops`' test on all loops at once,
+    the speed bounds of the planes with a loop within its ``1e-6`` bound in one call),
+    the rectangle first when a loop was it, else the
     loop of the largest area (:func:`loop_areas`, the areas' rounding bounded: when two
     are too close to tell, :func:`largest_loop` decides as ``rings()`` does)."""
     pts, start, gaps, face_loop = loop_points(P, chord_tol, True, cross_knots, flat=flat)
     d = flat[7]
-    hi = 1e-6 * np.maximum(d[:, 1] - d[:, 0], d[:, 3] - d[:, 2])
+    size_uv = np.maximum(d[:, 1] - d[:, 0], d[:, 3] - d[:, 2])
     perimeter = d[:, 1] - d[:, 0] + d[:, 3] - d[:, 2]
     nloops = np.diff(face_loop)
     of = np.repeat(np.arange(len(P)), nloops)  # each loop's face
     kept = np.ones(len(gaps), dtype=bool)
-    near = (gaps[:, 0] <= hi[of]) & (gaps[:, 1] <= (hi * perimeter)[of])
-    fl = face_loop.tolist()
-    for f in np.unique(of[near]).tolist():  # (rare) the face's own test decides
-        a, b = fl[f], fl[f + 1]
-        kept[a:b] = [not x for x in domain_loops(P[f], chord_tol, gaps[a:b].tolist())]
+    near = within(gaps[:, 0], gaps[:, 1], (1e-6 * size_uv)[of], perimeter[of])
+    if near.any():  # domain_loops' test, the speed bounds of those faces in one call
+        ask = np.unique(of[near])
+        Pw, pw_off, nets, U, u_off, V, v_off, _ = flat
+        xyz = np.concatenate([s.control_points for s in P], axis=None).reshape(-1, 3)
+        speed = speed_bounds(xyz, Pw, pw_off, nets, U, u_off, V, v_off, ask)
+        eps = np.zeros(len(P))
+        eps[ask] = [domain_eps(a, chord_tol, b) for a, b in zip(size_uv[ask].tolist(),
+                                                                speed.tolist())]
+        f = of[near]
+        kept[near] = ~within(gaps[near, 0], gaps[near, 1], eps[f], perimeter[f])
     rect = np.add.reduceat(kept.astype(np.int64), face_loop[:-1]) < nloops
     shell = face_loop[:-1].copy()
     multi = np.nonzero(~rect & (nloops > 1))[0].tolist()
+    fl = face_loop.tolist()
     if multi:
         area, err = loop_areas(pts, start)
         for f in multi:

@@ -31,26 +31,38 @@ from geomkit.nurbs.trims import packed_loops, packed_trims, starts
 def domain_loops(surface: Surface, chord_tol: float, gaps) -> list[bool]:
     """Whether each trim loop of ``surface`` is its domain rectangle, from the loops'
     ``(gap, area_gap)`` (:func:`geomkit._kernels.tess_trim.loop_rectangle_gap` of their
-    polylines): within ``eps`` (UV) of the domain's edges and of its area.  The sliver
-    between them is within ``eps * speed_bound`` of the loop in 3-D, at most 1e-3 of the
-    chord tolerance (files round their pcurves: OCC's closed torus face ends 2e-10 short
-    of 2 pi); ``eps`` is at most ``1e-6`` of the domain's size (a loop failing that
-    fails ``eps`` too: the bound is computed only for a loop that passes it)."""
+    polylines): within :func:`domain_eps` (UV) of the domain's edges and of its area
+    (:func:`within`).  The bound of the surface's speed is computed only for a loop
+    within ``1e-6`` of the domain's size (``eps`` is at most that)."""
     (u0, u1), (v0, v1) = surface.domain
     size_uv = max(u1 - u0, v1 - v0)
-    hi = 1e-6 * size_uv
-    eps = None
     perimeter = u1 - u0 + v1 - v0
+    eps = None
     out = []
     for gap, area_gap in gaps:
-        if not (gap <= hi and area_gap <= hi * perimeter):
+        if not within(gap, area_gap, 1e-6 * size_uv, perimeter):
             out.append(False)
             continue
         if eps is None:  # the bound of the surface's speed, only when needed
-            eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
-            eps = max(eps, 1e-12 * size_uv)
-        out.append(gap <= eps and area_gap <= eps * perimeter)
+            eps = domain_eps(size_uv, chord_tol, speed_bound(surface))
+        out.append(within(gap, area_gap, eps, perimeter))
     return out
+
+
+def domain_eps(size_uv, chord_tol: float, speed):
+    """How far (UV) a loop may lie from the domain rectangle and be taken for it: the
+    sliver between them is within ``eps * speed`` of the loop in 3-D, at most 1e-3 of the
+    chord tolerance (files round their pcurves: OCC's closed torus face ends 2e-10
+    short of 2 pi), ``eps`` between ``1e-12`` and ``1e-6`` of the domain's size
+    ``size_uv`` (floats; ``speed``: :func:`speed_bound`)."""
+    return max(min(1e-6 * size_uv, 1e-3 * chord_tol / max(speed, 1e-300)), 1e-12 * size_uv)
+
+
+def within(gap, area_gap, eps, perimeter):
+    """Whether loops of ``(gap, area_gap)`` lie within ``eps`` of the domain rectangle
+    of ``perimeter`` (``u1 - u0 + v1 - v0``): every point within ``eps`` of an edge line
+    and the area within ``eps * perimeter`` of the rectangle's.  Scalars or arrays."""
+    return (gap <= eps) & (area_gap <= eps * perimeter)
 
 
 class TrimPolylines:
@@ -203,8 +215,7 @@ def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bo
         return False
     if worst <= lo:
         return True
-    eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
-    return worst <= max(eps, lo)
+    return worst <= domain_eps(size_uv, chord_tol, speed_bound(surface))
 
 
 def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
@@ -257,11 +268,10 @@ def _rectangle_of(pts, chord_tol: float, surface: Surface):
     gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
     hi = 1e-6 * size_uv
     perimeter = a1 - a0 + b1 - b0
-    if not (gap <= hi and area_gap <= hi * perimeter):
+    if not within(gap, area_gap, hi, perimeter):
         return None
-    eps = min(hi, 1e-3 * chord_tol / max(speed_bound(surface), 1e-300))
-    eps = max(eps, 1e-12 * size_uv)
-    if not (gap <= eps and area_gap <= eps * perimeter):
+    if not within(gap, area_gap, domain_eps(size_uv, chord_tol, speed_bound(surface)),
+                  perimeter):
         return None
     return float(a0), float(a1), float(b0), float(b1)
 
@@ -302,25 +312,30 @@ def flat_surfaces(surfaces) -> tuple:
     faces: ``(Pw (n, 4), pw_off, nets, U, u_off, V, v_off, domains)``, face ``f``'s
     homogeneous net the rows ``Pw[pw_off[f]:pw_off[f+1]]`` (row-major), ``nets[f] = (nu,
     nv, p, q)``, its knots ``U[u_off[f]:u_off[f+1]]`` and ``V[...]``, ``domains[f] = (u0,
-    u1, v0, v1)``."""
+    u1, v0, v1)`` (``U[p]``, ``U[-p-1]``, ``V[q]``, ``V[-q-1]``: ``Surface.domain``)."""
+    H = [s.homogeneous for s in surfaces]
+    nets = np.array([h.shape[:2] + (s.degree_u, s.degree_v) for h, s in zip(H, surfaces)],
+                    dtype=np.int64)
     if len(surfaces) == 1:
         s = surfaces[0]
-        Pw = s.homogeneous.reshape(-1, 4)
+        Pw = H[0].reshape(-1, 4)
         U, V = s.knots_u, s.knots_v
         pw_off = np.array([0, len(Pw)], dtype=np.int64)
         u_off = np.array([0, len(U)], dtype=np.int64)
         v_off = np.array([0, len(V)], dtype=np.int64)
-    else:
-        Pw = np.concatenate([s.homogeneous.reshape(-1, 4) for s in surfaces])
-        U = np.concatenate([s.knots_u for s in surfaces])
-        V = np.concatenate([s.knots_v for s in surfaces])
-        pw_off = starts(np.array([s.homogeneous.shape[0] * s.homogeneous.shape[1]
-                                   for s in surfaces], dtype=np.int64))
-        u_off = starts(np.array([len(s.knots_u) for s in surfaces], dtype=np.int64))
-        v_off = starts(np.array([len(s.knots_v) for s in surfaces], dtype=np.int64))
-    nets = np.array([s.homogeneous.shape[:2] + (s.degree_u, s.degree_v) for s in surfaces],
-                    dtype=np.int64)
-    domains = np.array([s.domain[0] + s.domain[1] for s in surfaces], dtype=np.float64)
+        (u0, u1), (v0, v1) = s.domain
+        return Pw, pw_off, nets, U, u_off, V, v_off, np.array([[u0, u1, v0, v1]])
+    Pw = np.concatenate(H, axis=None).reshape(-1, 4)
+    Us = [s.knots_u for s in surfaces]
+    Vs = [s.knots_v for s in surfaces]
+    U = np.concatenate(Us)
+    V = np.concatenate(Vs)
+    pw_off = starts(nets[:, 0] * nets[:, 1])
+    u_off = starts(np.fromiter(map(len, Us), dtype=np.int64, count=len(Us)))
+    v_off = starts(np.fromiter(map(len, Vs), dtype=np.int64, count=len(Vs)))
+    p, q = nets[:, 2], nets[:, 3]
+    domains = np.stack([U[u_off[:-1] + p], U[u_off[1:] - p - 1], V[v_off[:-1] + q],
+                        V[v_off[1:] - q - 1]], axis=1)
     return Pw, pw_off, nets, U, u_off, V, v_off, domains
 
 

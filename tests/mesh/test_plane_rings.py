@@ -11,7 +11,9 @@ against the route it replaced: the rings of ``TrimPolylines(...).rings()`` face 
 ``affine_map(s, size) is not None``, the same answer.  On the trimmed faces of five
 real parts (planes with arcs and several loops, cylinders, cones, tori, B-splines)
 and on made-up cases: a loop that is the domain rectangle, two holes of one area,
-loops of equal area, nets near the degeneracy threshold."""
+loops of equal area, nets near the degeneracy threshold.  Also the planes' speed bounds
+in one call (``tess_trim.speed_bounds``) against ``speed_bound`` face by face, the flat
+nets' domains against ``Surface.domain``."""
 
 from __future__ import annotations
 
@@ -21,10 +23,11 @@ import numpy as np
 import pytest
 
 from geomkit._kernels.tess_loops import loop_areas, polygon_meshes
+from geomkit._kernels.tess_trim import speed_bounds
 from geomkit.cad.step import read_step
 from geomkit.mesh.planes import _rings, _rings_one_by_one, _triangulate, planar_batch
-from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, flat_surfaces, is_affine,
-                                         loop_points)
+from geomkit.mesh.trim_polylines import (affine_map, flat_surfaces, is_affine,
+                                         loop_points, speed_bound)
 from geomkit.nurbs.surface import Surface
 from geomkit.nurbs.trims import packed_loops, packed_trims
 
@@ -208,3 +211,13 @@ def test_polygon_meshes_match_numpy_on_parts(part):
     polys = polys[shapely.is_valid(polys)]
     tri, idx, _ = _triangulate(polys)
     _same_meshes(tri, idx, len(polys))
+
+
+def test_speed_bounds_and_flat_domains_match_the_face_by_face_values(part):
+    S, _ = part
+    flat = flat_surfaces(S)
+    assert flat[7].tolist() == [list(s.domain[0] + s.domain[1]) for s in S]
+    xyz = np.concatenate([s.control_points for s in S], axis=None).reshape(-1, 3)
+    Pw, pw_off, nets, U, u_off, V, v_off, _ = flat
+    got = speed_bounds(xyz, Pw, pw_off, nets, U, u_off, V, v_off, np.arange(len(S)))
+    assert got.tolist() == [speed_bound(s) for s in S]  # bit for bit
