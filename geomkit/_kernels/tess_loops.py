@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit, jit_exact
+from .numba_ext.policy import jit, jit_exact, jit_inline
 from .surface import surface_points_range
 from .tess_trim import loop_rectangle_gap, trim_polylines
 
@@ -235,6 +235,51 @@ def loop_areas(pts, start):
     return area, err
 
 
+@jit_inline
+def _uv_less(us, vs, i, j):
+    """Whether corner ``i`` comes before corner ``j`` by (u, v)."""
+    return us[i] < us[j] or (us[i] == us[j] and vs[i] < vs[j])
+
+
+@jit
+def _sort_uv(us, vs, order, buf, k):
+    """``order[:k]``: the indices ``0..k-1`` sorted by ``(us, vs)``, stably (equal corners
+    keep their order, as numpy's lexsort): insertion-sorted runs of 8, then bottom-up
+    merges through ``buf``."""
+    for r in range(k):
+        order[r] = r
+    for lo in range(0, k, 8):
+        for r in range(lo + 1, min(lo + 8, k)):
+            x = order[r]
+            q = r
+            while q > lo and _uv_less(us, vs, x, order[q - 1]):
+                order[q] = order[q - 1]
+                q -= 1
+            order[q] = x
+    src = order
+    dst = buf
+    width = 8
+    in_buf = False
+    while width < k:
+        for lo in range(0, k, 2 * width):
+            mid = min(lo + width, k)
+            hi = min(lo + 2 * width, k)
+            i = lo
+            j = mid
+            for o in range(lo, hi):
+                if j < hi and (i >= mid or _uv_less(us, vs, src[j], src[i])):
+                    dst[o] = src[j]
+                    j += 1
+                else:
+                    dst[o] = src[i]
+                    i += 1
+        src, dst = dst, src
+        in_buf = not in_buf
+        width *= 2
+    if in_buf:
+        order[:k] = buf[:k]
+
+
 @jit_exact
 def polygon_meshes(tri, idx, n):
     """Indexed meshes of triangles given by their corners, ``tri`` (T, 3, 2) of polygon
@@ -242,7 +287,7 @@ def polygon_meshes(tri, idx, n):
     signed area ``a_u b_v - a_v b_u`` of the edges from the first corner, without
     contraction: numpy's values), the others counter-clockwise (a clockwise one's
     corners reversed), each polygon's distinct corners sorted by u, then v (a stable
-    sort; equal corners merged into the first in that order).
+    sort, as numpy's lexsort; equal corners merged into the first in that order).
 
     Returns ``(uv (N, 2), faces (M, 3), vstart (n+1,), tstart (n+1,))``: polygon ``j``'s
     vertices ``uv[vstart[j]:vstart[j+1]]`` and its triangles ``faces[tstart[j]:
@@ -269,6 +314,8 @@ def polygon_meshes(tri, idx, n):
     faces = np.empty((m, 3), dtype=np.int64)
     vstart = np.zeros(n + 1, dtype=np.int64)
     tstart = np.zeros(n + 1, dtype=np.int64)
+    order = np.empty(3 * m, dtype=np.int64)
+    buf = np.empty(3 * m, dtype=np.int64)
     nv = 0
     t0 = 0
     for j in range(n):
@@ -280,10 +327,10 @@ def polygon_meshes(tri, idx, n):
         if t1 > t0:
             us = corner[3 * t0:3 * t1, 0]
             vs = corner[3 * t0:3 * t1, 1]
-            o1 = np.argsort(vs, kind="mergesort")  # by v, then stably by u: by (u, v)
-            order = o1[np.argsort(us[o1], kind="mergesort")]
+            k = us.shape[0]
+            _sort_uv(us, vs, order, buf, k)
             first = nv
-            for r in range(order.shape[0]):
+            for r in range(k):
                 i = order[r]
                 if r == 0 or us[i] != uv[nv - 1, 0] or vs[i] != uv[nv - 1, 1]:
                     uv[nv, 0] = us[i]

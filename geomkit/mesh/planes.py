@@ -24,7 +24,7 @@ from geomkit.mesh.cells import triangle_coordinates
 from geomkit._kernels.tess_loops import (faces_points, loop_areas, plane_rings,
                                         polygon_meshes)
 from geomkit._kernels.tess_trim import speed_bounds
-from geomkit.mesh.trim_polylines import (TrimPolylines, domain_eps, flat_surfaces, is_affine,
+from geomkit.mesh.trim_polylines import (TrimPolylines, affine_flags, domain_eps, flat_surfaces,
                                          largest_loop, loop_points, within)
 from geomkit.nurbs.trims import starts
 
@@ -67,13 +67,14 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     t0 = time.perf_counter()
     out = {}
     planes = []
-    for i, s in enumerate(surfaces):
-        if not s.trim:
-            continue
-        if not is_affine(s, s.size if sizes is None else sizes[i]):
+    trimmed = [i for i, s in enumerate(surfaces) if s.trim]
+    flags = affine_flags([surfaces[i] for i in trimmed],
+                         [surfaces[i].size if sizes is None else sizes[i] for i in trimmed])
+    for i, affine in zip(trimmed, flags):
+        if affine:
+            planes.append(i)
+        else:
             out[i] = False  # not a plane: the face-by-face path need not ask again
-            continue
-        planes.append(i)
     if not planes:
         return out
     P = [surfaces[i] for i in planes]

@@ -443,37 +443,53 @@ def _bilinear_affine(P, ku, kv, size):
 
 
 DEGENERATE_MARGIN = 1e-9
-""":func:`is_affine` decides :func:`_not_degenerate`'s test in Python floats when the
-two sides differ by more than this relative margin (rounding differences from numpy's
-dot products are ~1e-16); closer, numpy's own test decides."""
+""":func:`affine_flags` decides :func:`_not_degenerate`'s test in floats of its own when
+the two sides differ by more than this relative margin (rounding differences from
+numpy's dot products are ~1e-16); closer, numpy's own test decides."""
 
 
-def is_affine(s: Surface, size: float) -> bool:
-    """``affine_map(s, size) is not None``, the same answer on every surface, with fewer
-    numpy calls on the common nets: unequal weights refused from a list of them, a
-    2 x 2 net tested in Python floats (:func:`_bilinear_affine`; the degeneracy test
-    too, unless its two sides lie within :data:`DEGENERATE_MARGIN` of each other:
-    then numpy's, as :func:`affine_map` makes it).  Other nets: :func:`affine_map`."""
-    w = s.weights
-    if w is not None:  # finite and > 0 (the surface's invariant): min and max decide
-        wl = w.ravel().tolist()
-        if max(wl) != min(wl):
-            return False
-    P = s.control_points
-    if P.shape[0] != 2 or P.shape[1] != 2:
-        return affine_map(s, size) is not None
-    oab = _bilinear_affine(P.tolist(), s.knots_u.tolist(), s.knots_v.tolist(), size)
-    if oab is None:
-        return False
-    _, (a0, a1, a2), (b0, b1, b2) = oab
+def affine_flags(surfaces, sizes) -> list[bool]:
+    """``[affine_map(s, size) is not None ...]`` for ``surfaces`` of ``sizes``, the same
+    answers, with few numpy calls: unequal weights refused from a list of them, the
+    2 x 2 nets tested together (:func:`_bilinear_affine`'s operations on arrays of their
+    rows, elementwise: the same values; the degeneracy test too, unless its two sides
+    lie within :data:`DEGENERATE_MARGIN` of each other: then numpy's, as
+    :func:`affine_map` makes it).  Other nets: :func:`affine_map`."""
+    out = [False] * len(surfaces)
+    quad = []
+    for i, s in enumerate(surfaces):
+        w = s.weights
+        if w is not None:  # finite and > 0 (the surface's invariant): min and max decide
+            wl = w.ravel().tolist()
+            if max(wl) != min(wl):
+                continue
+        shape = s.control_points.shape
+        if shape[0] == 2 and shape[1] == 2:
+            quad.append(i)
+        else:
+            out[i] = affine_map(s, sizes[i]) is not None
+    if not quad:
+        return out
+    P = np.array([surfaces[i].control_points for i in quad])
+    KU = np.array([surfaces[i].knots_u for i in quad])
+    KV = np.array([surfaces[i].knots_v for i in quad])
+    p00, p01, p10, p11 = P[:, 0, 0], P[:, 0, 1], P[:, 1, 0], P[:, 1, 1]
+    a = (p10 - p00) / (KU[:, 2] - KU[:, 1])[:, None]
+    b = (p01 - p00) / (KV[:, 2] - KV[:, 1])[:, None]
+    t = np.abs(p11 - p10 - (p01 - p00))
+    lim = AFFINE_REL * np.array([sizes[i] for i in quad])
+    flat = ~(np.maximum.reduce(t, axis=1) > lim)  # NaN passes, as in _bilinear_affine
+    (a0, a1, a2), (b0, b1, b2) = a.T, b.T
     n0, n1, n2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
     lhs = n0 * n0 + n1 * n1 + n2 * n2
     rhs = 1e-24 * (a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2)
-    if lhs > rhs * (1.0 + DEGENERATE_MARGIN):
-        return True
-    if lhs < rhs * (1.0 - DEGENERATE_MARGIN):
-        return False
-    return _not_degenerate(*(np.array(x) for x in oab)) is not None
+    sure = lhs > rhs * (1.0 + DEGENERATE_MARGIN)
+    unsure = ~sure & ~(lhs < rhs * (1.0 - DEGENERATE_MARGIN))
+    for k, i in enumerate(quad):
+        if flat[k]:
+            out[i] = bool(sure[k]) or bool(unsure[k]) and _not_degenerate(
+                None, np.array(a[k].tolist()), np.array(b[k].tolist())) is not None
+    return out
 
 
 def planar_trimmed(trim: TrimPolylines):

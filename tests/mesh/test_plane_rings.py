@@ -4,7 +4,7 @@ indexed meshes in one kernel (``tess_loops.polygon_meshes``, against the numpy r
 it replaced, bit for bit: random triangles with repeated corners, zero areas and
 signed zeros, and the parts' planes), the packing of every
 loop of many surfaces at once (:func:`geomkit.nurbs.trims.packed_loops`) and the plane
-test with fewer numpy calls (:func:`geomkit.mesh.trim_polylines.is_affine`), each
+test of many surfaces with few numpy calls (:func:`geomkit.mesh.trim_polylines.affine_flags`), each
 against the route it replaced: the rings of ``TrimPolylines(...).rings()`` face by face
 (:func:`geomkit.mesh.planes._rings_one_by_one`), bit for bit; each surface's
 :func:`packed_trims` concatenated with its offsets moved, bit for bit; and
@@ -26,7 +26,7 @@ from geomkit._kernels.tess_loops import loop_areas, polygon_meshes
 from geomkit._kernels.tess_trim import speed_bounds
 from geomkit.cad.step import read_step
 from geomkit.mesh.planes import _rings, _rings_one_by_one, _triangulate, planar_batch
-from geomkit.mesh.trim_polylines import (affine_map, flat_surfaces, is_affine,
+from geomkit.mesh.trim_polylines import (affine_flags, affine_map, flat_surfaces,
                                          loop_points, speed_bound)
 from geomkit.nurbs.surface import Surface
 from geomkit.nurbs.trims import packed_loops, packed_trims
@@ -82,17 +82,17 @@ def test_packed_loops_match_the_surfaces_packs(part):
             assert a.dtype == b.dtype and np.array_equal(a, b)
 
 
-def test_is_affine_matches_affine_map_on_parts(part):
+def test_affine_flags_match_affine_map_on_parts(part):
     S, _ = part
-    for s in S:
-        assert is_affine(s, s.size) == (affine_map(s, s.size) is not None)
+    assert affine_flags(S, [s.size for s in S]) == [affine_map(s, s.size) is not None
+                                                    for s in S]
 
 
 def _net(P, W=None):
     return Surface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], np.array(P, dtype=float), W)
 
 
-def test_is_affine_matches_affine_map_on_made_up_nets():
+def test_affine_flags_match_affine_map_on_made_up_nets():
     rng = np.random.default_rng(7)
     nets = []
     for _ in range(300):
@@ -106,10 +106,11 @@ def test_is_affine_matches_affine_map_on_made_up_nets():
         nets.append([[o, o + b], [o + a, o + a + b]])
     o, a = rng.standard_normal((2, 3))
     nets += [[[o, o], [o + a, o + a]], [[o, o], [o, o]], [[o, o + a], [o + a, o + 2 * a]]]
-    for P in nets:
-        for W in (None, [[2.0, 2.0], [2.0, 2.0]], [[1.0, 2.0], [1.0, 1.0]]):
-            s = _net(P, W)
-            assert is_affine(s, s.size) == (affine_map(s, s.size) is not None)
+    S = [_net(P, W) for P in nets
+         for W in (None, [[2.0, 2.0], [2.0, 2.0]], [[1.0, 2.0], [1.0, 1.0]])]
+    want = [affine_map(s, s.size) is not None for s in S]
+    assert affine_flags(S, [s.size for s in S]) == want
+    assert 0 < sum(want) < len(S)
 
 
 def test_rings_match_trim_polylines_rings(part):
@@ -221,3 +222,12 @@ def test_speed_bounds_and_flat_domains_match_the_face_by_face_values(part):
     Pw, pw_off, nets, U, u_off, V, v_off, _ = flat
     got = speed_bounds(xyz, Pw, pw_off, nets, U, u_off, V, v_off, np.arange(len(S)))
     assert got.tolist() == [speed_bound(s) for s in S]  # bit for bit
+
+
+def test_polygon_meshes_match_numpy_on_large_polygons():
+    rng = np.random.default_rng(11)
+    for T in (30, 200, 700):  # corners beyond one run of 8 and several merge passes
+        pts = rng.integers(-20, 21, size=(3 * T // 2, 2)).astype(float)
+        tri = pts[rng.integers(0, len(pts), size=(T, 3))]
+        idx = np.sort(rng.integers(0, 3, size=T))
+        _same_meshes(tri, idx, 3)
