@@ -3,23 +3,22 @@
 Each axis-aligned cell is clipped to the region that closed UV polylines bound by the
 even-odd rule, and every piece is triangulated by the constrained Delaunay rule:
 
-* the rings are walked so that the region lies on their left (:func:`ring_directions`:
-  the sign of a ring's area and its nesting depth), and each ring's runs inside the
+* the rings are walked so that the region lies on their left
+  (:func:`geomkit._kernels.tess_rings.ring_directions`: the sign of a ring's area and
+  its nesting depth), and each ring's runs inside the
   closed cell become chains from an entry to an exit point on the cell's edge;
 * the pieces are the cycles chain, cell edge (its corners in turn), next chain by the
   entry's place along the edge counter-clockwise (Weiler-Atherton with a rectangle);
-* each piece is ear-clipped, then its diagonals are flipped until every one is
-  locally Delaunay: with the piece's edges kept, that is the constrained Delaunay
-  triangulation (as GEOS's ``constrained_delaunay_triangles`` makes it: ear clipping
-  then flips; ties between cocircular points may be broken the other way).
+* each piece is triangulated by the constrained Delaunay rule
+  (:mod:`geomkit._kernels.tess_cdt`).
 
 A cell no ring runs through (rings that touch it at most) is wholly in or out, by the
 even-odd rule at its centre.  A cell the walk cannot take surely is left to the
 caller (its status says why): a ring wholly inside the closed cell, two chain ends at
 one point of the edge, pieces whose edges meet other than at their shared corners
-(rings that cross or touch, spurs), or a piece with no ear (rounding).  Crossing points are
-computed from the segment in the ring's walking order and the cell edge's exact
-coordinate, so two cells sharing an edge get the same point.
+(rings that cross or touch, spurs), or a piece with no ear (rounding).  Crossing
+points are computed from the segment in the ring's walking order and the cell edge's
+exact coordinate, so two cells sharing an edge get the same point.
 """
 
 from __future__ import annotations
@@ -27,175 +26,17 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit, jit_inline
+from .tess_cdt import (_ear_clip, _flip_to_delaunay, _grow, _orient, _segments_meet,
+                       triangulate_polygon)
+from .tess_rings import _even_odd
 
 # a cell's status: taken, or left to the caller and why
 CLIP_DONE = 0
-CLIP_RING_INSIDE = 1  # a ring reaches the cell with no vertex outside it
+CLIP_RING_INSIDE = 1  # a hole with no vertex outside the cell touches its edge
 CLIP_WALK = 2  # two chain ends at one point of the edge, or the walk meets a chain twice
 CLIP_ORIENTATION = 3  # a piece turns clockwise
 CLIP_TOUCH = 4  # the pieces' edges meet other than at consecutive corners
 CLIP_NO_EAR = 5  # ear clipping found no ear (rounding)
-# diagonals flip only when the fourth point is inside the circle by more than this
-# fraction of the incircle determinant's magnitude: cocircular corners stay as made
-INCIRCLE_REL = 1e-12
-# a vertex where the ring turns back within this angle (radians) is a spur's tip
-SPUR_REL = 1e-12
-# small loops are sought between edges at most this many edges apart
-LOOP_SPAN = 4
-
-
-@jit_inline
-def _ring_holds(P, a, b, px, py):
-    """Whether the closed ring ``P[a:b]`` holds (px, py): an odd count of its edges
-    crossing the ray from it towards +u."""
-    inside = False
-    for k in range(a, b - 1):
-        y1 = P[k, 1]
-        y2 = P[k + 1, 1]
-        if (y1 > py) != (y2 > py):
-            x = P[k, 0] + (py - y1) * (P[k + 1, 0] - P[k, 0]) / (y2 - y1)
-            if px < x:
-                inside = not inside
-    return inside
-
-
-@jit
-def ring_directions(P, starts):
-    """(r,) +1 where closed ring ``P[starts[i]:starts[i+1]]`` (last point = first) has the
-    even-odd region on its left as stored, -1 where it must be walked backwards: a
-    ring nested in an even number of others bounds the region from outside
-    (counter-clockwise), in an odd number from inside (clockwise).  Nesting by the
-    ring's first point against every other ring."""
-    nr = starts.shape[0] - 1
-    out = np.empty(nr, dtype=np.int64)
-    for i in range(nr):
-        a = 0.0
-        for k in range(starts[i], starts[i + 1] - 1):
-            a += P[k, 0] * P[k + 1, 1] - P[k + 1, 0] * P[k, 1]
-        px = P[starts[i], 0]
-        py = P[starts[i], 1]
-        depth = 0
-        for j in range(nr):
-            if j != i and _ring_holds(P, starts[j], starts[j + 1], px, py):
-                depth += 1
-        out[i] = 1 if (a > 0.0) == (depth % 2 == 0) else -1
-    return out
-
-
-@jit
-def _drop_spur(Q, k):
-    """One spur tip or repeated vertex of the cyclic ring ``Q[:k]`` removed: the new
-    count (``k`` when there is none)."""
-    for j in range(k):
-        a = (j - 1) % k
-        c = (j + 1) % k
-        ax = Q[j, 0] - Q[a, 0]
-        ay = Q[j, 1] - Q[a, 1]
-        bx = Q[c, 0] - Q[j, 0]
-        by = Q[c, 1] - Q[j, 1]
-        same = ax == 0.0 and ay == 0.0
-        fold = ax * bx + ay * by < 0.0 and abs(ax * by - ay * bx) <= SPUR_REL * np.sqrt(
-            (ax * ax + ay * ay) * (bx * bx + by * by))
-        if same or fold:
-            for t in range(j, k - 1):
-                Q[t] = Q[t + 1]
-            return k - 1
-    return k
-
-
-@jit
-def _drop_small_loop(Q, k, tiny, buf):
-    """One small loop of the cyclic ring ``Q[:k]`` cut off: where edge ``i`` properly
-    crosses edge ``i + d`` (``2 <= d <= LOOP_SPAN``) and the loop between them encloses
-    at most ``tiny``, the vertices between become the crossing point.  The new count."""
-    for i in range(k):
-        ax, ay = Q[i, 0], Q[i, 1]
-        bx, by = Q[(i + 1) % k, 0], Q[(i + 1) % k, 1]
-        for d in range(2, min(LOOP_SPAN, k - 2) + 1):
-            j = (i + d) % k
-            cx, cy = Q[j, 0], Q[j, 1]
-            ex, ey = Q[(j + 1) % k, 0], Q[(j + 1) % k, 1]
-            d1 = _orient(cx, cy, ex, ey, ax, ay)
-            d2 = _orient(cx, cy, ex, ey, bx, by)
-            d3 = _orient(ax, ay, bx, by, cx, cy)
-            d4 = _orient(ax, ay, bx, by, ex, ey)
-            if not ((d1 > 0.0) != (d2 > 0.0) and d1 != 0.0 and d2 != 0.0
-                    and (d3 > 0.0) != (d4 > 0.0) and d3 != 0.0 and d4 != 0.0):
-                continue
-            t = d1 / (d1 - d2)
-            x = ax + t * (bx - ax)
-            y = ay + t * (by - ay)
-            s = 0.0  # the loop X, Q[i+1], ..., Q[j]
-            px, py = x, y
-            for e in range(1, d + 1):
-                qx, qy = Q[(i + e) % k, 0], Q[(i + e) % k, 1]
-                s += px * qy - qx * py
-                px, py = qx, qy
-            s += px * y - x * py
-            if abs(0.5 * s) > tiny:
-                continue
-            m = 0
-            for e in range(k - d):  # Q[j+1], ..., Q[i], then X
-                buf[m] = Q[(j + 1 + e) % k]
-                m += 1
-            buf[m, 0] = x
-            buf[m, 1] = y
-            m += 1
-            for e in range(m):
-                Q[e] = buf[e]
-            return m
-    return k
-
-
-@jit
-def clean_rings(P, starts, tiny):
-    """The closed rings ``P[starts[i]:starts[i+1]]`` without their spurs and small loops,
-    as GEOS's valid form of the region has them: a vertex where the ring turns straight
-    back (its two edges opposed, their cross product within :data:`SPUR_REL` of the
-    product of their lengths) goes, so does a vertex equal to the one before it, and a
-    loop of at most ``tiny`` area closed by two edges that cross is cut at the crossing;
-    repeated until none is left; a ring left with fewer than three vertices goes.  Trim
-    pieces overshoot or overlap where they join (by 1e-9 to 1e-7 of the domain): the
-    region changes by at most ``tiny`` a loop.  ``(P, starts)``, new arrays."""
-    nr = starts.shape[0] - 1
-    out = np.empty_like(P)
-    ostarts = np.empty_like(starts)
-    ostarts[0] = 0
-    Q = np.empty_like(P)
-    buf = np.empty_like(P)
-    n = 0
-    nk = 0
-    for r in range(nr):
-        k = starts[r + 1] - starts[r] - 1  # distinct vertices (the last repeats the first)
-        for i in range(k):
-            Q[i] = P[starts[r] + i]
-        while k >= 3:
-            k2 = _drop_spur(Q, k)
-            if k2 == k and k >= 5:
-                k2 = _drop_small_loop(Q, k, tiny, buf)
-            if k2 == k:
-                break
-            k = k2
-        if k < 3:
-            continue  # nothing but spurs: no area, no ring
-        for j in range(k):
-            out[n] = Q[j]
-            n += 1
-        out[n] = Q[0]
-        n += 1
-        nk += 1
-        ostarts[nk] = n
-    return out[:n], ostarts[:nk + 1]
-
-
-@jit
-def _even_odd(P, starts, px, py):
-    """Whether (px, py) is inside the region the closed rings bound (even-odd rule)."""
-    inside = False
-    for r in range(starts.shape[0] - 1):
-        if _ring_holds(P, starts[r], starts[r + 1], px, py):
-            inside = not inside
-    return inside
 
 
 @jit_inline
@@ -277,50 +118,15 @@ def _perimeter(x, y, u0, u1, v0, v1):
     return 3.0 + (v1 - y) / (v1 - v0)
 
 
-@jit_inline
-def _orient(ax, ay, bx, by, cx, cy):
-    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-
-
-@jit_inline
-def _segments_meet(ax, ay, bx, by, cx, cy, dx, dy):
-    """Whether the closed segments a-b and c-d share a point."""
-    d1 = _orient(cx, cy, dx, dy, ax, ay)
-    d2 = _orient(cx, cy, dx, dy, bx, by)
-    d3 = _orient(ax, ay, bx, by, cx, cy)
-    d4 = _orient(ax, ay, bx, by, dx, dy)
-    if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and \
-            ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
-        return True
-    if d1 == 0.0 and min(cx, dx) <= ax <= max(cx, dx) and min(cy, dy) <= ay <= max(cy, dy):
-        return True
-    if d2 == 0.0 and min(cx, dx) <= bx <= max(cx, dx) and min(cy, dy) <= by <= max(cy, dy):
-        return True
-    if d3 == 0.0 and min(ax, bx) <= cx <= max(ax, bx) and min(ay, by) <= cy <= max(ay, by):
-        return True
-    if d4 == 0.0 and min(ax, bx) <= dx <= max(ax, bx) and min(ay, by) <= dy <= max(ay, by):
-        return True
-    return False
-
-
 @jit
-def _grow(a, n):
-    """``a`` with room for at least ``n`` rows (doubled)."""
-    if n <= a.shape[0]:
-        return a
-    shape = (max(n, 2 * a.shape[0]),) + a.shape[1:]
-    b = np.empty(shape, dtype=a.dtype)
-    b[:a.shape[0]] = a
-    return b
-
-
-@jit
-def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout):
+def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout, inner):
     """The chains of every ring in the closed cell: points in ``pts``, chain ``c`` is
     ``pts[cs[c]:ce[c]]`` from its entry (place ``sin_[c]`` along the edge) to its exit
-    (``sout[c]``).  ``(n_chains, n_points, pts, ok)``; not ok when a ring that reaches
-    the cell has no vertex strictly outside it."""
+    (``sout[c]``); the rings without a vertex outside the cell in ``inner``.
+    ``(n_chains, n_inner, n_points, pts, ok)``; not ok when such a ring is a hole (turns
+    clockwise as walked) that touches the cell's edge."""
     nc = 0
+    ni = 0
     npt = 0
     for r in range(starts.shape[0] - 1):
         if bbox[r, 1] < u0 or bbox[r, 0] > u1 or bbox[r, 3] < v0 or bbox[r, 2] > v1:
@@ -334,8 +140,20 @@ def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout):
             if not _inside(q[0], q[1], u0, u1, v0, v1):
                 k0 = i
                 break
-        if k0 < 0:
-            return nc, npt, pts, False
+        if k0 < 0:  # no vertex outside: an island, or a hole unless it touches the edge
+            touch = False
+            a2 = 0.0
+            for i in range(m):
+                q = _vertex(P, s, m, d, i)
+                q1 = _vertex(P, s, m, d, i + 1)
+                a2 += q[0] * q1[1] - q1[0] * q[1]
+                if not (u0 < q[0] < u1 and v0 < q[1] < v1):
+                    touch = True
+            if touch and a2 <= 0.0:
+                return nc, ni, npt, pts, False
+            inner[ni] = r
+            ni += 1
+            continue
         open_ = False
         first = 0
         for j in range(m):
@@ -391,7 +209,7 @@ def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout):
             sin_[nc] = _perimeter(pts[first, 0], pts[first, 1], u0, u1, v0, v1)
             sout[nc] = _perimeter(pts[npt - 1, 0], pts[npt - 1, 1], u0, u1, v0, v1)
             nc += 1
-    return nc, npt, pts, True
+    return nc, ni, npt, pts, True
 
 
 @jit_inline
@@ -528,131 +346,53 @@ def _simple(poly, pstart, npiece):
 
 
 @jit_inline
-def _in_closed_triangle(px, py, ax, ay, bx, by, cx, cy):
-    return _orient(ax, ay, bx, by, px, py) >= 0.0 and _orient(bx, by, cx, cy, px, py) >= 0.0 \
-        and _orient(cx, cy, ax, ay, px, py) >= 0.0
-
-
-@jit
-def _ear_clip(x, y, n, tri, nxt, prv):
-    """Triangles (rows of corner indices, counter-clockwise) of the simple
-    counter-clockwise polygon ``x, y`` (``n`` points): ``(count, ok)``.  An ear is a
-    convex corner whose triangle holds no other remaining point (on its edges
-    included)."""
-    for i in range(n):
-        nxt[i] = (i + 1) % n
-        prv[i] = (i - 1) % n
-    left = n
-    nt = 0
-    i = 0
-    miss = 0
-    while left > 3:
-        p = prv[i]
-        q = nxt[i]
-        ear = _orient(x[p], y[p], x[i], y[i], x[q], y[q]) > 0.0
-        if ear:
-            r = nxt[q]
-            while r != p:
-                if _in_closed_triangle(x[r], y[r], x[p], y[p], x[i], y[i], x[q], y[q]):
-                    ear = False
-                    break
-                r = nxt[r]
-        if ear:
-            tri[nt, 0] = p
-            tri[nt, 1] = i
-            tri[nt, 2] = q
-            nt += 1
-            nxt[p] = q
-            prv[q] = p
-            left -= 1
-            i = q
-            miss = 0
-        else:
-            i = q
-            miss += 1
-            if miss > left:
-                return nt, False
-    i = nxt[i]
-    p = prv[i]
-    q = nxt[i]
-    if not _orient(x[p], y[p], x[i], y[i], x[q], y[q]) > 0.0:
-        return nt, False
-    tri[nt, 0] = p
-    tri[nt, 1] = i
-    tri[nt, 2] = q
-    return nt + 1, True
+def _holds(poly, a0, a1, px, py):
+    """Whether the open ring ``poly[a0:a1]`` holds (px, py) (ray crossings towards +u)."""
+    inside = False
+    for i in range(a0, a1):
+        j = i + 1 if i + 1 < a1 else a0
+        y1 = poly[i, 1]
+        y2 = poly[j, 1]
+        if (y1 > py) != (y2 > py):
+            x = poly[i, 0] + (py - y1) * (poly[j, 0] - poly[i, 0]) / (y2 - y1)
+            if px < x:
+                inside = not inside
+    return inside
 
 
 @jit_inline
-def _incircle(ax, ay, bx, by, cx, cy, dx, dy):
-    """Whether d is inside the circle through the counter-clockwise a, b, c by more than
-    :data:`INCIRCLE_REL` of the determinant's magnitude."""
-    adx = ax - dx
-    ady = ay - dy
-    bdx = bx - dx
-    bdy = by - dy
-    cdx = cx - dx
-    cdy = cy - dy
-    al = adx * adx + ady * ady
-    bl = bdx * bdx + bdy * bdy
-    cl = cdx * cdx + cdy * cdy
-    det = al * (bdx * cdy - bdy * cdx) + bl * (cdx * ady - cdy * adx) \
-        + cl * (adx * bdy - ady * bdx)
-    mag = al * (abs(bdx * cdy) + abs(bdy * cdx)) + bl * (abs(cdx * ady) + abs(cdy * adx)) \
-        + cl * (abs(adx * bdy) + abs(ady * bdx))
-    return det > INCIRCLE_REL * mag
+def _open_area2(poly, a0, a1):
+    s = 0.0
+    for i in range(a0, a1):
+        j = i + 1 if i + 1 < a1 else a0
+        s += poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+    return s
 
 
 @jit
-def _flip_to_delaunay(x, y, n, tri, nt):
-    """Diagonals of the ear-clipped polygon (``n`` points, triangles ``tri[:nt]``)
-    flipped until each is locally Delaunay; the polygon's edges stay."""
-    budget = 4 * nt * nt + 8
-    changed = True
-    while changed and budget > 0:
-        changed = False
-        for t in range(nt):
-            for e in range(3):
-                a = tri[t, e]
-                b = tri[t, (e + 1) % 3]
-                c = tri[t, (e + 2) % 3]
-                if (b - a) % n == 1 or (a - b) % n == 1:
-                    continue  # an edge of the polygon
-                for u in range(nt):
-                    if u == t:
-                        continue
-                    f = -1
-                    for g in range(3):
-                        if tri[u, g] == b and tri[u, (g + 1) % 3] == a:
-                            f = g
-                    if f < 0:
-                        continue
-                    d = tri[u, (f + 2) % 3]
-                    if _incircle(x[a], y[a], x[b], y[b], x[c], y[c], x[d], y[d]) and \
-                            _orient(x[a], y[a], x[d], y[d], x[c], y[c]) > 0.0 and \
-                            _orient(x[d], y[d], x[b], y[b], x[c], y[c]) > 0.0:
-                        tri[t, 0] = a
-                        tri[t, 1] = d
-                        tri[t, 2] = c
-                        tri[u, 0] = d
-                        tri[u, 1] = b
-                        tri[u, 2] = c
-                        changed = True
-                        budget -= 1
-                    break
-                if changed:
-                    break
-            if changed:
-                break
+def _triangulate_simple(poly, a0, n, x, y, tri, nxt, prv, zero, rs):
+    """:func:`geomkit._kernels.tess_cdt.triangulate_polygon` of the simple piece
+    ``poly[a0:a0+n]`` in the caller's scratch arrays (of at least ``n`` rows; ``zero``
+    zeros, ``rs`` two): ``(count, ok)``, triangles ``tri[:count]`` into ``x, y``."""
+    for i in range(n):
+        x[i] = poly[a0 + i, 0]
+        y[i] = poly[a0 + i, 1]
+    nt, ok = _ear_clip(x, y, n, tri, nxt, prv)
+    if ok:
+        rs[1] = n
+        _flip_to_delaunay(x, y, zero, rs, tri, nt)
+    return nt, ok
 
 
 @jit
 def clip_cells(cells, P, starts, dirs):
     """The axis-aligned cells ``cells`` (n, 4) ``u0, u1, v0, v1`` clipped to the even-odd
     region of the closed rings ``P[starts[i]:starts[i+1]]`` (walked in ``dirs``, see
-    :func:`ring_directions`) and triangulated: ``(tri (t, 3, 2) counter-clockwise, cell
-    (t,) of each, status (n,), area (n,))``: status :data:`CLIP_DONE` with the pieces'
-    area, or why the cell is left to the caller (its triangles are not in ``tri``)."""
+    :func:`geomkit._kernels.tess_rings.ring_directions`) and triangulated: ``(tri (t, 3,
+    2) counter-clockwise, cell (t,) of each, status (n,), area (n,))``: status
+    :data:`CLIP_DONE` with the pieces' area, or why the cell is left to the caller (its
+    triangles are not in ``tri``).  Rings wholly inside a cell are its islands (pieces
+    of their own) and holes (in the smallest piece holding them)."""
     nr = starts.shape[0] - 1
     bbox = np.empty((nr, 4))
     for r in range(nr):
@@ -669,33 +409,43 @@ def clip_cells(cells, P, starts, dirs):
     ce = np.empty(nseg + 1, dtype=np.int64)
     sin_ = np.empty(nseg + 1)
     sout = np.empty(nseg + 1)
+    inner = np.empty(nr, dtype=np.int64)
     poly = np.empty((64, 2))
-    pstart = np.empty(nseg + 2, dtype=np.int64)
+    pstart = np.empty(nseg + nr + 2, dtype=np.int64)
+    host = np.empty(nseg + nr + 1, dtype=np.int64)
+    parea = np.empty(nseg + nr + 1)
     out = np.empty((16 * cells.shape[0] + 16, 3, 2))
     owner = np.empty(out.shape[0], dtype=np.int64)
     status = np.full(cells.shape[0], CLIP_DONE, dtype=np.int8)
     area = np.zeros(cells.shape[0])
-    tri = np.empty((64, 3), dtype=np.int64)
-    nxt = np.empty(64, dtype=np.int64)
-    prv = np.empty(64, dtype=np.int64)
-    x = np.empty(64)
-    y = np.empty(64)
+    cap = 64
+    sx = np.empty(cap)
+    sy = np.empty(cap)
+    stri = np.empty((cap, 3), dtype=np.int64)
+    snxt = np.empty(cap, dtype=np.int64)
+    sprv = np.empty(cap, dtype=np.int64)
+    szero = np.zeros(cap, dtype=np.int64)
+    srs = np.zeros(2, dtype=np.int64)
     nout = 0
     for c in range(cells.shape[0]):
         u0, u1, v0, v1 = cells[c, 0], cells[c, 1], cells[c, 2], cells[c, 3]
-        nc, npt, pts, ok = _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce,
-                                   sin_, sout)
+        nc, ni, npt, pts, ok = _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce,
+                                       sin_, sout, inner)
         if not ok:
             status[c] = CLIP_RING_INSIDE
             continue
-        if nc == 0:  # rings at most touch the cell: all of it is in or out
-            if not _even_odd(P, starts, 0.5 * (u0 + u1), 0.5 * (v0 + v1)):
-                continue
-            for k in range(4):
-                poly[k, 0], poly[k, 1] = _corner(k, u0, u1, v0, v1)
-            pstart[0] = 0
-            pstart[1] = 4
-            npiece = 1
+        if nc == 0:  # no ring runs through the cell's edge: all of it is in or out
+            if ni == 0:
+                inside = _even_odd(P, starts, 0.5 * (u0 + u1), 0.5 * (v0 + v1))
+            else:  # the centre may be in a ring inside: ask at a corner
+                inside = _even_odd(P, starts, u0, v0)
+            npiece = 0
+            if inside:
+                for k in range(4):
+                    poly[k, 0], poly[k, 1] = _corner(k, u0, u1, v0, v1)
+                pstart[0] = 0
+                pstart[1] = 4
+                npiece = 1
         else:
             npiece, poly, ok = _pieces(pts, nc, cs, ce, sin_, sout, u0, u1, v0, v1, poly,
                                        pstart)
@@ -714,10 +464,7 @@ def clip_cells(cells, P, starts, dirs):
                         or poly[i, 1] == v1):
                     on_edge = False
                     break
-            s = 0.0
-            for i in range(a0, a1):
-                j = i + 1 if i + 1 < a1 else a0
-                s += poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+            s = _open_area2(poly, a0, a1)
             if s <= 0.0:
                 if on_edge and s > -1e-12 * (u1 - u0) * (v1 - v0):
                     continue
@@ -728,48 +475,112 @@ def clip_cells(cells, P, starts, dirs):
                 poly[k + i - a0, 0] = poly[i, 0]
                 poly[k + i - a0, 1] = poly[i, 1]
             pstart[keep] = k
+            parea[keep] = 0.5 * s
             k += a1 - a0
             keep += 1
-            area[c] += 0.5 * s
         if k < 0:
-            area[c] = 0.0
             status[c] = CLIP_ORIENTATION
             continue
-        pstart[keep] = k
-        if not _simple(poly, pstart, keep):
-            area[c] = 0.0
+        # the rings inside, as walked, after the pieces: islands turn counter-clockwise
+        for j in range(ni):
+            r = inner[j]
+            m = starts[r + 1] - starts[r] - 1
+            poly = _grow(poly, k + m)
+            for i in range(m):
+                q = _vertex(P, starts[r], m, dirs[r], i)
+                poly[k + i, 0] = q[0]
+                poly[k + i, 1] = q[1]
+            pstart[keep + j] = k
+            parea[keep + j] = 0.5 * _open_area2(poly, k, k + m)
+            k += m
+        pstart[keep + ni] = k
+        if not _simple(poly, pstart, keep + ni):
             status[c] = CLIP_TOUCH
             continue
+        # each hole in the smallest piece (islands included) that holds it
+        for j in range(keep + ni):
+            host[j] = -1
+        for j in range(keep, keep + ni):
+            if parea[j] < 0.0:
+                best = np.inf
+                for p in range(keep + ni):
+                    if parea[p] > 0.0 and parea[p] < best and _holds(
+                            poly, pstart[p], pstart[p + 1], poly[pstart[j], 0],
+                            poly[pstart[j], 1]):
+                        best = parea[p]
+                        host[j] = p
+                if host[j] < 0:
+                    ok = False
+        if not ok:
+            status[c] = CLIP_ORIENTATION
+            continue
         start = nout
-        ok = True
-        for p in range(keep):
-            a0 = pstart[p]
-            n = pstart[p + 1] - a0
-            if n > x.shape[0]:
-                x = np.empty(2 * n)
-                y = np.empty(2 * n)
-                nxt = np.empty(2 * n, dtype=np.int64)
-                prv = np.empty(2 * n, dtype=np.int64)
-                tri = np.empty((2 * n, 3), dtype=np.int64)
-            for i in range(n):
-                x[i] = poly[a0 + i, 0]
-                y[i] = poly[a0 + i, 1]
-            nt, ok = _ear_clip(x, y, n, tri, nxt, prv)
+        total = 0.0
+        for p in range(keep + ni):
+            if parea[p] <= 0.0:
+                continue
+            # the piece and its holes: rings of one point array
+            n = pstart[p + 1] - pstart[p]
+            nh = 0
+            for j in range(keep, keep + ni):
+                if host[j] == p:
+                    n += pstart[j + 1] - pstart[j]
+                    nh += 1
+            if nh == 0:  # a simple piece: scratch arrays, no bridging
+                if n > sx.shape[0]:
+                    sx = np.empty(2 * n)
+                    sy = np.empty(2 * n)
+                    stri = np.empty((2 * n, 3), dtype=np.int64)
+                    snxt = np.empty(2 * n, dtype=np.int64)
+                    sprv = np.empty(2 * n, dtype=np.int64)
+                    szero = np.zeros(2 * n, dtype=np.int64)
+                nt, ok = _triangulate_simple(poly, pstart[p], n, sx, sy, stri, snxt, sprv,
+                                             szero, srs)
+                if not ok:
+                    break
+                total += parea[p]
+                out = _grow(out, nout + nt)
+                owner = _grow(owner, nout + nt)
+                for t in range(nt):
+                    for v in range(3):
+                        out[nout, v, 0] = sx[stri[t, v]]
+                        out[nout, v, 1] = sy[stri[t, v]]
+                    owner[nout] = c
+                    nout += 1
+                continue
+            X = np.empty((n, 2))
+            rs = np.empty(nh + 2, dtype=np.int64)
+            rs[0] = 0
+            w = 0
+            for i in range(pstart[p], pstart[p + 1]):
+                X[w] = poly[i]
+                w += 1
+            rs[1] = w
+            h = 1
+            total += parea[p]
+            for j in range(keep, keep + ni):
+                if host[j] == p:
+                    for i in range(pstart[j], pstart[j + 1]):
+                        X[w] = poly[i]
+                        w += 1
+                    h += 1
+                    rs[h] = w
+                    total += parea[j]
+            tri, ok = triangulate_polygon(X, rs)
             if not ok:
                 break
-            _flip_to_delaunay(x, y, n, tri, nt)
-            out = _grow(out, nout + nt)
-            owner = _grow(owner, nout + nt)
-            for t in range(nt):
+            out = _grow(out, nout + tri.shape[0])
+            owner = _grow(owner, nout + tri.shape[0])
+            for t in range(tri.shape[0]):
                 for v in range(3):
-                    out[nout, v, 0] = x[tri[t, v]]
-                    out[nout, v, 1] = y[tri[t, v]]
+                    out[nout, v, 0] = X[tri[t, v], 0]
+                    out[nout, v, 1] = X[tri[t, v], 1]
                 owner[nout] = c
                 nout += 1
         if not ok:
             nout = start
-            area[c] = 0.0
             status[c] = CLIP_NO_EAR
             continue
+        area[c] = total
         status[c] = CLIP_DONE
     return out[:nout], owner[:nout], status, area

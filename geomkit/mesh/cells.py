@@ -24,7 +24,8 @@ import numpy as np
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.weld import points, weld
 from geomkit._kernels.tess import triangle_deviation
-from geomkit._kernels.tess_clip import CLIP_DONE, clip_cells, clean_rings, ring_directions
+from geomkit._kernels.tess_clip import CLIP_DONE, clip_cells
+from geomkit._kernels.tess_rings import prepared_rings
 from geomkit._kernels.tess_grid import edge_gaps
 from geomkit._kernels.tess_lattice import cell_triangles
 from geomkit.errors import ToleranceNotMetWarning
@@ -176,28 +177,19 @@ def clip_grid_cells(c: np.ndarray, trim, inside_area: float):
     counter-clockwise and the cell of each, in cell order.  The compiled clip
     (:func:`geomkit._kernels.tess_clip.clip_cells`) takes the cells it can; GEOS
     (:func:`clip_rectangles`) the others; the rings' spurs and loops of at most
-    :data:`LOOP_AREA_REL` of the domain (:func:`~geomkit._kernels.tess_clip.clean_rings`)
-    go first, as GEOS's valid form drops them.  Kept when the pieces, with the cells wholly inside (``inside_area``),
-    add up to the even-odd area of the rings; else every cell goes through GEOS."""
+    :data:`LOOP_AREA_REL` of the domain go first, as GEOS's valid form drops them
+    (:func:`~geomkit._kernels.tess_rings.prepared_rings`).  Kept when the pieces, with
+    the cells wholly inside (``inside_area``), add up to the even-odd area of the
+    rings; else every cell goes through GEOS."""
     rings = trim.rings()
     starts = np.zeros(len(rings) + 1, dtype=np.int64)
     np.add.accumulate(np.array([len(r) for r in rings], dtype=np.int64), out=starts[1:])
     (u0, u1), (v0, v1) = trim.surface.domain
-    P, starts = clean_rings(np.ascontiguousarray(
+    P, starts, dirs, region_area = prepared_rings(np.ascontiguousarray(
         np.concatenate(rings) if len(rings) > 1 else rings[0], dtype=np.float64), starts,
         LOOP_AREA_REL * (u1 - u0) * (v1 - v0))
-    sizes = np.diff(starts)
-    dirs = ring_directions(P, starts)
     tri, own, status, area = clip_cells(np.ascontiguousarray(c, dtype=np.float64), P,
                                         starts, dirs)
-    # the region's area: each ring's shoelace sum in its walking direction
-    x, y = P[:, 0], P[:, 1]
-    cross = x[:-1] * y[1:] - x[1:] * y[:-1]
-    nr = len(sizes)
-    ring_of = np.repeat(np.arange(nr), sizes - 1)
-    keep = np.ones(len(cross), dtype=bool)
-    keep[starts[1:-1] - 1] = False  # the step from one ring's last point to the next's
-    region_area = 0.5 * float(np.dot(np.bincount(ring_of, cross[keep], nr), dirs))
     cut_area = float(np.add.reduce((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))
     left = np.nonzero(status != CLIP_DONE)[0]
     total = inside_area + float(np.add.reduce(area))

@@ -14,7 +14,8 @@ import pytest
 import shapely
 
 from geomkit._kernels import tess_clip as K
-from geomkit._kernels.tess_clip import CLIP_DONE, clean_rings, clip_cells, ring_directions
+from geomkit._kernels.tess_clip import CLIP_DONE, clip_cells
+from geomkit._kernels.tess_rings import clean_rings, ring_directions
 from geomkit.cad.step import read_step
 from geomkit.mesh import cells as cells_mod
 from geomkit.mesh import tessellate as tess_mod
@@ -83,6 +84,39 @@ def test_random_regions_match_geos(seed):
         assert (status == CLIP_DONE).sum() >= 20
 
 
+def _circle(cx, cy, r, n, cw):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    p = np.c_[cx + r * np.cos(t), cy + r * np.sin(t)]
+    return p[::-1] if cw else p
+
+
+def test_holes_and_islands_inside_cells():
+    """Holes wholly inside cells (one, two in one cell, one holding an island) against
+    GEOS's clip and triangulation of the even-odd region, cell by cell."""
+    outer = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]])
+    holes = [_circle(0.5, 0.5, 0.3, 17, True), _circle(1.3, 1.5, 0.2, 11, True),
+             _circle(1.7, 1.5, 0.15, 9, True), _circle(2.5, 2.5, 0.4, 23, True),
+             _circle(2.5, 2.5, 0.2, 13, False), _circle(3.5, 0.6, 0.3, 19, True)]
+    cells = np.array([[0.0, 1.0, 0.0, 1.0], [1.0, 2.0, 1.0, 2.0], [2.0, 3.0, 2.0, 3.0],
+                      [3.0, 4.0, 0.0, 1.0], [0.0, 1.0, 1.0, 2.0]])
+    P, starts = _pack([outer] + holes)
+    dirs = ring_directions(P, starts)
+    assert dirs.tolist() == [1, 1, 1, 1, 1, 1, 1]
+    tri, own, status, area = clip_cells(cells, P, starts, dirs)
+    assert (status == CLIP_DONE).all()
+    region = shapely.Polygon(outer, holes[:4] + holes[5:]).union(shapely.Polygon(holes[4]))
+    for c in range(len(cells)):
+        piece = shapely.clip_by_rect(region, *cells[c, [0, 2, 1, 3]])
+        mine = tri[own == c]
+        assert area[c] == pytest.approx(piece.area, rel=1e-12)
+        assert 0.5 * _area2(mine).sum() == pytest.approx(piece.area, rel=1e-12)
+        assert (_area2(mine) > 0).all()
+        cent = shapely.points(mine.mean(axis=1))
+        assert shapely.contains(piece, cent).all()
+        geos = triangulate_pieces(np.array([piece]))[0]
+        assert len(mine) == len(geos)
+
+
 def test_ring_directions_follow_nesting():
     sq = lambda a, b: np.array([[a, a], [b, a], [b, b], [a, b]])  # noqa: E731
     # outer stored clockwise, a hole stored counter-clockwise, an island in the hole
@@ -121,8 +155,15 @@ def test_a_point_on_the_edge_between_runs_is_dropped():
 def test_left_cases():
     sq = np.array([[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]])
     cell = np.array([[0.0, 1.0, 0.0, 1.0]])
-    # a ring wholly inside the cell
-    assert clip_cells(cell, *_pack([sq]), np.array([1]))[2][0] == K.CLIP_RING_INSIDE
+    # a hole without a vertex outside the cell that touches its edge; as an island
+    # (counter-clockwise) it is the piece
+    touch = np.array([[0.0, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]])
+    assert clip_cells(cell, *_pack([touch]), np.array([-1]))[2][0] == K.CLIP_RING_INSIDE
+    tri, own, status, area = clip_cells(cell, *_pack([touch]), np.array([1]))
+    assert status[0] == CLIP_DONE and area[0] == pytest.approx(shapely.Polygon(touch).area)
+    # a ring wholly inside the cell is an island
+    tri, own, status, area = clip_cells(cell, *_pack([sq]), np.array([1]))
+    assert status[0] == CLIP_DONE and len(tri) == 2 and area[0] == pytest.approx(0.36)
     # two rings touching at one point of the cell's edge
     a = np.array([[-1.0, -1.0], [0.5, -1.0], [0.5, 0.0], [-1.0, 0.5]])
     b = np.array([[0.5, 0.0], [2.0, -1.0], [2.0, 0.5]])
