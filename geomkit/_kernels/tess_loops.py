@@ -185,21 +185,10 @@ def plane_rings(pts, start, face_loop, kept, rect, shell, domains):
             ring_face[q] = k
             q += 1
             lp = ring[i]
-            if lp < 0:
-                u0 = domains[f, 0]
-                u1 = domains[f, 1]
-                v0 = domains[f, 2]
-                v1 = domains[f, 3]
-                coords[n, 0] = u0
-                coords[n, 1] = v0
-                coords[n + 1, 0] = u1
-                coords[n + 1, 1] = v0
-                coords[n + 2, 0] = u1
-                coords[n + 2, 1] = v1
-                coords[n + 3, 0] = u0
-                coords[n + 3, 1] = v1
-                coords[n + 4, 0] = u0
-                coords[n + 4, 1] = v0
+            if lp < 0:  # (u0, v0), (u1, v0), (u1, v1), (u0, v1), (u0, v0)
+                for c in range(5):
+                    coords[n + c, 0] = domains[f, 1] if c == 1 or c == 2 else domains[f, 0]
+                    coords[n + c, 1] = domains[f, 3] if c == 2 or c == 3 else domains[f, 2]
                 n += 5
             else:
                 for j in range(start[lp], start[lp + 1]):

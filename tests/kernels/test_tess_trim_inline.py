@@ -1,67 +1,54 @@
 """The trim polylines' evaluations inlined (``geomkit._kernels.tess_trim``: its curve
 points through ``basis_funs_inline`` and its surface points through an inlined copy of
-``surface.surface_point``) against the calls they replaced (``basis.basis_funs`` and
-``surface.surface_point``, compiled as separate functions), bit for bit: random
+``surface.surface_point``) against the calls they replaced, bit for bit: the route
+before is the same code compiled with the called ``basis.basis_funs`` /
+``basis.find_span`` in place of the inlined ones (no copy of it here), on random
 rational curves of degrees 1-5 and random rational surfaces of degrees 1-3, at random
-parameters, knots and spans included."""
+parameters and at the knots."""
 
 from __future__ import annotations
 
+import types
+
+import numba
 import numpy as np
 
-from geomkit._kernels.basis import basis_funs, find_span
-from geomkit._kernels.numba_ext.policy import jit
-from geomkit._kernels.surface import surface_point as called_surface_point
-from geomkit._kernels.tess_trim import _curve_at, surface_point
+from geomkit._kernels import basis, surface, tess_trim
+from geomkit._kernels.numba_ext.policy import FASTMATH
 
 
-@jit
-def _curve_called(Pc, pc, Uc, ts, out):
-    """The route before: ``basis_funs`` called, then the weighted sum and the clip."""
+def _compiled(fn, **names):
+    """``fn``'s code compiled with the global ``names`` replaced (not cached: the
+    function is not the one its source defines)."""
+    py = getattr(fn, "py_func", fn)
+    return numba.njit(types.FunctionType(py.__code__, {**py.__globals__, **names}, py.__name__),
+                      fastmath=FASTMATH, error_model="numpy")
+
+
+def _curves(Pc, pc, Uc, ts, out):
     N = np.empty(pc + 1)
     left = np.empty(pc + 1)
     right = np.empty(pc + 1)
     for i in range(ts.shape[0]):
-        t = ts[i]
-        span = find_span(Pc.shape[0] - 1, pc, t, Uc)
-        basis_funs(span, t, pc, Uc, N, left, right)
-        x = 0.0
-        y = 0.0
-        w = 0.0
-        for r in range(pc + 1):
-            b = N[r]
-            x += b * Pc[span - pc + r, 0]
-            y += b * Pc[span - pc + r, 1]
-            w += b * Pc[span - pc + r, 2]
-        out[i, 0] = min(max(x / w, -0.5), 0.5)
-        out[i, 1] = min(max(y / w, -0.5), 0.5)
+        span = find_span(Pc.shape[0] - 1, pc, ts[i], Uc)  # noqa: F821 - set by _compiled
+        out[i, 0], out[i, 1] = curve_in_span(  # noqa: F821
+            Pc, pc, Uc, span, ts[i], -0.5, -0.5, 0.5, 0.5, N, left, right)
 
 
-@jit
-def _curve_inlined(Pc, pc, Uc, ts, out):
-    N = np.empty(pc + 1)
-    left = np.empty(pc + 1)
-    right = np.empty(pc + 1)
-    for i in range(ts.shape[0]):
-        out[i, 0], out[i, 1] = _curve_at(Pc, pc, Uc, ts[i], -0.5, -0.5, 0.5, 0.5, N, left,
-                                         right)
-
-
-@jit
-def _surface(Pw, p, q, U, V, uv, out, inlined):
-    m = max(p, q) + 1
-    Nu = np.empty(p + 1)
-    Nv = np.empty(q + 1)
-    left = np.empty(m)
-    right = np.empty(m)
-    tmp = np.empty(4)
+def _surfaces(Pw, p, q, U, V, uv, out):
+    Nu, Nv, left, right, tmp = surface.point_scratch(p, q)
     for i in range(uv.shape[0]):
-        if inlined:
-            surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp,
-                          out[i])
-        else:
-            called_surface_point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right,
-                                 tmp, out[i])
+        point(Pw, p, q, U, V, uv[i, 0], uv[i, 1], Nu, Nv, left, right, tmp,  # noqa: F821
+              out[i])
+
+
+CALLED_CURVE = _compiled(_curves, find_span=basis.find_span,
+                         curve_in_span=_compiled(tess_trim._curve_in_span,
+                                                 basis_funs_inline=basis.basis_funs))
+INLINED_CURVE = _compiled(_curves, find_span=tess_trim.find_span,
+                          curve_in_span=tess_trim._curve_in_span)
+CALLED_SURFACE = _compiled(_surfaces, point=surface.surface_point)
+INLINED_SURFACE = _compiled(_surfaces, point=tess_trim.surface_point)
 
 
 def _knots(rng, n, p):
@@ -71,9 +58,12 @@ def _knots(rng, n, p):
     return np.concatenate([np.zeros(p + 1), inner, np.ones(p + 1)])
 
 
-def _params(rng, U, k):
-    t = rng.random(k)
-    return np.concatenate([t, U, [0.0, 1.0]])  # the knots themselves too
+def _both(called, inlined, args, rows, cols):
+    a = np.empty((rows, cols))
+    b = np.empty((rows, cols))
+    called(*args, a)
+    inlined(*args, b)
+    assert np.array_equal(a, b)
 
 
 def test_inlined_curve_points_match_the_called_route():
@@ -86,12 +76,8 @@ def test_inlined_curve_points_match_the_called_route():
         Pc = np.empty((n, 3))
         Pc[:, :2] = (rng.random((n, 2)) - 0.5) * w[:, None]
         Pc[:, 2] = w
-        ts = _params(rng, U, 200)
-        a = np.empty((len(ts), 2))
-        b = np.empty((len(ts), 2))
-        _curve_called(Pc, p, U, ts, a)
-        _curve_inlined(Pc, p, U, ts, b)
-        assert np.array_equal(a, b)
+        ts = np.concatenate([rng.random(200), U])  # the knots themselves too
+        _both(CALLED_CURVE, INLINED_CURVE, (Pc, p, U, ts), len(ts), 2)
 
 
 def test_inlined_surface_points_match_the_called_route():
@@ -105,10 +91,6 @@ def test_inlined_surface_points_match_the_called_route():
         Pw = np.empty((nu, nv, 4))
         Pw[..., :3] = rng.standard_normal((nu, nv, 3)) * w[..., None]
         Pw[..., 3] = w
-        uv = np.stack([_params(rng, U, 150)[:150], _params(rng, V, 150)[:150]], axis=1)
-        uv = np.concatenate([uv, np.stack(np.meshgrid(U, V), -1).reshape(-1, 2)])
-        a = np.empty((len(uv), 3))
-        b = np.empty((len(uv), 3))
-        _surface(Pw, p, q, U, V, uv, a, False)
-        _surface(Pw, p, q, U, V, uv, b, True)
-        assert np.array_equal(a, b)
+        uv = np.concatenate([rng.random((150, 2)),
+                             np.stack(np.meshgrid(U, V), -1).reshape(-1, 2)])
+        _both(CALLED_SURFACE, INLINED_SURFACE, (Pw, p, q, U, V, uv), len(uv), 3)

@@ -17,21 +17,18 @@ nets' domains against ``Surface.domain``."""
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 from geomkit._kernels.tess_loops import loop_areas, polygon_meshes
 from geomkit._kernels.tess_trim import speed_bounds
-from geomkit.cad.step import read_step
 from geomkit.mesh.planes import _rings, _rings_one_by_one, _triangulate, planar_batch
 from geomkit.mesh.trim_polylines import (affine_flags, affine_map, flat_surfaces,
                                          loop_points, speed_bound)
 from geomkit.nurbs.surface import Surface
 from geomkit.nurbs.trims import packed_loops, packed_trims
 
-from helpers.paths import DATA
+from helpers.parts import part_surfaces
 
 PARTS = ["proe_as1_ap203.stp", "nist_ftc_07_ap242.stp", "nist_ctc_01_ap242.stp",
          "euclid_screw_ap214.step", "sw2013_featuretype_ap214.step"]
@@ -39,11 +36,8 @@ PARTS = ["proe_as1_ap203.stp", "nist_ftc_07_ap242.stp", "nist_ctc_01_ap242.stp",
 
 @pytest.fixture(scope="module", params=PARTS)
 def part(request):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        S = read_step(DATA / "parts" / request.param, cache=False).surfaces
-    B = np.array([s.bounds for s in S])
-    return S, 1e-3 * float(np.linalg.norm(B[:, 1].max(0) - B[:, 0].min(0)))
+    S, size = part_surfaces(request.param)
+    return S, 1e-3 * size
 
 
 def _same_rings(P, chord_tol):

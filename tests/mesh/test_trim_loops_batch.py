@@ -10,16 +10,13 @@ test; the loops come back read only."""
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 from geomkit._kernels.tess_trim import loop_rectangle_gap, trim_polylines
-from geomkit.cad.step import read_step
 from geomkit.mesh.trim_polylines import SEED_SPANS, loop_polylines, packed_trims
 
-from helpers.paths import DATA
+from helpers.parts import part_surfaces
 
 PARTS = ["proe_as1_ap203.stp", "nist_ctc_01_ap242.stp", "euclid_screw_ap214.step",
          "inventor2015_cylinder_block_face6.stp"]
@@ -54,11 +51,7 @@ def _numpy_route(s, chord_tol, affine):
 
 @pytest.fixture(scope="module", params=PARTS)
 def part(request):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        S = read_step(DATA / "parts" / request.param, cache=False).surfaces
-    B = np.array([s.bounds for s in S])
-    size = float(np.linalg.norm(B[:, 1].max(0) - B[:, 0].min(0)))
+    S, size = part_surfaces(request.param)
     return request.param, [s for s in S if s.trim], size
 
 
@@ -86,9 +79,7 @@ def test_loops_match_the_face_by_face_route(part, affine):
 def test_a_small_buffer_grows():
     """Many-span pieces (Inventor's quintic of ~100 spans) need more rows than the
     first guess of 8 per knot: the kernel grows its buffers itself."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        s = read_step(DATA / "parts" / PARTS[3], cache=False).surfaces[0]
+    s = part_surfaces(PARTS[3])[0][0]
     loops, _ = loop_polylines([s], 1e-7 * s.size, False, True)[0]
     want, _ = _numpy_route(s, 1e-7 * s.size, False)
     assert len(loops[0]) > 8 * sum(len(c.knots) for c in s.trim[0].pieces) + 64
