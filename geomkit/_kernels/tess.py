@@ -23,13 +23,18 @@ in the calling thread: handing a few cells to the thread pool costs more than th
 work (~0.1 ms per task on an idle machine, several ms when the cores are busy)."""
 TRI_CHUNK = 128
 """Triangles (or chords) per parallel task range step."""
+CELL_SERIAL = 256
+TRI_SERIAL = 1024
+"""Cells / triangles measured in the calling thread up to these counts: on the parts'
+faces (tens to hundreds of triangles), handing half to the pool cost 7-20 % more CPU
+time and gave no shorter wall time on an idle 2-core machine (same-run A/B)."""
 
 
-def _run(worker, n, chunk, *args):
-    """:func:`prun`, or the worker directly for at most one chunk (skips the thread
-    query and dispatch of ``prun``: a few tens of microseconds per call, which is the
-    order of a whole small tessellation)."""
-    if n <= chunk:
+def _run(worker, n, chunk, serial, *args):
+    """:func:`prun`, or the worker directly for at most ``serial`` items or one chunk
+    (skips the thread query and dispatch of ``prun``: a few tens of microseconds per
+    call, which is the order of a whole small tessellation)."""
+    if n <= chunk or n <= serial:
         worker(0, n, *args)
     else:
         prun(worker, n, chunk, *args)
@@ -219,10 +224,11 @@ def cell_errors(Pw, p, q, U, V, cells, m, out, box=None):
         4: largest 3-D edge length of the cell's corners (for ``max_edge``).
     """
     if box is None:
-        _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m, out)
+        _run(_cell_errors_range, cells.shape[0], CELL_CHUNK, CELL_SERIAL, Pw, p, q, U, V,
+             cells, m, out)
     else:
-        _run(_cell_errors_box_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, m,
-             *(float(b) for b in box), out)
+        _run(_cell_errors_box_range, cells.shape[0], CELL_CHUNK, CELL_SERIAL, Pw, p, q, U, V,
+             cells, m, *(float(b) for b in box), out)
 
 
 FOOT_STEPS = 12
@@ -403,8 +409,8 @@ def triangle_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, umax, vmin, vma
     ``tri_uv`` (M, 3, 2), ``tri_xyz`` (M, 3, 3); ``out[t]`` is the largest sample
     value of triangle t.
     """
-    _run(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
-         tri_xyz, k, umin, umax, vmin, vmax, exact_above, out)
+    _run(_triangle_deviation_range, tri_uv.shape[0], TRI_CHUNK, TRI_SERIAL, Pw, p, q, U, V,
+         tri_uv, tri_xyz, k, umin, umax, vmin, vmax, exact_above, out)
 
 
 @jit
@@ -543,5 +549,5 @@ def cell_deviation(Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax, exac
     whereas a trimmed face's mesh point can lie off the trimmed region, which only
     the surface point of its own triangle's sample showed.
     """
-    _run(_cell_deviation_range, cells.shape[0], CELL_CHUNK, Pw, p, q, U, V, cells, first, k,
-         umin, umax, vmin, vmax, exact_above, target, bool(pair), out)
+    _run(_cell_deviation_range, cells.shape[0], CELL_CHUNK, CELL_SERIAL, Pw, p, q, U, V,
+         cells, first, k, umin, umax, vmin, vmax, exact_above, target, bool(pair), out)

@@ -11,7 +11,8 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import surface_derivs, surface_point
-from .tess import FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, _dev_scratch, _run, foot_step
+from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _run,
+                   foot_step)
 from .triangles import _dist3, point_triangle_distance
 
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
@@ -468,5 +469,5 @@ def group_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k, exact_abo
     the mesh) and the triangle point's foot is sought only inside the group's UV
     triangles (inside the face: a point of a clipped triangle that sticks out past the
     trim is measured to the face, not to the surface beyond it)."""
-    _run(_group_deviation_range, tri_uv.shape[0], TRI_CHUNK, Pw, p, q, U, V, tri_uv,
-         tri_xyz, group, starts, k, exact_above, out)
+    _run(_group_deviation_range, tri_uv.shape[0], TRI_CHUNK, TRI_SERIAL, Pw, p, q, U, V,
+         tri_uv, tri_xyz, group, starts, k, exact_above, out)
