@@ -8,7 +8,9 @@ other remaining point that is not one of its corners), and its diagonals, bridge
 included, flipped until each is locally Delaunay: with the rings' edges kept, the
 constrained Delaunay triangulation (GEOS's ``constrained_delaunay_triangles`` makes it
 the same way; ties between cocircular points may be broken the other way).  The
-orientation and incircle tests are plain floating point: a polygon they cannot take
+orientation and incircle tests are plain floating point, compiled without contraction
+(:data:`~geomkit._kernels.numba_ext.policy.jit_exact`: a fused multiply-add makes
+``orient(a, b, b)`` the rounding error of a product, not 0): a polygon they cannot take
 surely (no ear, a bridge that crosses an edge, triangles that do not add up to the
 polygon's area) is reported, for the caller's fallback.
 """
@@ -17,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit, jit_inline
+from .numba_ext.policy import jit_exact, jit_inline
 
 # diagonals flip only when the fourth point is inside the circle by more than this
 # fraction of the incircle determinant's magnitude: cocircular corners stay as made
@@ -50,7 +52,7 @@ def _segments_meet(ax, ay, bx, by, cx, cy, dx, dy):
     return False
 
 
-@jit
+@jit_exact
 def _grow(a, n):
     """``a`` with room for at least ``n`` rows (doubled)."""
     if n <= a.shape[0]:
@@ -72,7 +74,7 @@ def _in_closed_triangle(px, py, ax, ay, bx, by, cx, cy):
         and _orient(cx, cy, ax, ay, px, py) >= 0.0
 
 
-@jit
+@jit_exact
 def _ear_clip(x, y, n, tri, nxt, prv):
     """Triangles (rows of corner indices, counter-clockwise) of the weakly simple
     counter-clockwise polygon ``x, y`` (``n`` points; bridged holes repeat points):
@@ -144,7 +146,7 @@ def _incircle(ax, ay, bx, by, cx, cy, dx, dy):
     return det > INCIRCLE_REL * mag
 
 
-@jit
+@jit_exact
 def _flip_to_delaunay(x, y, ring_of, rs, tri, nt):
     """Diagonals of the ear-clipped polygon (triangles ``tri[:nt]`` of the points ``x,
     y``, ring ``ring_of[i]`` of each, ring ``r`` the points ``rs[r]:rs[r+1]`` in order)
@@ -191,7 +193,7 @@ def _flip_to_delaunay(x, y, ring_of, rs, tri, nt):
                 break
 
 
-@jit
+@jit_exact
 def _bridge_target(X, seq, nxt, start, hx, hy):
     """The position of the ring (linked positions from ``start``, points ``X[seq]``) a
     hole's rightmost point (hx, hy) is bridged to: the nearer end, in +u, of the first
@@ -245,7 +247,7 @@ def _bridge_target(X, seq, nxt, start, hx, hy):
     return pick
 
 
-@jit
+@jit_exact
 def _bridge_crosses(X, seq, nxt, start, hx, hy, mx, my):
     """Whether the segment (hx, hy)-(mx, my) properly crosses an edge of the ring."""
     p = start
@@ -266,7 +268,7 @@ def _bridge_crosses(X, seq, nxt, start, hx, hy, mx, my):
     return False
 
 
-@jit
+@jit_exact
 def triangulate_polygon(X, rs):
     """Constrained Delaunay triangles of the polygon whose rings are ``X[rs[k]:rs[k+1]]``
     (open: the first point not repeated): ring 0 counter-clockwise, the others clockwise
@@ -351,3 +353,62 @@ def triangulate_polygon(X, rs):
         return fail, False
     _flip_to_delaunay(X[:, 0].copy(), X[:, 1].copy(), ring_of, rs, out, nt)
     return out, True
+
+
+@jit_exact
+def triangulate_polygons(P, rstart, first, last, small):
+    """:func:`triangulate_polygon` of many valid polygons (each one shell and holes
+    inside it, in either orientation): ring ``r`` is ``P[rstart[r]:rstart[r+1]]`` (its
+    last point may repeat the first), polygon ``j`` the rings ``first[j]:last[j]``, its
+    shell first.  Polygons of more than ``small`` points are not taken (flipping
+    scans every pair of triangles).  ``(tri (t, 3, 2) counter-clockwise, polygon (t,) of
+    each, taken (n,) bool)``."""
+    n = first.shape[0]
+    out = np.empty((16, 3, 2))
+    owner = np.empty(16, dtype=np.int64)
+    taken = np.zeros(n, dtype=np.bool_)
+    nout = 0
+    for j in range(n):
+        r0 = first[j]
+        r1 = last[j]
+        m = 0
+        for r in range(r0, r1):
+            k = rstart[r + 1] - rstart[r]
+            if k > 1 and P[rstart[r + 1] - 1, 0] == P[rstart[r], 0] and \
+                    P[rstart[r + 1] - 1, 1] == P[rstart[r], 1]:
+                k -= 1
+            m += k
+        if m > small:
+            continue
+        X = np.empty((m, 2))
+        rs = np.empty(r1 - r0 + 1, dtype=np.int64)
+        rs[0] = 0
+        w = 0
+        for r in range(r0, r1):
+            a = rstart[r]
+            k = rstart[r + 1] - a
+            if k > 1 and P[a + k - 1, 0] == P[a, 0] and P[a + k - 1, 1] == P[a, 1]:
+                k -= 1
+            s = 0.0
+            for i in range(k):
+                i1 = i + 1 if i + 1 < k else 0
+                s += P[a + i, 0] * P[a + i1, 1] - P[a + i1, 0] * P[a + i, 1]
+            # the shell counter-clockwise, the holes clockwise
+            fwd = (s > 0.0) == (r == r0)
+            for i in range(k):
+                X[w + i] = P[a + i] if fwd else P[a + k - 1 - i]
+            w += k
+            rs[r - r0 + 1] = w
+        tri, ok = triangulate_polygon(X, rs)
+        if not ok:
+            continue
+        taken[j] = True
+        out = _grow(out, nout + tri.shape[0])
+        owner = _grow(owner, nout + tri.shape[0])
+        for t in range(tri.shape[0]):
+            for c in range(3):
+                out[nout, c, 0] = X[tri[t, c], 0]
+                out[nout, c, 1] = X[tri[t, c], 1]
+            owner[nout] = j
+            nout += 1
+    return out[:nout], owner[:nout], taken

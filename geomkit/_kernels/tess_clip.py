@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit, jit_inline
+from .numba_ext.policy import jit_exact, jit_inline
 from .tess_cdt import (_ear_clip, _flip_to_delaunay, _grow, _orient, _segments_meet,
                        triangulate_polygon)
 from .tess_rings import _even_odd
@@ -118,7 +118,7 @@ def _perimeter(x, y, u0, u1, v0, v1):
     return 3.0 + (v1 - y) / (v1 - v0)
 
 
-@jit
+@jit_exact
 def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout, inner):
     """The chains of every ring in the closed cell: points in ``pts``, chain ``c`` is
     ``pts[cs[c]:ce[c]]`` from its entry (place ``sin_[c]`` along the edge) to its exit
@@ -224,7 +224,7 @@ def _corner(c, u0, u1, v0, v1):
     return u0, v1
 
 
-@jit
+@jit_exact
 def _pieces(pts, nc, cs, ce, sin_, sout, u0, u1, v0, v1, poly, pstart):
     """The cell's pieces walked from its chains: piece ``k`` is
     ``poly[pstart[k]:pstart[k+1]]`` (open ring, counter-clockwise).  ``(n_pieces,
@@ -284,7 +284,7 @@ def _same_edge(ax, ay, bx, by, cx, cy, u0, u1, v0, v1):
         or (ay == v0 and by == v0 and cy == v0) or (ay == v1 and by == v1 and cy == v1)
 
 
-@jit
+@jit_exact
 def _drop_edge_runs(poly, a0, a1, u0, u1, v0, v1):
     """The piece ``poly[a0:a1]`` without the points inside a run along one edge line of
     the cell (a ring along the cell's edge: the edge is the piece's side, as the
@@ -308,7 +308,7 @@ def _drop_edge_runs(poly, a0, a1, u0, u1, v0, v1):
     return a0 + n
 
 
-@jit
+@jit_exact
 def _simple(poly, pstart, npiece):
     """Whether the pieces' edges meet only where consecutive edges of one piece share
     their corner (and fold neither back nor onto each other)."""
@@ -369,7 +369,7 @@ def _open_area2(poly, a0, a1):
     return s
 
 
-@jit
+@jit_exact
 def _triangulate_simple(poly, a0, n, x, y, tri, nxt, prv, zero, rs):
     """:func:`geomkit._kernels.tess_cdt.triangulate_polygon` of the simple piece
     ``poly[a0:a0+n]`` in the caller's scratch arrays (of at least ``n`` rows; ``zero``
@@ -384,7 +384,7 @@ def _triangulate_simple(poly, a0, n, x, y, tri, nxt, prv, zero, rs):
     return nt, ok
 
 
-@jit
+@jit_exact
 def clip_cells(cells, P, starts, dirs):
     """The axis-aligned cells ``cells`` (n, 4) ``u0, u1, v0, v1`` clipped to the even-odd
     region of the closed rings ``P[starts[i]:starts[i+1]]`` (walked in ``dirs``, see

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .numba_ext.policy import jit, jit_inline
+from .numba_ext.policy import jit_exact, jit_inline
 from .tess_cdt import _orient
 
 # a vertex where the ring turns back within this angle (radians) is a spur's tip
@@ -30,7 +30,7 @@ def _ring_holds(P, a, b, px, py):
     return inside
 
 
-@jit
+@jit_exact
 def ring_directions(P, starts):
     """(r,) +1 where closed ring ``P[starts[i]:starts[i+1]]`` (last point = first) has the
     even-odd region on its left as stored, -1 where it must be walked backwards: a
@@ -53,7 +53,7 @@ def ring_directions(P, starts):
     return out
 
 
-@jit
+@jit_exact
 def _drop_spur(Q, k):
     """One spur tip or repeated vertex of the cyclic ring ``Q[:k]`` removed: the new
     count (``k`` when there is none)."""
@@ -74,7 +74,7 @@ def _drop_spur(Q, k):
     return k
 
 
-@jit
+@jit_exact
 def _drop_small_loop(Q, k, tiny, buf):
     """One small loop of the cyclic ring ``Q[:k]`` cut off: where edge ``i`` properly
     crosses edge ``i + d`` (``2 <= d <= LOOP_SPAN``) and the loop between them encloses
@@ -118,7 +118,7 @@ def _drop_small_loop(Q, k, tiny, buf):
     return k
 
 
-@jit
+@jit_exact
 def clean_rings(P, starts, tiny):
     """The closed rings ``P[starts[i]:starts[i+1]]`` without their spurs and small loops,
     as GEOS's valid form of the region has them: a vertex where the ring turns straight
@@ -159,7 +159,7 @@ def clean_rings(P, starts, tiny):
     return out[:n], ostarts[:nk + 1]
 
 
-@jit
+@jit_exact
 def _even_odd(P, starts, px, py):
     """Whether (px, py) is inside the region the closed rings bound (even-odd rule)."""
     inside = False
@@ -169,7 +169,7 @@ def _even_odd(P, starts, px, py):
     return inside
 
 
-@jit
+@jit_exact
 def prepared_rings(P, starts, tiny):
     """:func:`clean_rings`, then :func:`ring_directions` and the region's even-odd area
     (each ring's shoelace sum in its walking direction), in one call: ``(P, starts,

@@ -21,6 +21,7 @@ import time
 import numpy as np
 
 from geomkit.mesh.cells import triangle_coordinates
+from geomkit._kernels.tess_cdt import triangulate_polygons
 from geomkit._kernels.tess_loops import (faces_points, loop_areas, plane_rings,
                                         polygon_meshes)
 from geomkit._kernels.tess_trim import speed_bounds
@@ -31,25 +32,47 @@ from geomkit.nurbs.trims import starts
 __all__ = ["planar_batch"]
 
 
-def _triangulate(polys: np.ndarray):
-    """Constrained Delaunay triangles of each polygon: ``(coords (n, 3, 2), polygon of
-    each (n,), failed (m,) bool)``; all in one call, one polygon at a time when GEOS
-    refuses the batch (the polygons it still refuses are ``failed``)."""
+CDT_SMALL = 64
+"""Planar polygons of at most this many points are triangulated by the compiled
+constrained Delaunay triangulation (:func:`geomkit._kernels.tess_cdt.triangulate_polygons`);
+larger ones, and those it does not take, by GEOS."""
+
+
+def _triangulate(polys: np.ndarray, coords, ring_size, ring_face, use):
+    """Constrained Delaunay triangles of the polygons ``polys[use]`` (made of the rings
+    ``coords``/``ring_size``, ring ``r`` in polygon ``ring_face[r]``, shell first):
+    ``(coords (n, 3, 2), polygon of each (n,) ascending, failed (m,) bool)``.  The small
+    ones compiled in one call, the others by GEOS in one call, one polygon at a time
+    when GEOS refuses the batch (the polygons it still refuses are ``failed``)."""
     import shapely
 
-    failed = np.zeros(len(polys), dtype=bool)
+    ring_size = np.asarray(ring_size, dtype=np.int64)
+    rstart = np.zeros(len(ring_size) + 1, dtype=np.int64)
+    np.add.accumulate(ring_size, out=rstart[1:])
+    first = np.searchsorted(np.asarray(ring_face), np.arange(len(polys) + 1))
+    ctri, cidx, taken = triangulate_polygons(
+        np.ascontiguousarray(coords, dtype=np.float64), rstart, first[use], first[use + 1],
+        CDT_SMALL)
+    failed = np.zeros(len(use), dtype=bool)
+    rest = np.nonzero(~taken)[0]
+    if not len(rest):
+        return ctri, cidx, failed
+    todo = polys[use[rest]]
     try:
-        tri = shapely.constrained_delaunay_triangles(polys)
+        tri = shapely.constrained_delaunay_triangles(todo)
     except shapely.errors.GEOSException:
-        tri = np.empty(len(polys), dtype=object)
-        for j, g in enumerate(polys):
+        tri = np.empty(len(todo), dtype=object)
+        for j, g in enumerate(todo):
             try:
                 tri[j] = shapely.constrained_delaunay_triangles(g)
             except shapely.errors.GEOSException:
                 tri[j] = shapely.GeometryCollection()
-                failed[j] = True
-    coords, idx = triangle_coordinates(tri)
-    return coords, idx, failed
+                failed[rest[j]] = True
+    gtri, gidx = triangle_coordinates(tri)
+    tri = np.concatenate([ctri, gtri])
+    idx = np.concatenate([cidx, rest[gidx]])
+    order = np.argsort(idx, kind="stable")
+    return tri[order], idx[order], failed
 
 
 def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = False) -> dict:
@@ -94,7 +117,7 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     use = np.nonzero(ok)[0]
     if not len(use):
         return out
-    tri, idx, failed = _triangulate(polys[use])
+    tri, idx, failed = _triangulate(polys, coords, ring_size, ring_face, use)
     # counter-clockwise, no triangle of zero area (as planar_trimmed); each polygon's
     # vertices sorted by (u, v)
     n = len(use)
