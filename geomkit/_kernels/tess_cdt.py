@@ -32,14 +32,26 @@ def _orient(ax, ay, bx, by, cx, cy):
 
 
 @jit_inline
+def _opposite(d1, d2):
+    """Whether two orientations have strictly opposite signs."""
+    return (d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)
+
+
+@jit_inline
+def _cross_properly(ax, ay, bx, by, cx, cy, dx, dy):
+    """Whether the segments a-b and c-d cross at a point inside both."""
+    return _opposite(_orient(cx, cy, dx, dy, ax, ay), _orient(cx, cy, dx, dy, bx, by)) \
+        and _opposite(_orient(ax, ay, bx, by, cx, cy), _orient(ax, ay, bx, by, dx, dy))
+
+
+@jit_inline
 def _segments_meet(ax, ay, bx, by, cx, cy, dx, dy):
     """Whether the closed segments a-b and c-d share a point."""
     d1 = _orient(cx, cy, dx, dy, ax, ay)
     d2 = _orient(cx, cy, dx, dy, bx, by)
     d3 = _orient(ax, ay, bx, by, cx, cy)
     d4 = _orient(ax, ay, bx, by, dx, dy)
-    if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and \
-            ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
+    if _opposite(d1, d2) and _opposite(d3, d4):
         return True
     if d1 == 0.0 and min(cx, dx) <= ax <= max(cx, dx) and min(cy, dy) <= ay <= max(cy, dy):
         return True
@@ -255,12 +267,7 @@ def _bridge_crosses(X, seq, nxt, start, hx, hy, mx, my):
         q = nxt[p]
         ax, ay = X[seq[p], 0], X[seq[p], 1]
         bx, by = X[seq[q], 0], X[seq[q], 1]
-        d1 = _orient(ax, ay, bx, by, hx, hy)
-        d2 = _orient(ax, ay, bx, by, mx, my)
-        d3 = _orient(hx, hy, mx, my, ax, ay)
-        d4 = _orient(hx, hy, mx, my, bx, by)
-        if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and \
-                ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
+        if _cross_properly(hx, hy, mx, my, ax, ay, bx, by):
             return True
         p = q
         if p == start:
@@ -356,6 +363,22 @@ def triangulate_polygon(X, rs):
 
 
 @jit_exact
+def emit_triangles(out, owner, nout, x, y, tri, nt, who):
+    """The triangles ``tri[:nt]`` (corner indices into ``x, y``) appended to ``out`` (k,
+    3, 2) at ``nout``, ``owner`` ``who`` for each (both grown as needed): ``(out, owner,
+    nout)``."""
+    out = _grow(out, nout + nt)
+    owner = _grow(owner, nout + nt)
+    for t in range(nt):
+        for v in range(3):
+            out[nout, v, 0] = x[tri[t, v]]
+            out[nout, v, 1] = y[tri[t, v]]
+        owner[nout] = who
+        nout += 1
+    return out, owner, nout
+
+
+@jit_exact
 def triangulate_polygons(P, rstart, first, last, small):
     """:func:`triangulate_polygon` of many valid polygons (each one shell and holes
     inside it, in either orientation): ring ``r`` is ``P[rstart[r]:rstart[r+1]]`` (its
@@ -403,12 +426,6 @@ def triangulate_polygons(P, rstart, first, last, small):
         if not ok:
             continue
         taken[j] = True
-        out = _grow(out, nout + tri.shape[0])
-        owner = _grow(owner, nout + tri.shape[0])
-        for t in range(tri.shape[0]):
-            for c in range(3):
-                out[nout, c, 0] = X[tri[t, c], 0]
-                out[nout, c, 1] = X[tri[t, c], 1]
-            owner[nout] = j
-            nout += 1
+        out, owner, nout = emit_triangles(out, owner, nout, X[:, 0], X[:, 1], tri,
+                                          tri.shape[0], j)
     return out[:nout], owner[:nout], taken

@@ -27,7 +27,7 @@ import numpy as np
 
 from .numba_ext.policy import jit_exact, jit_inline
 from .tess_cdt import (_ear_clip, _flip_to_delaunay, _grow, _orient, _segments_meet,
-                       triangulate_polygon)
+                       emit_triangles, triangulate_polygon)
 from .tess_rings import _even_odd
 
 # a cell's status: taken, or left to the caller and why
@@ -539,14 +539,7 @@ def clip_cells(cells, P, starts, dirs):
                 if not ok:
                     break
                 total += parea[p]
-                out = _grow(out, nout + nt)
-                owner = _grow(owner, nout + nt)
-                for t in range(nt):
-                    for v in range(3):
-                        out[nout, v, 0] = sx[stri[t, v]]
-                        out[nout, v, 1] = sy[stri[t, v]]
-                    owner[nout] = c
-                    nout += 1
+                out, owner, nout = emit_triangles(out, owner, nout, sx, sy, stri, nt, c)
                 continue
             X = np.empty((n, 2))
             rs = np.empty(nh + 2, dtype=np.int64)
@@ -569,14 +562,8 @@ def clip_cells(cells, P, starts, dirs):
             tri, ok = triangulate_polygon(X, rs)
             if not ok:
                 break
-            out = _grow(out, nout + tri.shape[0])
-            owner = _grow(owner, nout + tri.shape[0])
-            for t in range(tri.shape[0]):
-                for v in range(3):
-                    out[nout, v, 0] = X[tri[t, v], 0]
-                    out[nout, v, 1] = X[tri[t, v], 1]
-                owner[nout] = c
-                nout += 1
+            out, owner, nout = emit_triangles(out, owner, nout, X[:, 0], X[:, 1], tri,
+                                              tri.shape[0], c)
         if not ok:
             nout = start
             status[c] = CLIP_NO_EAR

@@ -11,6 +11,8 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .surface import surface_derivs, surface_point
+from .tess_clip import _clip_t
+from .tess_rings import _ring_holds
 from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _run,
                    foot_step)
 from .triangles import _dist3, point_triangle_distance
@@ -283,36 +285,10 @@ def split_counts(e, eu, ev, target, max_parts, nu, nv):
 @jit_inline
 def _segment_meets_box(x1, y1, x2, y2, u0, u1, v0, v1):
     """Whether the segment (x1, y1)-(x2, y2) meets the closed box ``[u0, u1] x [v0, v1]``
-    (Liang-Barsky clipping; touching counts)."""
-    t0 = 0.0
-    t1 = 1.0
-    dx = x2 - x1
-    dy = y2 - y1
-    for k in range(4):
-        if k == 0:
-            pk, qk = -dx, x1 - u0
-        elif k == 1:
-            pk, qk = dx, u1 - x1
-        elif k == 2:
-            pk, qk = -dy, y1 - v0
-        else:
-            pk, qk = dy, v1 - y1
-        if pk == 0.0:
-            if qk < 0.0:
-                return False
-        else:
-            r = qk / pk
-            if pk < 0.0:
-                if r > t1:
-                    return False
-                if r > t0:
-                    t0 = r
-            else:
-                if r < t0:
-                    return False
-                if r < t1:
-                    t1 = r
-    return True
+    (Liang-Barsky clipping, :func:`geomkit._kernels.tess_clip._clip_t`; touching
+    counts)."""
+    t0, t1, _, _ = _clip_t(x1, y1, x2, y2, u0, u1, v0, v1)
+    return t0 <= t1
 
 
 @jit
@@ -341,13 +317,8 @@ def classify_cells(P, starts, n_cut, cells, out):
             cv = 0.5 * (v0 + v1)
             inside = False
             for L in range(nl):
-                for i in range(starts[L], starts[L + 1] - 1):
-                    y1 = P[i, 1]
-                    y2 = P[i + 1, 1]
-                    if (y1 > cv) != (y2 > cv):
-                        x = P[i, 0] + (cv - y1) * (P[i + 1, 0] - P[i, 0]) / (y2 - y1)
-                        if cu < x:
-                            inside = not inside
+                if _ring_holds(P, starts[L], starts[L + 1], cu, cv):
+                    inside = not inside
             state = 1 if inside else 0
         out[c] = state
 

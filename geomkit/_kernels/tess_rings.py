@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .numba_ext.policy import jit_exact, jit_inline
-from .tess_cdt import _orient
+from .tess_cdt import _opposite, _orient
 
 # a vertex where the ring turns back within this angle (radians) is a spur's tip
 SPUR_REL = 1e-12
@@ -90,8 +90,7 @@ def _drop_small_loop(Q, k, tiny, buf):
             d2 = _orient(cx, cy, ex, ey, bx, by)
             d3 = _orient(ax, ay, bx, by, cx, cy)
             d4 = _orient(ax, ay, bx, by, ex, ey)
-            if not ((d1 > 0.0) != (d2 > 0.0) and d1 != 0.0 and d2 != 0.0
-                    and (d3 > 0.0) != (d4 > 0.0) and d3 != 0.0 and d4 != 0.0):
+            if not (_opposite(d1, d2) and _opposite(d3, d4)):
                 continue
             t = d1 / (d1 - d2)
             x = ax + t * (bx - ax)

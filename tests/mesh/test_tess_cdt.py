@@ -12,11 +12,10 @@ import pytest
 import shapely
 
 from geomkit._kernels.tess_cdt import triangulate_polygons
-from geomkit.cad.step import read_step
 from geomkit.mesh import planes as planes_mod
 from geomkit.mesh.tessellate import tessellate
 
-from helpers.paths import DATA
+from helpers.parts import part_surfaces
 
 
 def _area2(t):
@@ -101,11 +100,8 @@ def test_large_polygons_are_left():
 
 @pytest.mark.parametrize("name", ["proe_as1_ap203.stp", "nist_ctc_05_ap203.stp"])
 def test_parts_planes_match_geos(name, monkeypatch):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        S = read_step(DATA / "parts" / name, cache=False).surfaces
-    B = np.array([s.bounds for s in S])
-    tol = 1e-3 * float(np.linalg.norm(B[:, 1].max(0) - B[:, 0].min(0)))
+    S, size = part_surfaces(name)
+    tol = 1e-3 * size
     seen = []
     real = planes_mod._triangulate
 

@@ -16,12 +16,11 @@ import shapely
 from geomkit._kernels import tess_clip as K
 from geomkit._kernels.tess_clip import CLIP_DONE, clip_cells
 from geomkit._kernels.tess_rings import clean_rings, ring_directions
-from geomkit.cad.step import read_step
 from geomkit.mesh import cells as cells_mod
 from geomkit.mesh import tessellate as tess_mod
 from geomkit.mesh.cells import triangulate_pieces
 
-from helpers.paths import DATA
+from helpers.parts import part_surfaces
 
 
 def _pack(rings):
@@ -222,11 +221,8 @@ def test_parts_cut_cells_match_geos(name, monkeypatch):
     region and its triangulation: the same triangle count and area (only the area
     where the cleaned rings still touch: against GEOS's valid form of the rings); the
     cleaned region's area within the loops cut off of GEOS's valid form."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        S = read_step(DATA / "parts" / name, cache=False).surfaces
-    B = np.array([s.bounds for s in S])
-    tol = 1e-3 * float(np.linalg.norm(B[:, 1].max(0) - B[:, 0].min(0)))
+    S, size = part_surfaces(name)
+    tol = 1e-3 * size
     seen = []
     real = cells_mod.clip_grid_cells
 
