@@ -298,6 +298,44 @@ def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin,
 
 
 @jit
+def _gap_pass(Pw, p, q, U, V, A, B, C, T, k, exact_above, Nu, Nv, left, right, tmp, P, G,
+              gc, floor):
+    """``(worst, over)``: the running maximum from ``floor`` of the parametric gaps at
+    the samples of :func:`_tri_dev` (same order, same arithmetic), and whether a gap
+    exceeds ``exact_above`` or is NaN (then :func:`_tri_dev` measures the samples
+    again with the exact distances).  On its own, without the exact branch, this
+    loop runs about twice as fast (same-run timing of the grouped measure)."""
+    worst = floor
+    over = False
+    for i in range(k + 1):
+        for j in range(k + 1 - i):
+            if (i == 0 and j == 0) or i == k or j == k:
+                continue  # the corners are exact
+            l1 = i / k
+            l2 = j / k
+            l0 = 1.0 - l1 - l2
+            if gc[0] >= 0:
+                i0 = k - i - j
+                gu = (i0 * gc[0] + i * gc[2] + j * gc[4]) // k
+                gv = (i0 * gc[1] + i * gc[3] + j * gc[5]) // k
+                P[0] = G[gu, gv, 0]
+                P[1] = G[gu, gv, 1]
+                P[2] = G[gu, gv, 2]
+            else:
+                u = l0 * A[0] + l1 * B[0] + l2 * C[0]
+                v = l0 * A[1] + l1 * B[1] + l2 * C[1]
+                surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
+            x = l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0]
+            y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
+            z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
+            gap = _dist3(x, y, z, P[0], P[1], P[2])
+            if not gap <= exact_above:
+                over = True
+            worst = max(worst, gap)
+    return worst, over
+
+
+@jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
              Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, floor, Tall, j0, j1):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
@@ -314,7 +352,15 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
     parametrisation across the diagonal: the surface point of a sample lies over the
     other half).  The other direction, the triangle point's distance to the surface,
     is measured from T's own points as before.
+
+    The gaps are taken first on their own (:func:`_gap_pass`); only when one exceeds
+    ``exact_above`` (or is NaN) are the samples measured again with the exact
+    distances, so the result is the same either way.
     """
+    worst, over = _gap_pass(Pw, p, q, U, V, A, B, C, T, k, exact_above, Nu, Nv, left,
+                            right, tmp, P, G, gc, floor)
+    if not over:
+        return worst
     worst = floor
     for i in range(k + 1):
         for j in range(k + 1 - i):

@@ -13,10 +13,11 @@ from .numba_ext.policy import jit, jit_inline
 from .surface import surface_derivs, surface_point
 from .tess_clip import _clip_t
 from .tess_rings import _ring_holds
-from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _run,
-                   foot_step)
+from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _gap_pass,
+                   _run, foot_step)
 from .triangles import _dist3, point_triangle_distance
 
+_NO_GRID = np.full(6, -1, dtype=np.int64)  # _gap_pass evaluates every sample
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
 
 
@@ -387,7 +388,13 @@ def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, l
     ``j0:j1`` that tiles one cell's part of the face: at each barycentric sample the
     parametric gap, or where it exceeds ``exact_above`` the larger of the surface
     point's distance to the nearest triangle of the group and the triangle point's
-    distance to the surface over the group's UV triangles (:func:`_foot_in_group`)."""
+    distance to the surface over the group's UV triangles (:func:`_foot_in_group`).
+    The gaps are taken first on their own (:func:`.tess._gap_pass`, ``gc[0] < 0``:
+    evaluated); the exact distances only when one exceeds ``exact_above``."""
+    worst, over = _gap_pass(Pw, p, q, U, V, TUV[t, 0], TUV[t, 1], TUV[t, 2], TX[t], k,
+                            exact_above, Nu, Nv, left, right, tmp, P, TX, _NO_GRID, 0.0)
+    if not over:
+        return worst
     worst = 0.0
     for i in range(k + 1):
         for j in range(k + 1 - i):
@@ -421,7 +428,18 @@ def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, l
 @jit
 def _group_deviation_range(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k,
                            exact_above, out):
-    Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr = _dev_scratch(p, q)
+    _group_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k,
+                          exact_above, out, _dev_scratch(p, q))
+
+
+@jit
+def _group_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k,
+                          exact_above, out, scratch):
+    """The loop of :func:`_group_deviation_range` over borrowed views (no atomic
+    reference counting, :mod:`.numba_ext.borrow`)."""
+    (Pw, U, V, tri_uv, tri_xyz, group, starts, out,
+     (Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr)) = borrow_all((
+         Pw, U, V, tri_uv, tri_xyz, group, starts, out, scratch))
     for t in range(i0, i1):
         g = group[t]
         out[t] = _group_tri_dev(Pw, p, q, U, V, tri_uv, tri_xyz, t, starts[g],
