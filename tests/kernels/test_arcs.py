@@ -103,9 +103,10 @@ def _numpy_revolve(curve, S, T, theta0, theta1):
 def test_revolve_is_the_numpy_formula(seed):
     """revolve (one revolve_net call) against the numpy route on random rational
     generatrices, a control point on the axis among them, every span count: the same
-    knots and weights, the points within an ulp of the model's size (numpy's 3-element
-    dot is OpenBLAS's, whose fused order the kernel names; another BLAS may round
-    differently), the control point on the axis one point for every angle."""
+    knots and weights, the points within a few ulps of the model's size (numpy's
+    3-element dot is OpenBLAS's, whose fused order the kernel follows; OpenBLAS picks
+    its dot kernel by CPU, and on a Zen 5 one point came out 3 ulps away), the control
+    point on the axis one point for every angle."""
     from geomkit.cad.analytic import revolve
 
     rng = np.random.default_rng(seed)
@@ -126,7 +127,7 @@ def test_revolve_is_the_numpy_formula(seed):
         assert (p, q) == (curve[0], 2)
         np.testing.assert_array_equal(V, V2)
         np.testing.assert_array_equal(W, W2)
-        np.testing.assert_allclose(Q, Q2, rtol=0, atol=4e-16 * np.abs(Q2).max())
+        np.testing.assert_allclose(Q, Q2, rtol=0, atol=2e-15 * np.abs(Q2).max())
         assert (Q[0] == Q[0][0]).all()
 
 
