@@ -430,6 +430,78 @@ def loop_rectangle_gap(pts, u0, u1, v0, v1):
 
 
 @jit
+def rectangle_of(pts, chord_tol, P, Pw, p, q, U, V):
+    """:meth:`geomkit.mesh.trim_polylines.TrimPolylines.rectangle` of the closed UV
+    polyline ``pts`` on the surface ``P``, ``Pw``, ``p``, ``q``, ``U``, ``V``: ``(ok, a0,
+    a1, b0, b1)``, its bounding box when every point lies within ``eps`` of the box's
+    edge lines and its area within ``eps`` times the perimeter of the box's, for ``eps``
+    ``1e-6`` of the box's size and the domain rectangle test's ``domain_eps`` (the
+    surface's :func:`speed_bound_of`, taken only then)."""
+    a0 = np.inf
+    b0 = np.inf
+    a1 = -np.inf
+    b1 = -np.inf
+    for i in range(pts.shape[0]):
+        a0 = min(a0, pts[i, 0])
+        a1 = max(a1, pts[i, 0])
+        b0 = min(b0, pts[i, 1])
+        b1 = max(b1, pts[i, 1])
+    size_uv = max(a1 - a0, b1 - b0)
+    if not size_uv > 0:
+        return False, a0, a1, b0, b1
+    gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
+    hi = 1e-6 * size_uv
+    perimeter = a1 - a0 + b1 - b0
+    if not (gap <= hi and area_gap <= hi * perimeter):
+        return False, a0, a1, b0, b1
+    speed = speed_bound_of(P, Pw, p, q, U, V)
+    eps = max(min(1e-6 * size_uv, 1e-3 * chord_tol / max(speed, 1e-300)), 1e-12 * size_uv)
+    return gap <= eps and area_gap <= eps * perimeter, a0, a1, b0, b1
+
+
+@jit
+def line_rectangle_of(CP, W, K, deg, cp_off, k_off, loop_first, u0, u1, v0, v1, chord_tol,
+                      P, Pw, p, q, U, V):
+    """:func:`geomkit.mesh.trim_polylines.line_rectangle` in one call: ``(ok, a0, a1, b0,
+    b1)`` for a single loop of straight pieces (degree 1, unit weights, distinct knots),
+    its control polygon (clipped to the domain) tested by :func:`rectangle_of`; not
+    ``ok`` for other loops or one within ``1e-6`` of the domain rectangle."""
+    if loop_first.shape[0] != 2:
+        return False, 0.0, 0.0, 0.0, 0.0
+    m = deg.shape[0]
+    for c in range(m):
+        if deg[c] != 1:
+            return False, 0.0, 0.0, 0.0, 0.0
+    for i in range(W.shape[0]):
+        if W[i] != 1.0:
+            return False, 0.0, 0.0, 0.0, 0.0
+    for c in range(m):  # distinct knots: the control points are the vertices
+        for j in range(k_off[c] + 1, k_off[c + 1] - 2):
+            if not K[j + 1] > K[j]:
+                return False, 0.0, 0.0, 0.0, 0.0
+    n = CP.shape[0] - m + 1
+    pts = np.empty((n, 2))
+    r = 0
+    c = 1
+    for i in range(CP.shape[0]):
+        if r == n - 1:
+            break
+        if c < m and i == cp_off[c]:  # each later piece's first point: the last one's end
+            c += 1
+            continue
+        pts[r, 0] = min(max(CP[i, 0], u0), u1)
+        pts[r, 1] = min(max(CP[i, 1], v0), v1)
+        r += 1
+    pts[n - 1, 0] = pts[0, 0]  # closed exactly
+    pts[n - 1, 1] = pts[0, 1]
+    size_uv = max(u1 - u0, v1 - v0)
+    gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
+    if gap <= 1e-6 * size_uv and area_gap <= 1e-6 * size_uv * (u1 - u0 + v1 - v0):
+        return False, 0.0, 0.0, 0.0, 0.0
+    return rectangle_of(pts, chord_tol, P, Pw, p, q, U, V)
+
+
+@jit
 def speed_bound_of(P, Pw, p, q, U, V):
     """:func:`geomkit.mesh.trim_polylines.speed_bound` of the surface with control
     points ``P`` (nu, nv, 3), homogeneous net ``Pw`` (its weights ``Pw[..., 3]``) and

@@ -21,8 +21,8 @@ import numpy as np
 from geomkit.tolerances import AFFINE_REL
 from geomkit._kernels.tess_lattice import classify_cells
 from geomkit._kernels.tess_loops import face_loops
-from geomkit._kernels.tess_trim import (domain_rectangle_gap, loop_rectangle_gap,
-                                       speed_bound_of)
+from geomkit._kernels.tess_trim import (domain_rectangle_gap, line_rectangle_of, rectangle_of,
+                                        speed_bound_of)
 from geomkit.nurbs.surface import Surface
 from geomkit.nurbs.trims import packed_loops, packed_trims, starts
 
@@ -259,21 +259,16 @@ def loop_points(surfaces, chord_tol: float, affine: bool, cross_knots: bool, pac
 
 
 def _rectangle_of(pts, chord_tol: float, surface: Surface):
-    """:meth:`TrimPolylines.rectangle` of the closed polyline ``pts``."""
-    a0, b0 = np.minimum.reduce(pts)
-    a1, b1 = np.maximum.reduce(pts)
-    size_uv = max(a1 - a0, b1 - b0)
-    if not size_uv > 0:
-        return None
-    gap, area_gap = loop_rectangle_gap(pts, a0, a1, b0, b1)
-    hi = 1e-6 * size_uv
-    perimeter = a1 - a0 + b1 - b0
-    if not within(gap, area_gap, hi, perimeter):
-        return None
-    if not within(gap, area_gap, domain_eps(size_uv, chord_tol, speed_bound(surface)),
-                  perimeter):
-        return None
-    return float(a0), float(a1), float(b0), float(b1)
+    """:meth:`TrimPolylines.rectangle` of the closed polyline ``pts``
+    (:func:`geomkit._kernels.tess_trim.rectangle_of`)."""
+    ok, a0, a1, b0, b1 = rectangle_of(pts, float(chord_tol), *_net(surface))
+    return (a0, a1, b0, b1) if ok else None
+
+
+def _net(surface: Surface) -> tuple:
+    """The surface's ``(P, Pw, p, q, U, V)``, as :func:`speed_bound` takes them."""
+    return (surface.control_points, surface.homogeneous, surface.degree_u,
+            surface.degree_v, surface.knots_u, surface.knots_v)
 
 
 def line_rectangle(surface: Surface, chord_tol: float, packed) -> tuple | None:
@@ -284,27 +279,12 @@ def line_rectangle(surface: Surface, chord_tol: float, packed) -> tuple | None:
     the box, the points' distance from its edge lines and the enclosed area are the
     control polygon's.  None for other pieces, or a loop near the domain rectangle
     (which :class:`TrimPolylines` may drop as the domain's own edges): then the
-    polylines decide."""
-    CP, W, K, deg, cp_off, k_off, loop_first = packed
-    if len(loop_first) != 2 or not (deg == 1).all() or not (W == 1.0).all():
-        return None
-    for c in range(len(deg)):  # distinct knots: the control points are the vertices
-        kc = K[k_off[c] + 1:k_off[c + 1] - 1]
-        if not (kc[1:] > kc[:-1]).all():
-            return None
+    polylines decide.  One compiled call
+    (:func:`geomkit._kernels.tess_trim.line_rectangle_of`)."""
     (u0, u1), (v0, v1) = surface.domain
-    pts = np.empty((len(CP) - len(deg) + 1, 2))
-    keep = np.ones(len(CP), dtype=bool)
-    keep[cp_off[1:-1]] = False  # each later piece's first point: the last one's end
-    q = CP[keep]
-    pts[:-1, 0] = np.minimum(np.maximum(q[:-1, 0], u0), u1)
-    pts[:-1, 1] = np.minimum(np.maximum(q[:-1, 1], v0), v1)
-    pts[-1] = pts[0]  # closed exactly
-    size_uv = max(u1 - u0, v1 - v0)
-    gap, area_gap = loop_rectangle_gap(pts, u0, u1, v0, v1)
-    if gap <= 1e-6 * size_uv and area_gap <= 1e-6 * size_uv * (u1 - u0 + v1 - v0):
-        return None  # near the domain rectangle: TrimPolylines' domain_loop test decides
-    return _rectangle_of(pts, chord_tol, surface)
+    ok, a0, a1, b0, b1 = line_rectangle_of(*packed, u0, u1, v0, v1, float(chord_tol),
+                                           *_net(surface))
+    return (a0, a1, b0, b1) if ok else None
 
 
 def flat_surfaces(surfaces) -> tuple:
