@@ -247,8 +247,10 @@ def circle_frames(Z, Xd, C, r, X1, X2, same, closed):
         for j in range(2):
             P = X1 if j == 0 else X2
             d0, d1, d2 = P[k, 0] - C[k, 0], P[k, 1] - C[k, 1], P[k, 2] - C[k, 2]
-            t[k, j] = math.atan2(_dot3(d0, d1, d2, b0, b1, b2) / rk,
-                                 _dot3(d0, d1, d2, a0, a1, a2) / rk) % two_pi
+            tj = math.atan2(_dot3(d0, d1, d2, b0, b1, b2) / rk,
+                            _dot3(d0, d1, d2, a0, a1, a2) / rk) % two_pi
+            # a tiny negative angle wraps to 2 pi itself in floats: it is 0
+            t[k, j] = 0.0 if tj >= two_pi else tj
         t1, t2 = t[k, 0], t[k, 1]
         if not same[k]:
             t1, t2 = t2, t1

@@ -110,8 +110,9 @@ def conic_arc(coef, zt: float, start, end, form: int, what: str):
     if kind == 1:
         for (x, y), q in zip(loc, (p0, p1)):
             _on(x / a, y / b, lambda x, y: math.hypot(x, y) - 1.0, q, a, b, size, what)
-        t0 = math.atan2(loc[0][1] / b, loc[0][0] / a) % (2 * math.pi)
-        t1 = math.atan2(loc[1][1] / b, loc[1][0] / a) % (2 * math.pi)
+        # (a tiny negative angle wraps to 2 pi itself in floats: it is 0)
+        t0, t1 = (math.atan2(y / b, x / a) % (2 * math.pi) for x, y in loc)
+        t0, t1 = (0.0 if t >= 2 * math.pi else t for t in (t0, t1))
         if t1 <= t0 + 1e-12 * (1 + t0):
             t1 += 2 * math.pi
         cz = np.array([*c, zt])

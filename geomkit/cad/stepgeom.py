@@ -89,7 +89,8 @@ class Curve:
             return float((X - self.O) @ self.D / (self.D @ self.D))
         if self.kind in ("circle", "ellipse"):
             d = X - self.C
-            return math.atan2((d @ self.Y) / self.b, (d @ self.X) / self.a) % TWO_PI
+            t = math.atan2((d @ self.Y) / self.b, (d @ self.X) / self.a) % TWO_PI
+            return 0.0 if t >= TWO_PI else t  # (a tiny negative angle wraps to 2 pi)
         return self._locate(X)
 
     def _locate(self, X):
