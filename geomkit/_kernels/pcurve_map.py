@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit_exact, jit_plain as jit, jit_inline
 from .basis import (basis_funs_inline, ders_basis_funs_inline, ders_scratch,
                     find_span_inline)
@@ -358,13 +359,25 @@ def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, period
     """
     nb = binv.shape[0]
     nc = check.shape[0]
-    sref = np.empty(ref.shape[0])
+    scratch = (np.empty(ref.shape[0]), np.empty(p + 1), np.empty(p + 1), np.empty(p + 1),
+               np.zeros((2, 3)), np.empty((nb, 2)), np.empty((nc, 2)), np.empty((nb, 2)))
+    return _fit_loop(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, periodic, maps,
+                     T, S, tol, binv, check, cb, max_spans, max_split, scratch)
+
+
+@jit
+def _fit_loop(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, periodic, maps, T, S,
+              tol, binv, check, cb, max_spans, max_split, scratch):
+    """The work of :func:`fit_edge_pcurve` over borrowed views of its arguments and
+    scratch (no atomic reference counting in the many inlined evaluations,
+    :mod:`.numba_ext.borrow`); the arrays it makes and returns are its own."""
+    Pw, U, frame, ref, periodic, maps, T, S, binv, check, cb = borrow_all((
+        Pw, U, frame, ref, periodic, maps, T, S, binv, check, cb))
+    sref, N, left, right, arc, X, C, B = borrow_all(scratch)
+    nb = binv.shape[0]
+    nc = check.shape[0]
     for i in range(sref.shape[0]):
         sref[i] = i / (sref.shape[0] - 1)
-    N = np.empty(p + 1)
-    left = np.empty(p + 1)
-    right = np.empty(p + 1)
-    arc = np.zeros((2, 3))
     for c in range(2):
         if maps[c, 0] > 0:
             arc[c, 0], arc[c, 1], arc[c, 2] = arc_consts(maps[c, 1], maps[c, 2])
@@ -376,9 +389,6 @@ def fit_edge_pcurve(Pw, p, U, e0, e1, rev, kind, frame, R, r, tan_a, ref, period
     out_b = np.empty((cap, nb, 2))
     nout = 0
     err = 0.0
-    X = np.empty((nb, 2))
-    C = np.empty((nc, 2))
-    B = np.empty((nb, 2))
     while a.shape[0] > 0:
         k = a.shape[0]
         m = np.zeros(k, dtype=np.int64)
