@@ -222,13 +222,23 @@ def edge_local(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a):
     rho = np.empty(n)
     dN = np.empty((1, p + 1))
     ndu, left, right, a = ders_scratch(p)
+    _edge_local_fill(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a, X, ab, rho,
+                     (dN, ndu, left, right, a))
+    return X, ab, rho
+
+
+@jit
+def _edge_local_fill(Pw, p, U, t0, t1, n, kind, frame, R, r, tan_a, X, ab, rho, scratch):
+    """The loop of :func:`edge_local` over borrowed views (no atomic reference counting
+    in the inlined evaluations, :mod:`.numba_ext.borrow`)."""
+    Pw, U, frame, X, ab, rho, (dN, ndu, left, right, a) = borrow_all((
+        Pw, U, frame, X, ab, rho, scratch))
     step = (t1 - t0) / (n - 1)
     for i in range(n):
         t = t1 if i == n - 1 else float(i) * step + t0
         x, y, z = _curve_point(Pw, p, U, t, dN, ndu, left, right, a)
         X[i, 0], X[i, 1], X[i, 2] = x, y, z
         ab[i, 0], ab[i, 1], rho[i] = _local_xyz(x, y, z, kind, frame, R, r, tan_a)
-    return X, ab, rho
 
 
 @jit

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit_exact, jit_plain as jit
 from .basis import basis_funs_inline, find_span_inline
 from .surface import point_scratch, surface_point
@@ -71,6 +72,17 @@ def loop_points(Q, W, off, deg, U, uoff, per):
     N = np.empty(pmax + 1)
     left = np.empty(pmax + 1)
     right = np.empty(pmax + 1)
+    _fill_points(Q, W, off, deg, U, uoff, per, out, N, left, right)
+    return out
+
+
+@jit
+def _fill_points(Q, W, off, deg, U, uoff, per, out, N, left, right):
+    """The points of :func:`loop_points` into ``out``, over borrowed views (no atomic
+    reference counting in the per-point knot slices, :mod:`.numba_ext.borrow`)."""
+    Q, W, off, deg, U, uoff, out, N, left, right = borrow_all((
+        Q, W, off, deg, U, uoff, out, N, left, right))
+    m = deg.shape[0]
     k = 0
     for i in range(m):
         p, r0, n = deg[i], off[i], off[i + 1] - off[i]
@@ -91,7 +103,6 @@ def loop_points(Q, W, off, deg, U, uoff, per):
                 k += 1
         _rational_point(Q, W, r0, n, p, U, u0, nu, U[u0 + nu - 1], N, left, right, out, k)
         k += 1
-    return out
 
 
 @jit
