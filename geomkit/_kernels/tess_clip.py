@@ -162,6 +162,10 @@ def _chains(P, starts, dirs, bbox, u0, u1, v0, v1, pts, cs, ce, sin_, sout, inne
             ax, ay, bx, by = a[0], a[1], b[0], b[1]
             b_in = _inside(bx, by, u0, u1, v0, v1)
             if not open_:
+                if ((ax < u0 and bx < u0) or (ax > u1 and bx > u1) or (ay < v0 and by < v0)
+                        or (ay > v1 and by > v1)):
+                    continue  # both ends past one edge line: it misses the cell (or
+                    # touches it after rounding, which makes no chain either)
                 t0, t1, e0, e1 = _clip_t(ax, ay, bx, by, u0, u1, v0, v1)
                 if t0 > t1:
                     continue
