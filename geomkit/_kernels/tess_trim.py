@@ -280,6 +280,17 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
                 spans += 1
         polyline = pc == 1 and not rational
         exact = polyline and spans == ncp - 1  # seeds are the control points
+        # a straight piece inside the domain box (not clipped) is its own UV chord: the
+        # chord points would be the curve points again
+        chords = uv_chords
+        if polyline:
+            inside = True
+            for r in range(ncp):
+                x = CP[a0 + r, 0]
+                y = CP[a0 + r, 1]
+                if not (lo0 <= x <= hi0 and lo1 <= y <= hi1):
+                    inside = False
+            chords = uv_chords and not inside
         dense = (not polyline) and spans <= dense_spans
         start = n
         ta = Uc[pc]
@@ -338,7 +349,7 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
                     ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
                     surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
                 worst = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
-                                     uv_chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
+                                     chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
                                      Nc, lc, rc, Nu, Nv, left, right, tmp, X, grid_pts,
                                      grid_stamp, stamp)
                 if worst > chord_tol and tb - ta > tiny:

@@ -281,6 +281,9 @@ def line_rectangle(surface: Surface, chord_tol: float, packed) -> tuple | None:
     (which :class:`TrimPolylines` may drop as the domain's own edges): then the
     polylines decide.  One compiled call
     (:func:`geomkit._kernels.tess_trim.line_rectangle_of`)."""
+    _, W, _, deg, _, _, loop_first = packed
+    if len(loop_first) != 2 or not (deg == 1).all() or not (W == 1.0).all():
+        return None  # (most curved faces: no kernel call)
     (u0, u1), (v0, v1) = surface.domain
     ok, a0, a1, b0, b1 = line_rectangle_of(*packed, u0, u1, v0, v1, float(chord_tol),
                                            *_net(surface))
