@@ -73,6 +73,15 @@ def unwrap(x, period: float = 2 * math.pi) -> np.ndarray:
     return unwrap_angles(x, float(period))
 
 
+def turn_angle(y: float, x: float) -> float:
+    """``atan2(y, x)`` in ``[0, 2 pi)``.  The float modulo takes a tiny negative angle to
+    2 pi itself; that is 0 here, so an arc starting on its frame's x axis starts at 0
+    whatever the last bits of ``y`` (the compiled circle frames,
+    :func:`geomkit._kernels.arcs.circle_frames`, do the same)."""
+    t = math.atan2(y, x) % (2 * math.pi)
+    return 0.0 if t >= 2 * math.pi else t
+
+
 def angle_to_param(theta, theta0: float, theta1: float) -> np.ndarray:
     """NURBS parameter of the arc built by :func:`arc_curve` at angle ``theta``."""
     n, d = _spans(theta0, theta1)

@@ -34,7 +34,7 @@ import numpy as np
 
 from geomkit.tolerances import ON_CONIC_TOL
 from geomkit.errors import FileFormatError
-from geomkit.cad.analytic import angle_to_param, arc_curve
+from geomkit.cad.analytic import angle_to_param, arc_curve, turn_angle
 from geomkit.cad.analytic import turn_into as _turn
 
 __all__ = ["conic_arc", "ON_CONIC_TOL", "FORMS"]
@@ -110,9 +110,7 @@ def conic_arc(coef, zt: float, start, end, form: int, what: str):
     if kind == 1:
         for (x, y), q in zip(loc, (p0, p1)):
             _on(x / a, y / b, lambda x, y: math.hypot(x, y) - 1.0, q, a, b, size, what)
-        # (a tiny negative angle wraps to 2 pi itself in floats: it is 0)
-        t0, t1 = (math.atan2(y / b, x / a) % (2 * math.pi) for x, y in loc)
-        t0, t1 = (0.0 if t >= 2 * math.pi else t for t in (t0, t1))
+        t0, t1 = (turn_angle(y / b, x / a) for x, y in loc)
         if t1 <= t0 + 1e-12 * (1 + t0):
             t1 += 2 * math.pi
         cz = np.array([*c, zt])

@@ -16,7 +16,8 @@ import re
 
 import numpy as np
 
-from geomkit.cad.analytic import arc_curve, cross3, curve_derivs, line_curve, norm3
+from geomkit.cad.analytic import (arc_curve, cross3, curve_derivs, line_curve, norm3,
+                                  turn_angle)
 from geomkit.cad.brep import Analytic
 from geomkit.cad.iges.entities import restrict
 from geomkit.cad.loops import Unsupported
@@ -89,8 +90,7 @@ class Curve:
             return float((X - self.O) @ self.D / (self.D @ self.D))
         if self.kind in ("circle", "ellipse"):
             d = X - self.C
-            t = math.atan2((d @ self.Y) / self.b, (d @ self.X) / self.a) % TWO_PI
-            return 0.0 if t >= TWO_PI else t  # (a tiny negative angle wraps to 2 pi)
+            return turn_angle((d @ self.Y) / self.b, (d @ self.X) / self.a)
         return self._locate(X)
 
     def _locate(self, X):

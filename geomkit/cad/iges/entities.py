@@ -17,7 +17,7 @@ import numpy as np
 from geomkit.tolerances import JOIN_TOL, RULED_ARC_TOL
 from geomkit._kernels.bezier import insert_knot, restrict_curve
 from geomkit.cad.analytic import (angle_to_param, arc_curve, curve_derivs, extrude, line_curve,
-                                  revolve, ruled, transform_curve, turn_into)
+                                  revolve, ruled, transform_curve, turn_angle, turn_into)
 from geomkit.cad.conic import conic_arc
 from geomkit.cad.iges.file import integer as i_
 from geomkit.cad.iges.file import real as f_
@@ -96,8 +96,8 @@ def curve3d(rd, de: int):
     elif t == 100:
         zt, x1, y1, x2, y2, x3, y3 = (f_(x) for x in r[1:8])
         rad = math.hypot(x2 - x1, y2 - y1)
-        a0 = math.atan2(y2 - y1, x2 - x1) % (2 * math.pi)
-        a1 = math.atan2(y3 - y1, x3 - x1) % (2 * math.pi)
+        a0 = turn_angle(y2 - y1, x2 - x1)
+        a1 = turn_angle(y3 - y1, x3 - x1)
         if a1 <= a0 + 1e-12:
             a1 += 2 * math.pi
         c = arc_curve([x1, y1, zt], [1, 0, 0], [0, 1, 0], rad, a0, a1)
