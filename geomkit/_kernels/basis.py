@@ -50,6 +50,30 @@ def basis_funs(i, u, p, U, N, left, right):
 
 
 @jit
+def basis_d1(i, u, p, U, D, left, right):
+    """Non-zero basis functions ``D[0, 0..p]`` at ``u`` in span ``i`` and their first
+    derivatives ``D[1, 0..p]`` (``p >= 1``): A2.2, whose last round divides the degree
+    ``p - 1`` functions by the knot differences that A2.3's first derivatives take
+    (``N'_r = p (T_{r-1} - T_r)``, ``T_r`` that quotient, ``T_{-1} = T_p = 0``), at the
+    cost of A2.2 alone.  ``left``, ``right``: scratch of length ``p + 1``."""
+    D[0, 0] = 1.0
+    prev = 0.0
+    for j in range(1, p + 1):
+        left[j] = u - U[i + 1 - j]
+        right[j] = U[i + j] - u
+        saved = 0.0
+        for r in range(j):
+            temp = D[0, r] / (right[r + 1] + left[j - r])
+            if j == p:
+                D[1, r] = p * (prev - temp)
+                prev = temp
+            D[0, r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        D[0, j] = saved
+    D[1, p] = p * prev
+
+
+@jit
 def ders_scratch(p):
     """Scratch arrays for :func:`ders_basis_funs`: (ndu, left, right, a)."""
     return (np.empty((p + 1, p + 1)), np.empty(p + 1), np.empty(p + 1),
@@ -117,3 +141,4 @@ def ders_basis_funs(i, u, p, n, U, ders, ndu, left, right, a):
 find_span_inline = jit_inline(find_span.py_func)
 basis_funs_inline = jit_inline(basis_funs.py_func)
 ders_basis_funs_inline = jit_inline(ders_basis_funs.py_func)
+basis_d1_inline = jit_inline(basis_d1.py_func)

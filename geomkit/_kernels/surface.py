@@ -13,8 +13,8 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline, prun
-from .basis import (basis_funs_inline, ders_basis_funs_inline, ders_scratch,
-                    find_span_inline)
+from .basis import (basis_d1_inline, basis_funs_inline, ders_basis_funs_inline,
+                    ders_scratch, find_span_inline)
 
 CHUNK = 256  # points per parallel work item (scratch arrays allocated once per chunk)
 POLE_RATIO = 1e-7
@@ -61,6 +61,71 @@ def surface_point(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, out):
     out[0] = tmp[0] / tmp[3]
     out[1] = tmp[1] / tmp[3]
     out[2] = tmp[2] / tmp[3]
+
+
+@jit
+def surface_point_d1(Pw, p, q, U, V, u, v, Du, Dv, left, right, SKL):
+    """``S``, ``S_u``, ``S_v`` at ``(u, v)`` into ``SKL[0, 0]``, ``SKL[1, 0]``,
+    ``SKL[0, 1]`` (``SKL[1, 1]`` untouched): :func:`surface_derivs` of order 1 without
+    the mixed derivative, from :func:`.basis.basis_d1` (the cost of about two surface
+    points).  ``Du`` (2, p+1), ``Dv`` (2, q+1), ``left``, ``right`` (max(p, q)+1):
+    scratch."""
+    su = find_span_inline(Pw.shape[0] - 1, p, u, U)
+    basis_d1_inline(su, u, p, U, Du, left, right)
+    sv = find_span_inline(Pw.shape[1] - 1, q, v, V)
+    basis_d1_inline(sv, v, q, V, Dv, left, right)
+    a0 = a1 = a2 = a3 = 0.0   # S w
+    b0 = b1 = b2 = b3 = 0.0   # d/du
+    c0 = c1 = c2 = c3 = 0.0   # d/dv
+    for k in range(p + 1):
+        row = su - p + k
+        e0 = e1 = e2 = e3 = 0.0
+        f0 = f1 = f2 = f3 = 0.0
+        for l in range(q + 1):
+            col = sv - q + l
+            n = Dv[0, l]
+            d = Dv[1, l]
+            x0 = Pw[row, col, 0]
+            x1 = Pw[row, col, 1]
+            x2 = Pw[row, col, 2]
+            x3 = Pw[row, col, 3]
+            e0 += n * x0
+            e1 += n * x1
+            e2 += n * x2
+            e3 += n * x3
+            f0 += d * x0
+            f1 += d * x1
+            f2 += d * x2
+            f3 += d * x3
+        n = Du[0, k]
+        d = Du[1, k]
+        a0 += n * e0
+        a1 += n * e1
+        a2 += n * e2
+        a3 += n * e3
+        b0 += d * e0
+        b1 += d * e1
+        b2 += d * e2
+        b3 += d * e3
+        c0 += n * f0
+        c1 += n * f1
+        c2 += n * f2
+        c3 += n * f3
+    s0 = a0 / a3
+    s1 = a1 / a3
+    s2 = a2 / a3
+    SKL[0, 0, 0] = s0
+    SKL[0, 0, 1] = s1
+    SKL[0, 0, 2] = s2
+    SKL[1, 0, 0] = (b0 - b3 * s0) / a3
+    SKL[1, 0, 1] = (b1 - b3 * s1) / a3
+    SKL[1, 0, 2] = (b2 - b3 * s2) / a3
+    SKL[0, 1, 0] = (c0 - c3 * s0) / a3
+    SKL[0, 1, 1] = (c1 - c3 * s1) / a3
+    SKL[0, 1, 2] = (c2 - c3 * s2) / a3
+
+
+surface_point_d1_inline = jit_inline(surface_point_d1.py_func)
 
 
 @jit

@@ -14,7 +14,7 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline, prun
 from .basis import basis_funs, find_span
-from .surface import _binomial_table, derivs_scratch, surface_derivs, surface_point
+from .surface import surface_point, surface_point_d1_inline as surface_point_d1
 from .triangles import _dist3, point_triangle_distance
 
 CELL_CHUNK = 32
@@ -257,13 +257,13 @@ def foot_step(SKL, x, y, z):
     return True, (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
 
 
-@jit
+@jit_inline
 def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin, umax,
-                  vmin, vmax, Nu, Nv, left, right, tmp, Q, SKL, bin_, dscr):
+                  vmin, vmax, Nu, Nv, left, right, tmp, Q, SKL, Du, Dv):
     """An upper bound of the distance from X = (x, y, z) to the surface, from
     ``d = |X - S(uu, vv)|`` down: damped Gauss-Newton steps on ``|X - S(uv)|^2`` with
-    the exact first derivatives (``SKL`` (2, 2, 3) receives them; ``bin_``, ``dscr``:
-    :func:`~geomkit._kernels.surface.surface_derivs` scratch).  Every value returned
+    the exact first derivatives (:func:`~geomkit._kernels.surface.surface_point_d1`
+    into ``SKL`` (2, 2, 3), ``Du``, ``Dv`` its scratch).  Every value returned
     is ``|X - S(uv')|`` for a surface point, so it bounds the distance from above
     whatever the steering; a step that does not lower it is halved.  Stops at
     ``d <= d_stop`` or ``d <= exact_above`` (the caller's result cannot fall
@@ -274,7 +274,7 @@ def _foot_descent(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, umin,
     for it in range(FOOT_STEPS):
         if d <= d_stop or d <= exact_above:
             break
-        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
+        surface_point_d1(Pw, p, q, U, V, uu, vv, Du, Dv, left, right, SKL)
         ok, du, dv = foot_step(SKL, x, y, z)
         if not ok:
             break
@@ -337,7 +337,7 @@ def _gap_pass(Pw, p, q, U, V, A, B, C, T, k, exact_above, Nu, Nv, left, right, t
 
 @jit
 def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
-             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, floor, Tall, j0, j1):
+             Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, Du, Dv, floor, Tall, j0, j1):
     """Deviation of the flat triangle T (3, 3) over the UV triangle A, B, C (2,) each.
 
     See :func:`triangle_deviation` for the measure.  With ``gc[0] >= 0`` the surface
@@ -394,7 +394,7 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
                     d_st = min(d_st, point_triangle_distance(P[0], P[1], P[2], Tall[j]))
                 d_ts = _foot_descent(Pw, p, q, U, V, x, y, z, u, v, gap, d_st, exact_above,
                                      umin, umax, vmin, vmax, Nu, Nv, left, right, tmp, Q,
-                                     SKL, bin_, dscr)
+                                     SKL, Du, Dv)
                 # never more than the gap, which bounds both distances (a near-degenerate
                 # triangle at a pole can make the closest-point rounding exceed it)
                 gap = min(gap, max(d_st, d_ts))
@@ -406,8 +406,8 @@ def _tri_dev(Pw, p, q, U, V, A, B, C, T, k, umin, umax, vmin, vmax, exact_above,
 def _dev_scratch(p, q):
     mm = max(p, q) + 1
     return (np.empty(p + 1), np.empty(q + 1), np.empty(mm), np.empty(mm), np.empty(4),
-            np.empty(3), np.empty(3), np.empty((2, 2, 3)), _binomial_table(1),
-            derivs_scratch(p, q, 1))
+            np.empty(3), np.empty(3), np.empty((2, 2, 3)), np.empty((2, p + 1)),
+            np.empty((2, q + 1)))
 
 
 @jit
@@ -425,12 +425,12 @@ def _triangle_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, k, umin, u
     """The loop of :func:`_triangle_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, tri_uv, tri_xyz, out, G, gc,
-     (Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr)) = borrow_all((
+     (Nu, Nv, left, right, tmp, P, Q, SKL, Du, Dv)) = borrow_all((
          Pw, U, V, tri_uv, tri_xyz, out, G, gc, scratch))
     for t in range(i0, i1):
         out[t] = _tri_dev(Pw, p, q, U, V, tri_uv[t, 0], tri_uv[t, 1], tri_uv[t, 2],
                           tri_xyz[t], k, umin, umax, vmin, vmax, exact_above,
-                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, bin_, dscr, 0.0,
+                          Nu, Nv, left, right, tmp, P, Q, SKL, G, gc, Du, Dv, 0.0,
                           tri_xyz, 0, 0)
 
 
@@ -509,7 +509,7 @@ _HALF = np.array([[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]], dtype=np.int6
 @jit
 def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                           exact_above, target, pair, out):
-    Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr = _dev_scratch(p, q)
+    Nu, Nv, left, right, tmp, P, Q, SKL, Du, Dv = _dev_scratch(p, q)
     G = np.empty((k + 1, k + 1, 3))
     Bu = np.empty((k + 1, p + 1))
     Bv = np.empty((k + 1, q + 1))
@@ -521,7 +521,7 @@ def _cell_deviation_range(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, v
     _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vmin, vmax,
                          exact_above, target, pair, out,
                          (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T,
-                          bin_, dscr))
+                          Du, Dv))
 
 
 @jit
@@ -530,8 +530,8 @@ def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vm
     """The loop of :func:`_cell_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, cells, first, out,
-     (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T, bin_,
-      dscr)) = borrow_all((
+     (Nu, Nv, left, right, tmp, P, Q, SKL, G, Bu, Bv, H, gc, UVc, X, T, Du,
+      Dv)) = borrow_all((
          Pw, U, V, cells, first, out, scratch))
     for c in range(i0, i1):
         UVc[0, 0] = cells[c, 0]
@@ -574,8 +574,8 @@ def _cell_deviation_loop(i0, i1, Pw, p, q, U, V, cells, first, k, umin, umax, vm
                 gc[5] = k if cc >= 2 else 0
                 worst = max(worst, _tri_dev(Pw, p, q, U, V, UVc[a], UVc[b], UVc[cc], T[half],
                                             k, umin, umax, vmin, vmax, exact_above, Nu, Nv,
-                                            left, right, tmp, P, Q, SKL, G, gc, bin_,
-                                            dscr, worst, T, 1 - half, j1))
+                                            left, right, tmp, P, Q, SKL, G, gc, Du,
+                                            Dv, worst, T, 1 - half, j1))
             out[c, diag] = worst
 
 

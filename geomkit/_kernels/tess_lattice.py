@@ -10,7 +10,7 @@ import numpy as np
 
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
-from .surface import surface_derivs, surface_point
+from .surface import surface_point, surface_point_d1_inline as surface_point_d1
 from .tess_clip import _clip_t
 from .tess_rings import _ring_holds
 from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _gap_pass,
@@ -344,9 +344,9 @@ def _in_group(u, v, TUV, j0, j1):
     return False
 
 
-@jit
+@jit_inline
 def _foot_in_group(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, TUV, j0, j1,
-                   Nu, Nv, left, right, tmp, Q, SKL, bin_, dscr):
+                   Nu, Nv, left, right, tmp, Q, SKL, Du, Dv):
     """:func:`geomkit._kernels.tess._foot_descent` with every foot kept in the UV
     triangles ``TUV[j0:j1]`` (a step leaving them is halved like one that does not
     lower the distance): the value returned is ``|X - S(uv')|`` for a ``uv'`` in
@@ -354,7 +354,7 @@ def _foot_in_group(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, TUV,
     for it in range(FOOT_STEPS):
         if d <= d_stop or d <= exact_above:
             break
-        surface_derivs(Pw, p, q, U, V, uu, vv, 1, bin_, dscr, SKL)
+        surface_point_d1(Pw, p, q, U, V, uu, vv, Du, Dv, left, right, SKL)
         ok, du, dv = foot_step(SKL, x, y, z)
         if not ok:
             break
@@ -383,7 +383,7 @@ def _foot_in_group(Pw, p, q, U, V, x, y, z, uu, vv, d, d_stop, exact_above, TUV,
 
 @jit
 def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, left,
-                   right, tmp, P, Q, SKL, bin_, dscr):
+                   right, tmp, P, Q, SKL, Du, Dv):
     """Deviation of triangle ``t`` (UV ``TUV[t]``, 3-D ``TX[t]``) of the group
     ``j0:j1`` that tiles one cell's part of the face: at each barycentric sample the
     parametric gap, or where it exceeds ``exact_above`` the larger of the surface
@@ -418,8 +418,8 @@ def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, l
                     if g != t:
                         d_st = min(d_st, point_triangle_distance(P[0], P[1], P[2], TX[g]))
                 d_ts = _foot_in_group(Pw, p, q, U, V, x, y, z, u, v, gap, d_st, exact_above,
-                                      TUV, j0, j1, Nu, Nv, left, right, tmp, Q, SKL, bin_,
-                                      dscr)
+                                      TUV, j0, j1, Nu, Nv, left, right, tmp, Q, SKL, Du,
+                                      Dv)
                 gap = min(gap, max(d_st, d_ts))
             worst = max(worst, gap)
     return worst
@@ -438,13 +438,13 @@ def _group_deviation_loop(i0, i1, Pw, p, q, U, V, tri_uv, tri_xyz, group, starts
     """The loop of :func:`_group_deviation_range` over borrowed views (no atomic
     reference counting, :mod:`.numba_ext.borrow`)."""
     (Pw, U, V, tri_uv, tri_xyz, group, starts, out,
-     (Nu, Nv, left, right, tmp, P, Q, SKL, bin_, dscr)) = borrow_all((
+     (Nu, Nv, left, right, tmp, P, Q, SKL, Du, Dv)) = borrow_all((
          Pw, U, V, tri_uv, tri_xyz, group, starts, out, scratch))
     for t in range(i0, i1):
         g = group[t]
         out[t] = _group_tri_dev(Pw, p, q, U, V, tri_uv, tri_xyz, t, starts[g],
                                 starts[g + 1], k, exact_above, Nu, Nv, left, right, tmp, P,
-                                Q, SKL, bin_, dscr)
+                                Q, SKL, Du, Dv)
 
 
 def group_deviation(Pw, p, q, U, V, tri_uv, tri_xyz, group, starts, k, exact_above, out):

@@ -8,8 +8,8 @@ import pytest
 
 import geomkit
 from geomkit import samples
-from geomkit._kernels.surface import D2, _binomial_table, derivs_scratch, surface_derivs, \
-    surface_derivs2
+from geomkit._kernels.surface import D1, D2, _binomial_table, derivs_scratch, surface_derivs, \
+    surface_derivs2, surface_point_d1
 
 ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
 
@@ -56,6 +56,37 @@ def test_surface_derivs2_equals_the_general_kernel(s):
         scale = max(np.abs(S1[k, l]).max() for k, l in ORDERS)
         for k, l in ORDERS:
             assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
+
+
+@pytest.mark.parametrize("s", _surfaces(), ids=lambda s: f"{s.degree_u}x{s.degree_v}")
+def test_surface_point_d1_equals_the_general_kernel(s):
+    """surface_point_d1 (S, S_u, S_v: the meshing measure's foot steps) against
+    surface_derivs of order 1, equal to rounding at random parameters and at every
+    knot (both ends included), on poles, creases and heavy weights; SKL[1, 1] is left
+    as it was."""
+    (a, b), (c, d) = s.domain
+    rng = np.random.default_rng(1)
+    ku = np.unique(s.knots_u)
+    kv = np.unique(s.knots_v)
+    uv = np.vstack([np.column_stack([rng.uniform(a, b, 300), rng.uniform(c, d, 300)]),
+                    np.column_stack([ku, rng.uniform(c, d, ku.size)]),
+                    np.column_stack([rng.uniform(a, b, kv.size), kv]),
+                    [[a, c], [b, d], [a, d], [b, c]]])
+    p, q = s.degree_u, s.degree_v
+    bin_ = _binomial_table(D1)
+    scr = derivs_scratch(p, q, D1)
+    Du, Dv = np.empty((2, p + 1)), np.empty((2, q + 1))
+    left, right = np.empty(max(p, q) + 1), np.empty(max(p, q) + 1)
+    S1 = np.empty((2, 2, 3))
+    S2 = np.full((2, 2, 3), 7.0)
+    for u, v in uv:
+        surface_derivs(s.homogeneous, p, q, s.knots_u, s.knots_v, u, v, D1, bin_, scr, S1)
+        surface_point_d1(s.homogeneous, p, q, s.knots_u, s.knots_v, u, v, Du, Dv, left,
+                         right, S2)
+        scale = max(np.abs(S1[k, l]).max() for k, l in ORDERS[:3])
+        for k, l in ORDERS[:3]:
+            assert np.abs(S1[k, l] - S2[k, l]).max() <= 1e-12 * scale, (u, v, k, l)
+        assert (S2[1, 1] == 7.0).all()
 
 
 @pytest.mark.parametrize("rational", [False, True])
