@@ -176,6 +176,43 @@ def _occ_distances(shape, P):
                                                 faces).Value() for p in P])
 
 
+def exercise(parts=None, parts_dir=None) -> int:
+    """geomkit's side of :func:`sweep` once per part, untimed and without Open CASCADE:
+    read (geomkit's own STEP reader), mesh at 1e-3 of the size, section through the
+    middle normal to each axis, project points near the mesh.  The ahead-of-time build
+    records the kernel calls of this run beside the demo's (``aot_build.py record``), so
+    that a real part's first read, mesh, section and projection on a fresh install run
+    compiled code.  ``parts``: file names in ``parts_dir`` (default: every STEP file of
+    the repository's parts folder); returns the number of parts run."""
+    import geomkit
+    from geomkit.cad.step import read_step
+    from geomkit.query.projection_part import make_projector
+
+    folder = Path(parts_dir) if parts_dir is not None else PARTS_DIR
+    if not folder.is_dir():
+        return 0
+    names = sorted(p.name for p in folder.iterdir() if p.suffix.lower() in (".stp", ".step")) \
+        if parts is None else parts
+    rng = np.random.default_rng(0)
+    for name in names:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = read_step(folder / name, cache=False)
+        S = res.surfaces
+        B = np.array([s.bounds for s in S])
+        lo, hi = B[:, 0].min(axis=0), B[:, 1].max(axis=0)
+        size = float(np.linalg.norm(hi - lo))
+        mesh = geomkit.tessellate(S, 1e-3 * size)
+        for ax in range(3):
+            n = np.zeros(3)
+            n[ax] = 1.0
+            geomkit.plane_section(S, [*n, -0.5 * (lo[ax] + hi[ax])], 1e-4 * size,
+                                  gap=res.edge_gap or 0.0)
+        V = mesh.vertices[rng.choice(len(mesh.vertices), 200)]
+        make_projector(S).project(V + rng.normal(size=V.shape) * 0.01 * size)
+    return len(names)
+
+
 def sweep(parts=QUICK, parts_dir=None, repeat=3):
     """Rows of the common schema (:mod:`geomkit.bench._common`), four stages per part
     (see the module docstring); no rows without Open CASCADE (STEP is read through it)

@@ -2,9 +2,11 @@
 
 ``python geomkit/_kernels/numba_ext/aot_build.py`` (run by ``setup.py`` when the package is built or
 installed) compiles the kernels listed in ``aot_exports.json`` -- the kernels the
-demo's jobs call from Python, with the argument types they call them with -- into
-the extension module ``aot_lib`` next to this file, and writes ``aot_manifest.json``
-(what was built, for which kernel sources, numba version and CPU).
+demo's jobs and a real part's read, mesh, section and projection call from Python,
+with the argument types they call them with -- into the extension modules
+``aot_lib`` (and ``aot_lib_1`` for the kernels compiled without contraction) next to
+this file, and writes ``aot_manifest.json`` (what was built, for which kernel
+sources, numba version and CPU, each export's module).
 
 At import, :func:`load` accepts the module only if the manifest matches this
 process: the same kernel sources (the stamp of :mod:`.policy`, so an edited kernel
@@ -242,11 +244,14 @@ def load(stamp_hex: str):
             return None
         import importlib
 
-        lib = importlib.import_module(f"{__package__}.{LIB_NAME}")
+        libs = {}  # one module per set of compile flags (aot_build.build)
         table = {}
-        for mod, qual, k, sig in man["exports"]:
+        for mod, qual, k, sig, *name in man["exports"]:
+            name = name[0] if name else LIB_NAME
+            if name not in libs:
+                libs[name] = importlib.import_module(f"{__package__}.{name}")
             argtypes = [parse_type(s) for s in sig]
-            fn = getattr(lib, export_symbol(mod, qual, k))
+            fn = getattr(libs[name], export_symbol(mod, qual, k))
             table.setdefault((mod, qual), []).append((signature_checker(argtypes), fn))
         _table = table
         status = (f"ahead-of-time kernels: {sum(map(len, table.values()))} entries "

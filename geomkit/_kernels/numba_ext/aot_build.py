@@ -8,7 +8,9 @@ Not a kernel: the build tool, kept here (with the loader) so that it imports onl
     python geomkit/_kernels/numba_ext/aot_build.py record      # regenerate numba_ext/aot_exports.json
     python geomkit/_kernels/numba_ext/aot_build.py build [DIR] # compile aot_lib + manifest into DIR
 
-``record`` runs ``geomkit demo`` in a child process with ``GEOMKIT_AOT_RECORD`` set:
+``record`` runs ``geomkit demo`` and then the real parts of ``tests/data/parts`` (read,
+mesh, section, project: ``geomkit.bench.parts.exercise``) in a child process with
+``GEOMKIT_AOT_RECORD`` set:
 every kernel call made *from Python* is recorded with its argument types (calls from
 other kernels are compiled code and never pass through Python), and those are the
 exports.  ``build`` compiles each export with numba's ``pycc`` into one extension
@@ -48,8 +50,11 @@ if __name__ == "__main__" and not __package__:
 from . import aot as _aot  # noqa: E402
 
 
-def record(out=_aot.EXPORTS, grid=None) -> list:
-    """Run the demo with call recording and write the export list to ``out``."""
+def record(out=_aot.EXPORTS, grid=None, parts=True) -> list:
+    """Run the demo with call recording and write the export list to ``out``; with
+    ``parts``, then geomkit's side of the parts benchmark on the repository's real
+    parts (``geomkit.bench.parts.exercise``: read, mesh, section, project), so that a
+    real part's first calls on a fresh install are compiled code too."""
     with tempfile.TemporaryDirectory(prefix="geomkit-aot-rec-") as tmp:
         rec = Path(tmp) / "rec.json"
         env = dict(os.environ, GEOMKIT_AOT_RECORD=str(rec), GEOMKIT_AOT="0")
@@ -57,7 +62,8 @@ def record(out=_aot.EXPORTS, grid=None) -> list:
                                                            if env.get("PYTHONPATH") else []))
         code = ("from geomkit.jobs.demo import run_demo; "
                 f"run_demo({str(Path(tmp) / 'demo')!r}, warm_up=False"
-                + (f", grid={grid}" if grid else "") + ")")
+                + (f", grid={grid}" if grid else "") + ")"
+                + ("; from geomkit.bench.parts import exercise; exercise()" if parts else ""))
         subprocess.run([sys.executable, "-c", code], env=env, check=True,
                        stdout=subprocess.DEVNULL)
         rows = json.loads(rec.read_text())
@@ -99,26 +105,29 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     t0 = time.time()
     out_dir = Path(out_dir)
     rows = json.loads(_aot.EXPORTS.read_text()) if exports is None else exports
-    cc = CC(_aot.LIB_NAME)
-    cc.output_dir = str(out_dir)
-    cc.verbose = verbose
-    cc.target_cpu = "host"
-    entries, flags, jit_only = [], None, []
+    # pycc compiles a module with one set of flags: one module per set, the first
+    # (the first export's: the JIT's default) aot_lib, the others (jit_exact: no
+    # contraction) aot_lib_1, ...
+    groups = []  # [flags, CC, lib name]
+    entries = []
     for k, (mod, qual, sig) in enumerate(rows):
         obj = import_module(mod)
         for part in qual.split("."):
             obj = getattr(obj, part)
         disp = getattr(obj, "dispatcher", obj)
         f = _flags_for(disp)
-        flags = flags or f
-        if f != flags:  # pycc compiles a module with one set of flags: the first
-            # export's (the JIT's default); a kernel compiled otherwise (jit_exact: no
-            # contraction) stays on the JIT, which compiles it with its own flags
-            jit_only.append(f"{mod}.{qual}")
-            continue
+        g = next((g for g in groups if g[0] == f), None)
+        if g is None:
+            lib = _aot.LIB_NAME if not groups else f"{_aot.LIB_NAME}_{len(groups)}"
+            cc = CC(lib)
+            cc.output_dir = str(out_dir)
+            cc.verbose = verbose
+            cc.target_cpu = "host"
+            g = [f, cc, lib]
+            groups.append(g)
         sym = _aot.export_symbol(mod, qual, k)
-        cc.export(sym, tuple(_aot.parse_type(s) for s in sig))(disp.py_func)
-        entries.append([mod, qual, k, sig])
+        g[1].export(sym, tuple(_aot.parse_type(s) for s in sig))(disp.py_func)
+        entries.append([mod, qual, k, sig, g[2]])
 
     # pycc compiles with a bare Flags(): patch it to the JIT's flags, and give the AOT
     # code generator the host's CPU features (the JIT's) rather than only the model's
@@ -132,21 +141,21 @@ def build(out_dir, exports=None, verbose=False) -> dict:
     def compile_copy(typingctx, targetctx, func, args, return_type, fl, **kw):
         return compile_extra(typingctx, targetctx, func, args, return_type,
                              copy.deepcopy(fl), **kw)
-    pycc_compiler.Flags = lambda: copy.deepcopy(flags)
     pycc_compiler.compile_extra = compile_copy
     codegen.AOTCPUCodegen._customize_tm_features = lambda self: host_features
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         old = out_dir / _aot.MANIFEST.name
-        if old.exists():  # no manifest until the new module is complete
+        if old.exists():  # no manifest until the new modules are complete
             old.unlink()
-        cc.compile()
+        for flags, cc, _ in groups:
+            pycc_compiler.Flags = lambda flags=flags: copy.deepcopy(flags)
+            cc.compile()
     finally:
         (pycc_compiler.Flags, pycc_compiler.compile_extra,
          codegen.AOTCPUCodegen._customize_tm_features) = saved
     manifest = {"stamp": policy._kernels_stamp().hex(), "numba": numba.__version__,
                 "cpu": list(_aot.host_cpu()), "exports": entries,
-                "jit_only": sorted(set(jit_only)),
                 "built_seconds": round(time.time() - t0, 1)}
     (out_dir / _aot.MANIFEST.name).write_text(json.dumps(manifest, indent=1) + "\n")
     return manifest
