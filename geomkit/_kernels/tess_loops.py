@@ -30,8 +30,8 @@ def _grow(a, n):
 
 @jit
 def face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece, face_loop, Pw, pw_off,
-               nets, U, u_off, V, v_off, domains, dense_spans, chord_tol, uv_chords,
-               cross_knots):
+               nets, U, u_off, V, v_off, domains, dense_spans, curve_tol, chord_tol, pair_tol,
+               uv_chords, cross_knots):
     """The closed UV polylines of the trim loops of faces ``f`` (``len(face_piece) - 1``).
 
     Face ``f``: surface net ``Pw[pw_off[f]:pw_off[f+1]]`` rows of ``(x w, y w, z w, w)``
@@ -68,7 +68,8 @@ def face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece, face_loop, 
         while True:
             m = trim_polylines(CP, W, K, deg[c0:c1], cp_off[c0:c1 + 1], k_off[c0:c1 + 1],
                                dense_spans, u0, v0, u1, v1, Pf, nets[f, 2], nets[f, 3], Uf,
-                               Vf, chord_tol, uv_chords, cross_knots, rows, counts, True)
+                               Vf, curve_tol, chord_tol, pair_tol, uv_chords, cross_knots,
+                               rows, counts, True)
             if m >= 0:
                 break
             rows = np.empty((4 * rows.shape[0], 3))

@@ -3,10 +3,13 @@
 A trim piece ``C(t)`` (a rational 2-D curve) on a surface ``S`` becomes the polyline
 through ``C(t_i)``.  Its vertices include every knot where the curve has a corner (and
 every knot of a polyline); between them the curve is marched: a segment ``[ta, tb]``
-is accepted when the points ``S(C(t))`` and ``S(C(ta) + f (C(tb) - C(ta)))`` (the exact
-boundary curve, and the image of the UV chord, which the mesh boundary also follows
-where it crosses cell edges) all lie within ``chord_tol`` of the 3-D chord
-``S(C(ta))``--``S(C(tb))`` at the quarter points of its part in each knot span and at
+is accepted when the points ``S(C(t))`` (the exact boundary curve) lie within
+``curve_tol`` of the 3-D chord ``S(C(ta))``--``S(C(tb))``, the points
+``S(C(ta) + f (C(tb) - C(ta)))`` (the image of the UV chord, which the mesh boundary
+also follows where it crosses cell edges) within ``chord_tol``, and the curve points
+within ``chord_tol`` too or the two largest distances adding up to at most ``pair_tol``
+(the mesh boundary, which lies within the second of the chord, then lies within their
+sum of the curve), at the quarter points of its part in each knot span and at
 the knots it crosses (and, on a curved piece of few spans, at every point of the knot
 span's 1/16 grid inside a part longer than a quarter span); each step is the rest of
 the run in equal parts of at most the current step estimate, which a failing part
@@ -37,8 +40,16 @@ SMOOTH_SIN = 1e-9
 """A knot of full multiplicity is crossed by segments when the control polygon's
 directions before and after it agree within this sine (the curve is tangent-
 continuous there); any other such knot, and every knot of a polyline, is a vertex."""
+MAX_BEND = 0.3
+"""A segment is split whenever its curve lies more than this times its chord's length
+from the chord (an arc of ~120 degrees: ``tan(a / 4) / 2`` for an arc of angle ``a``),
+whatever the tolerance: a loop small against the tolerance keeps at least three
+edges (a circle of radius ``tol`` became two chords of its diameter, a loop of no area).
+Not below a 16th of the run, nor for a curve within ``1e-6 chord_tol`` of its chord
+(rounding, as at a pole, where the chord is as short)."""
 SPLIT_AIM = 0.8
-"""Parts are sized for a predicted chord error of ``SPLIT_AIM * chord_tol``."""
+"""Parts are sized for a predicted chord error of ``SPLIT_AIM`` times the allowed one
+(the tightest of the three tests, each error relative to its tolerance)."""
 
 
 @jit
@@ -120,9 +131,10 @@ def _smooth_knot(CP, a0, Uc, pc, i):
 def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, lo0, lo1,
                  hi0, hi1, Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X,
                  grid_pts, grid_stamp, stamp):
-    """The largest distance from the 3-D chord ``Pa``--``Pb`` of the segment
-    ``[ta, tb]`` (UV ends ``(ua, va)``, ``(ub, vb)``) of the curve's points, and (with
-    ``uv_chords``) of the UV chord's images at the same fractions of the segment: on
+    """``(curve, chord)``: the largest distance from the 3-D chord ``Pa``--``Pb`` of
+    the segment ``[ta, tb]`` (UV ends ``(ua, va)``, ``(ub, vb)``) of the curve's points,
+    and (with ``uv_chords``; else 0) of the UV chord's images at the same fractions of
+    the segment: on
     each knot span the segment overlaps, at the quarter points of its part there and
     at the knot ending it, and, on a ``dense`` piece where that part is longer than a
     quarter of the span, at the span's 1/16 grid inside it (see
@@ -136,6 +148,7 @@ def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, l
     d2 = Pb[2] - Pa[2]
     ll = d0 * d0 + d1 * d1 + d2 * d2
     worst = 0.0
+    worst_chord = 0.0
     span = find_span(Pc.shape[0] - 1, pc, ta, Uc)
     k0 = Uc[span]
     while True:
@@ -177,14 +190,25 @@ def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, l
                 f = (t - ta) / (tb - ta)
                 surface_point(Pw, p, q, U, V, ua + (ub - ua) * f, va + (vb - va) * f, Nu,
                               Nv, left, right, tmp, X)
-                worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+                worst_chord = max(worst_chord, _chord_gap(X, Pa, d0, d1, d2, ll))
         if s1 >= tb:
             break
         span += 1
         while Uc[span + 1] <= k1:
             span += 1
         k0 = k1
-    return worst
+    return worst, worst_chord
+
+
+@jit_inline
+def _bent(gc, Pa, Pb):
+    """Whether a segment whose curve lies up to ``gc`` from its 3-D chord ``Pa``--``Pb``
+    turns too far to stand for it: ``gc > MAX_BEND |Pb - Pa|`` (a chord of length 0
+    with the curve off it: a closed piece's first try)."""
+    d0 = Pb[0] - Pa[0]
+    d1 = Pb[1] - Pa[1]
+    d2 = Pb[2] - Pa[2]
+    return gc * gc > MAX_BEND * MAX_BEND * (d0 * d0 + d1 * d1 + d2 * d2)
 
 
 @jit_inline
@@ -200,7 +224,8 @@ def _emit(out, n, t, u, v):
 
 @jit
 def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
-                   U, V, chord_tol, uv_chords, cross_knots, out, counts, grid_cache):
+                   U, V, curve_tol, chord_tol, pair_tol, uv_chords, cross_knots, out,
+                   counts, grid_cache):
     """Polylines of many trim pieces on one surface, in one call.
 
     Piece ``c`` has degree ``deg[c]``, control points ``CP[cp_off[c]:cp_off[c+1]]``
@@ -211,10 +236,14 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
     projector's certificate boxes need) and is marched between them (see
     the module docstring); a segment is tested at its parts' quarter points in every
     knot span it overlaps and at the knots it crosses (:func:`_segment_gap`).  A segment
-    ``[ta, tb]`` is accepted when the curve points ``S(C(t))`` and the UV-chord
-    points (``uv_chords``; False for a surface that is an affine map of its
-    parameters, where they lie on the 3-D chord) are within ``chord_tol`` of the 3-D
-    chord at its quarter points and, for a curved piece of at most ``dense_spans``
+    ``[ta, tb]`` is accepted when the curve points ``S(C(t))`` are within ``curve_tol``
+    of the 3-D chord, the UV-chord points (``uv_chords``; False for a surface that is
+    an affine map of its parameters, where they lie on the 3-D chord) within
+    ``chord_tol``, and the curve points within ``chord_tol`` too or the two largest
+    distances adding up to at most ``pair_tol`` (``curve_tol = chord_tol``: each within
+    ``chord_tol``; a straight piece inside the domain is its own UV chord: its points
+    count as both), at its quarter points and, for a curved piece of at most
+    ``dense_spans``
     spans, when the segment is longer than a quarter of its knot span, at every point
     of the span's 1/16 grid inside it: sample spacing at most 1/16 of the span on every
     segment, as when such pieces started from 5 seeds a span and checked quarter
@@ -242,13 +271,14 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
                np.empty(mc), np.empty(mc), np.empty((nk, 16, 3)),
                np.zeros((nk, 16), dtype=np.int64))
     return _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw,
-                      p, q, U, V, chord_tol, uv_chords, cross_knots, out, counts, scratch,
-                      grid_cache)
+                      p, q, U, V, curve_tol, chord_tol, pair_tol, uv_chords, cross_knots, out,
+                      counts, scratch, grid_cache)
 
 
 @jit
 def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw, p, q,
-               U, V, chord_tol, uv_chords, cross_knots, out, counts, scratch, grid_cache):
+               U, V, curve_tol, chord_tol, pair_tol, uv_chords, cross_knots, out, counts,
+               scratch, grid_cache):
     """The loop of :func:`trim_polylines` over borrowed views (no atomic reference
     counting in the many evaluations, :mod:`.numba_ext.borrow`); ``scratch`` holds
     the surface's and the pieces' evaluation arrays (the pieces' at their largest
@@ -258,6 +288,8 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
     Nu, Nv, left, right, tmp, Pa, Pb, X, Pbuf, Nc, lc, rc, grid_pts, grid_stamp = \
         borrow_all(scratch)
     n = 0
+    to_curve = chord_tol / curve_tol  # (1 exactly when curve_tol = chord_tol: the test of
+    to_pair = chord_tol / pair_tol    # each within chord_tol)
     for c in range(deg.shape[0]):
         pc = deg[c]
         a0 = cp_off[c]
@@ -291,6 +323,7 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
                 if not (lo0 <= x <= hi0 and lo1 <= y <= hi1):
                     inside = False
             chords = uv_chords and not inside
+        own_chord = uv_chords and not chords
         dense = (not polyline) and spans <= dense_spans
         start = n
         ta = Uc[pc]
@@ -348,12 +381,22 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
                 else:
                     ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
                     surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
-                worst = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
-                                     chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
-                                     Nc, lc, rc, Nu, Nv, left, right, tmp, X, grid_pts,
-                                     grid_stamp, stamp)
-                if worst > chord_tol and tb - ta > tiny:
-                    r = np.sqrt(SPLIT_AIM * chord_tol / worst)
+                gc, gu = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
+                                      chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
+                                      Nc, lc, rc, Nu, Nv, left, right, tmp, X, grid_pts,
+                                      grid_stamp, stamp)
+                # the error in units of chord_tol: the image within it, the curve within
+                # curve_tol and within it or the pair within pair_tol (a piece that is
+                # its own UV chord: its curve points are the chord's image)
+                if own_chord:
+                    gu = gc
+                worst = max(max(gc * to_curve, gu), min(gc, (gc + gu) * to_pair))
+                bend = (gc > 1e-6 * chord_tol and 16.0 * (tb - ta) > B - A
+                        and _bent(gc, Pa, Pb))
+                if (worst > chord_tol or bend) and tb - ta > tiny:
+                    r = np.sqrt(SPLIT_AIM * chord_tol / worst) if worst > chord_tol else 1.0
+                    if bend:
+                        r = min(r, 0.5)
                     step = (tb - ta) * min(max(r, 1.0 / MAX_PARTS), 0.9)
                     continue
                 n = _emit(out, n, ta, ua, va)

@@ -148,17 +148,20 @@ def staircase_cells(s: Surface, lat, cells: np.ndarray, stair: Staircase, h: flo
 
 
 def fallback_face(s: Surface, tol: float, max_angle, max_edge, k: int, trim_target: float,
-                  why: str):
+                  why: str, pair_tol: float | None = None, cross_knots: bool = False):
     """One face meshed by the fallback route (see the module docstring), after the
     primary route failed with ``why``: ``(V, F, UV, dev, tri_uv, stats)`` with every
-    triangle measured within ``tol``; ``stats["fallback"]`` is ``why``.  Raises
+    triangle measured within ``tol``; ``stats["fallback"]`` is ``why``; ``pair_tol``,
+    ``cross_knots``: the trim polylines' (those of the primary route,
+    :class:`~geomkit.mesh.trim_polylines.TrimPolylines`).  Raises
     :class:`~geomkit.errors.MeshingError` when the trim loops cannot be built."""
     t0 = time.perf_counter()
     size = s.size
     trim = None
     if s.trim:
         try:
-            trim = TrimPolylines(s, trim_target * tol)
+            trim = TrimPolylines(s, trim_target * tol, pair_tol=pair_tol,
+                                 cross_knots=cross_knots)
         except Exception as exc:  # noqa: BLE001 - named: the face cannot be bounded
             raise MeshingError(f"its trim loops could not be built "
                                f"({type(exc).__name__}: {exc})") from exc

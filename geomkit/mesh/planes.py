@@ -75,11 +75,13 @@ def _triangulate(polys: np.ndarray, coords, ring_size, ring_face, use):
     return tri[order], idx[order], failed
 
 
-def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = False) -> dict:
+def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = False,
+                 pair_tol: float | None = None) -> dict:
     """``{index: (uv (n, 2), faces (m, 3), S(uv) (n, 3), seconds)}`` for the trimmed surfaces of
     ``surfaces`` that are affine maps of their parameters, their regions triangulated
     together (see the module docstring): faces counter-clockwise in UV, every
-    boundary edge (trim polylines within ``chord_tol`` in 3-D, domain edges) kept, no
+    boundary edge (trim polylines within ``chord_tol`` in 3-D, or ``pair_tol`` when given:
+    :func:`~geomkit.mesh.trim_polylines.loop_points`; domain edges) kept, no
     point added, vertices sorted by u then v; ``{index: False}`` for a trimmed surface
     that is not such a map.  A surface not listed (untrimmed, an empty region, a
     polygon GEOS refuses, trim polylines that raise) is left to the face-by-face path.
@@ -103,11 +105,12 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     P = [surfaces[i] for i in planes]
     flat = flat_surfaces(P)
     try:  # every plane's trim polylines and rings in one call each
-        coords, ring_size, ring_face, kept = _rings(P, chord_tol, cross_knots, flat)
+        coords, ring_size, ring_face, kept = _rings(P, chord_tol, cross_knots, flat,
+                                                    pair_tol)
         faces = [planes[f] for f in kept.tolist()]
     except Exception:  # noqa: BLE001 - face by face: the face path reports a failure
         faces, coords, ring_size, ring_face = _rings_one_by_one(surfaces, planes, chord_tol,
-                                                                cross_knots)
+                                                                cross_knots, pair_tol)
     if not faces:
         return out
     ring_geoms = shapely.linearrings(coords, indices=np.repeat(np.arange(len(ring_size)),
@@ -139,7 +142,7 @@ def planar_batch(surfaces, chord_tol: float, sizes=None, cross_knots: bool = Fal
     return out
 
 
-def _rings(P, chord_tol: float, cross_knots: bool, flat) -> tuple:
+def _rings(P, chord_tol: float, cross_knots: bool, flat, pair_tol=None) -> tuple:
     """The rings of the planes ``P`` (surfaces with trims) for shapely's constructors,
     from every plane's trim polylines in one call (:func:`loop_points`):
     ``(coords, ring_size, ring_face, kept)`` of :func:`~geomkit._kernels.tess_loops.
@@ -149,7 +152,8 @@ def _rings(P, chord_tol: float, cross_knots: bool, flat) -> tuple:
     the rectangle first when a loop was it, else the
     loop of the largest area (:func:`loop_areas`, the areas' rounding bounded: when two
     are too close to tell, :func:`largest_loop` decides as ``rings()`` does)."""
-    pts, start, gaps, face_loop = loop_points(P, chord_tol, True, cross_knots, flat=flat)
+    pts, start, gaps, face_loop = loop_points(P, chord_tol, True, cross_knots, flat=flat,
+                                              pair_tol=pair_tol)
     d = flat[7]
     size_uv = np.maximum(d[:, 1] - d[:, 0], d[:, 3] - d[:, 2])
     perimeter = d[:, 1] - d[:, 0] + d[:, 3] - d[:, 2]
@@ -185,14 +189,15 @@ def _rings(P, chord_tol: float, cross_knots: bool, flat) -> tuple:
     return plane_rings(pts, start, face_loop, kept, rect, shell, d)
 
 
-def _rings_one_by_one(surfaces, planes, chord_tol: float, cross_knots: bool) -> tuple:
+def _rings_one_by_one(surfaces, planes, chord_tol: float, cross_knots: bool,
+                      pair_tol=None) -> tuple:
     """:func:`_rings` face by face (``TrimPolylines(...).rings()``), a face whose
     polylines raise left out: ``(faces, coords, ring_size, ring_face)``."""
     faces, rings = [], []
     for i in planes:
         try:
-            r = TrimPolylines(surfaces[i], chord_tol, affine=True,
-                              cross_knots=cross_knots).rings()
+            r = TrimPolylines(surfaces[i], chord_tol, affine=True, cross_knots=cross_knots,
+                              pair_tol=pair_tol).rings()
         except Exception:  # noqa: BLE001 - the face-by-face path reports it
             continue
         if min(len(p) for p in r) < 4:  # not a ring: left to the face-by-face path

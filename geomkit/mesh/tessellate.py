@@ -8,10 +8,15 @@ Method (Paper 1 step 1, then beyond it):
    ``0.8 tol`` (:mod:`geomkit.mesh.quadtree`), and within ``max_edge`` / ``max_angle``
    when given.  Flat regions stay coarse.
 2. **Trim boundary.**  Each trim curve becomes a polyline whose 3-D chords
-   ``S(C(t_i))``–``S(C(t_i+1))`` deviate at most ``tol / 2`` from the exact boundary
-   curve ``S(C(t))``, and from the image under ``S`` of the UV chord (the mesh
-   boundary runs through UV-chord points where it crosses cell edges) — checked at
-   interior samples; a failing segment is split into as many equal parameter parts
+   ``S(C(t_i))``–``S(C(t_i+1))`` deviate at most ``tol / 2`` from the image under ``S``
+   of the UV chord (the mesh boundary runs through UV-chord points where it crosses
+   cell edges), and at most ``tol / 2``, or ``0.9 tol`` minus that deviation, from the
+   exact boundary curve ``S(C(t))``, so that the mesh boundary lies within ``tol`` of
+   the curve (on a plane, whose UV chords map onto the 3-D chords, the chords lie
+   within ``0.9 tol`` of the curve) — checked at interior samples; a segment whose curve
+   bends away from it by more than 0.3 times its length is split too, so a loop small
+   against ``tol`` keeps three edges or more; a failing segment is split into as many
+   equal parameter parts
    as its measured error predicts (:mod:`geomkit._kernels.tess_trim`, one kernel
    call per trim piece).
 3. **Triangles.**  A cell untouched by the trim becomes two triangles (the diagonal
@@ -82,12 +87,20 @@ from geomkit.errors import FaceFailedWarning, InvalidInputError, MeshingError
 from geomkit.mesh.mesh import Mesh
 from geomkit.nurbs.surface import Surface, as_surfaces
 
-__all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET"]
+__all__ = ["tessellate", "SAMPLES_PER_EDGE", "CELL_TARGET", "TRIM_TARGET", "TRIM_PAIR"]
 
 SAMPLES_PER_EDGE = 6
 """``k``: barycentric samples per triangle edge in the deviation measurement."""
 TRIM_TARGET = 0.5
-"""Trim polylines are refined until their 3-D chord error is below ``TRIM_TARGET * tol``."""
+"""Trim polylines are refined until their 3-D chords are within ``TRIM_TARGET * tol`` of
+the images of their UV chords (and, for the projector's mesh, of the curve)."""
+TRIM_PAIR = 0.9
+"""... and until a chord lies within ``TRIM_TARGET * tol`` of the curve, or its
+distances from the curve and from its UV chord's image add up to at most
+``TRIM_PAIR * tol`` (:func:`geomkit.mesh.trim_polylines.loop_points`; the mesh boundary
+within ``tol`` of the curve at the samples; on a plane, where the second is 0, the rest
+of ``tol`` covers the curve between them: a plane's hole at 1.0 came 1.004 tol from
+its chords)."""
 PLANNED_TRIES = 3
 """Grids of the estimates tried for a trimmed surface before the measured grid
 (:func:`_trimmed_grid`)."""
@@ -112,14 +125,15 @@ def _affine_plane(s: Surface, size: float):
 
 
 def _planar_trimmed(s: Surface, tol: float, size: float, t0: float,
-                    trim_target: float = TRIM_TARGET, cross_knots: bool = False):
+                    trim_target: float = TRIM_TARGET, cross_knots: bool = False,
+                    pair_tol: float | None = None):
     """A trimmed surface that is an affine map of its domain, meshed without cells
     (:func:`geomkit.mesh.trim_polylines.planar_trimmed`); None for any other surface (or when
     the trimmed region is empty: the general path reports that)."""
     if affine_map(s, size) is None:
         return None
     uv, F = planar_trimmed(TrimPolylines(s, trim_target * tol, affine=True,
-                                         cross_knots=cross_knots))
+                                         cross_knots=cross_knots, pair_tol=pair_tol))
     if not len(F):
         return None
     used = np.zeros(len(uv), dtype=bool)  # corners of triangles inside the region only
@@ -309,14 +323,19 @@ def _grid_face(V, F, UV, dev, tri_uv, good, cells, closed, t0: float):
 
 def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                     trim_target: float = TRIM_TARGET, fallback: str | None = None,
-                    planar=None, size: float | None = None, cross_knots: bool = False):
+                    planar=None, size: float | None = None, cross_knots: bool = False,
+                    trim_pair: float | None = None):
     """One face's part of the mesh, ``(V, F, UV, dev, tri_uv, stats)``: the fast paths
     (planes, grids), then the adaptive cells.  With ``fallback`` (why this route failed
     for the face) the fallback route instead (:func:`geomkit.mesh.fallback.fallback_face`);
     with ``planar``, the face's triangles from :func:`geomkit.mesh.planes.planar_batch`
-    (False: it found the surface is not a plane); ``size``: ``s.size`` if known."""
+    (False: it found the surface is not a plane); ``size``: ``s.size`` if known;
+    ``trim_pair``: the trim polylines' :data:`TRIM_PAIR` (None: each of their chord
+    errors within ``trim_target * tol``)."""
+    pair_tol = None if trim_pair is None else trim_pair * tol
     if fallback is not None:
-        return fallback_face(s, tol, max_angle, max_edge, k, trim_target, fallback)
+        return fallback_face(s, tol, max_angle, max_edge, k, trim_target, fallback, pair_tol,
+                             cross_knots)
     if planar:
         uv, F, P, seconds = planar
         return P, F, uv, np.zeros(len(F)), uv[F], _planar_stats(seconds)
@@ -330,7 +349,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
                             "seconds": time.perf_counter() - t0},)
     # a plane's normals agree: max_angle holds (planar False: the batch found no plane)
     if s.trim and max_edge is None and planar is None:
-        planar = _planar_trimmed(s, tol, size, t0, trim_target, cross_knots)
+        planar = _planar_trimmed(s, tol, size, t0, trim_target, cross_knots, pair_tol)
         if planar is not None:
             return planar
     # trims that are only the domain rectangle (a STEP face bounded by its surface's
@@ -349,7 +368,7 @@ def _tessellate_one(s: Surface, tol: float, max_angle, max_edge, k: int,
             if gridded is not None:
                 return gridded
     trim = None if whole else TrimPolylines(s, trim_target * tol, packed=packed,
-                                            cross_knots=cross_knots)
+                                            cross_knots=cross_knots, pair_tol=pair_tol)
     if trim is not None and not trim.loops:
         whole, trim = True, None
     if whole:
@@ -419,22 +438,23 @@ def tessellate(surfaces, tol: float, max_angle: float | None = None,
         A single surface that neither route can mesh, or no surface meshed.
     """
     return tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
-                                  TRIM_TARGET, cross_knots=True)
+                                  TRIM_TARGET, cross_knots=True, trim_pair=TRIM_PAIR)
 
 
 def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None,
-               cross_knots: bool = False):
+               cross_knots: bool = False, trim_pair: float | None = None):
     """Face ``i``'s part of the mesh by the primary route, else by the fallback route
     (a :class:`~geomkit.errors.FaceFailedWarning` says which face and why): ``(part,
     None)``, or ``(None, why)`` when both routes fail."""
     try:
         return _tessellate_one(s, *args, planar=planar, size=size,
-                               cross_knots=cross_knots), None
+                               cross_knots=cross_knots, trim_pair=trim_pair), None
     except Exception as exc:  # noqa: BLE001 - GEOS and numeric failures: the fallback
         why = f"{type(exc).__name__}: {exc}"
     name = f"surface {i}" + (f" ({s.name})" if s.name else "")
     try:
-        part = _tessellate_one(s, *args, fallback=why)
+        part = _tessellate_one(s, *args, fallback=why, trim_pair=trim_pair,
+                               cross_knots=cross_knots)
     except Exception as exc:  # noqa: BLE001 - reported by the caller
         return None, f"{why}; the fallback failed too ({type(exc).__name__}: {exc})"
     warnings.warn(f"{name} meshed by the fallback route (untrimmed cells kept inside its "
@@ -444,13 +464,16 @@ def _mesh_face(i: int, s: Surface, args: tuple, planar=None, size=None,
 
 
 def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
-                           trim_target, cross_knots: bool = False) -> Mesh:
+                           trim_target, cross_knots: bool = False,
+                           trim_pair: float | None = None) -> Mesh:
     """:func:`tessellate` with the trim polylines' chord error target (a fraction of
     ``tol``) chosen: the projector's candidate mesh asks for finer ones (its bounds
     carry this error).  ``cross_knots``: trim polyline edges may run across a trim
     piece's smooth knots (:class:`~geomkit.mesh.trim_polylines.TrimPolylines`;
     :func:`tessellate` does); without, each edge lies on one knot span of its piece
-    (the projector's certificate boxes locate an edge on one trim segment)."""
+    (the projector's certificate boxes locate an edge on one trim segment).
+    ``trim_pair``: the trim polylines' :data:`TRIM_PAIR` (:func:`tessellate`'s); None:
+    each chord within ``trim_target * tol`` of the curve and of its UV chord's image."""
     surfaces = as_surfaces(surfaces)
     try:
         tol = float(tol)
@@ -476,7 +499,8 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
     trim_target = float(trim_target)
     args = (tol, max_angle, max_edge, k, trim_target)
     if len(surfaces) == 1:  # one surface: its arrays as they are, no concatenation
-        part, why = _mesh_face(0, surfaces[0], args, cross_knots=cross_knots)
+        part, why = _mesh_face(0, surfaces[0], args, cross_knots=cross_knots,
+                               trim_pair=trim_pair)
         if part is None:
             raise MeshingError(f"the surface could not be triangulated ({why})")
         V, F, UV, dev, tuv, st = part
@@ -485,13 +509,14 @@ def tessellate_with_target(surfaces, tol, max_angle, max_edge, samples_per_edge,
                     np.ascontiguousarray(tuv))
     # the trimmed planes together: one constrained triangulation
     sizes = [s.size for s in surfaces]  # once a face (the batch and the face path)
-    planes = (planar_batch(surfaces, trim_target * tol, sizes, cross_knots)
+    planes = (planar_batch(surfaces, trim_target * tol, sizes, cross_knots,
+                           None if trim_pair is None else trim_pair * tol)
               if max_edge is None else {})
     Vs, Fs, UVs, ds, fuv, stats = [], [], [], [], [], []
     kept, nv, nf = [], [], []  # the faces meshed, their vertex and triangle counts
     offset = 0
     for i, s in enumerate(surfaces):
-        part, why = _mesh_face(i, s, args, planes.get(i), sizes[i], cross_knots)
+        part, why = _mesh_face(i, s, args, planes.get(i), sizes[i], cross_knots, trim_pair)
         if part is None:  # one face never sinks the model: named in the stats
             name = f"surface {i}" + (f" ({s.name})" if s.name else "")
             warnings.warn(f"{name} left out of the mesh: {why}", FaceFailedWarning,

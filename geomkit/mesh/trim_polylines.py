@@ -66,7 +66,8 @@ def within(gap, area_gap, eps, perimeter):
 
 
 class TrimPolylines:
-    """Trim loops as UV polylines whose 3-D chords are within ``chord_tol``.
+    """Trim loops as UV polylines whose 3-D chords are within ``chord_tol`` (with
+    ``pair_tol``: see :func:`loop_points`).
 
     ``packed``: :func:`packed_trims` of the surface, if the caller made it.
     ``loops``: the closed (k, 2) polylines (read only), the domain rectangle left out
@@ -76,7 +77,8 @@ class TrimPolylines:
     """
 
     def __init__(self, surface: Surface, chord_tol: float, affine: bool = False,
-                 packed=None, cross_knots: bool = False, polylines=None):
+                 packed=None, cross_knots: bool = False, polylines=None,
+                 pair_tol: float | None = None):
         self.surface = surface
         self.cross_knots = cross_knots  # segments may run across smooth knots
         self.chord_tol = chord_tol
@@ -85,7 +87,8 @@ class TrimPolylines:
         self.domain_loop = False  # a loop was the domain rectangle (:func:`domain_loops`)
         if polylines is None:
             polylines = loop_polylines([surface], chord_tol, affine, cross_knots,
-                                       None if packed is None else [packed])[0]
+                                       None if packed is None else [packed],
+                                       pair_tol=pair_tol)[0]
         loops, gaps = polylines
         for pts, is_domain in zip(loops, domain_loops(surface, chord_tol, gaps)):
             if is_domain:
@@ -219,12 +222,12 @@ def domain_rectangle_only(surface: Surface, chord_tol: float, packed=None) -> bo
 
 
 def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
-                   packs=None, flat=None) -> list:
+                   packs=None, flat=None, pair_tol: float | None = None) -> list:
     """Per surface ``(loops, gaps)``: the closed (k, 2) UV polylines of its trim loops
     (read only) and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`
     (:func:`loop_points`, split by surface and loop)."""
     pts, start, gaps, face_loop = loop_points(surfaces, chord_tol, affine, cross_knots,
-                                              packs, flat)
+                                              packs, flat, pair_tol)
     bounds = start.tolist()
     loops = [pts[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     fl = face_loop.tolist()
@@ -232,13 +235,19 @@ def loop_polylines(surfaces, chord_tol: float, affine: bool, cross_knots: bool,
 
 
 def loop_points(surfaces, chord_tol: float, affine: bool, cross_knots: bool, packs=None,
-                flat=None) -> tuple:
+                flat=None, pair_tol: float | None = None) -> tuple:
     """``(pts (n, 2) read only, start (L+1,), gaps (L, 2), face_loop (len(surfaces)+1,))``:
     the closed UV polylines of the trim loops of ``surfaces`` (loop ``l``:
     ``pts[start[l]:start[l+1]]``, surface ``f``'s loops ``face_loop[f]:face_loop[f+1]``)
     and each loop's :func:`geomkit._kernels.tess_trim.loop_rectangle_gap`, every piece of
     every loop of every surface in one :func:`geomkit._kernels.tess_loops.face_loops` call
-    (each piece from its knots, split until every 3-D chord is within ``chord_tol``;
+    (each piece from its knots, split until every 3-D chord is within ``chord_tol`` of
+    the exact curve ``S(C(t))`` and of the image of its UV chord; with ``pair_tol``,
+    until the chord is within ``chord_tol`` of the UV chord's image and within
+    ``chord_tol`` of the curve too or the two distances add up to at most ``pair_tol``:
+    the mesh boundary, which lies within the second of the chord, then lies within
+    ``max(2 chord_tol, pair_tol)`` of the curve, and a plane's chords, whose UV chords
+    map onto them, may lie ``pair_tol`` from the curve;
     ``affine``: the surfaces are affine maps of their parameters, whose UV chords map to
     3-D chords).  ``packs``: ``[packed_trims(s)]`` of a single surface, ``flat``:
     :func:`flat_surfaces`, if made."""
@@ -251,9 +260,14 @@ def loop_points(surfaces, chord_tol: float, affine: bool, cross_knots: bool, pac
         CP, W, K, deg, cp_off, k_off, loop_first, face_loop = packed_loops(surfaces)
         face_piece = loop_first[face_loop]
     flat = flat_surfaces(surfaces) if flat is None else flat
+    chord_tol = float(chord_tol)
+    if pair_tol is None:  # each distance within chord_tol
+        curve_tol, pair_tol = chord_tol, 2.0 * chord_tol
+    else:
+        curve_tol = pair_tol = float(pair_tol)
     pts, start, gaps = face_loops(CP, W, K, deg, cp_off, k_off, loop_first, face_piece,
-                                  face_loop, *flat, SEED_SPANS, chord_tol, not affine,
-                                  cross_knots)
+                                  face_loop, *flat, SEED_SPANS, curve_tol, chord_tol,
+                                  pair_tol, not affine, cross_knots)
     pts.flags.writeable = False
     return pts, start, gaps, face_loop
 

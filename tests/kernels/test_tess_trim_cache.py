@@ -37,7 +37,8 @@ def _run(s, chord_tol, cross_knots, grid_cache):
     out = np.empty((100_000, 3))
     n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
                        s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol,
-                       affine_map(s, s.size) is None, cross_knots, out, counts, grid_cache)
+                       chord_tol, 2 * chord_tol, affine_map(s, s.size) is None, cross_knots,
+                       out, counts, grid_cache)
     assert n > 0
     return out[:n].copy(), counts
 

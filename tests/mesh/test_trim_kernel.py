@@ -28,7 +28,8 @@ M = 48
 DENSE = SEED_SPANS  # the grid rule; -1 checks quarter points only (a failing control)
 
 
-def _kernel(s, pieces, chord_tol, uv_chords=True, cross_knots=False):
+def _kernel(s, pieces, chord_tol, uv_chords=True, cross_knots=False, pair_tol=None):
+    curve_tol, pair = (chord_tol, 2 * chord_tol) if pair_tol is None else (pair_tol, pair_tol)
     (u0, u1), (v0, v1) = s.domain
     CP = np.concatenate([c.control_points for c in pieces])
     W = np.concatenate([c.weights for c in pieces])
@@ -39,12 +40,14 @@ def _kernel(s, pieces, chord_tol, uv_chords=True, cross_knots=False):
     counts = np.empty(len(pieces), dtype=np.int64)
     buf = np.empty((4, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
-                       s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
+                       s.degree_u, s.degree_v, s.knots_u, s.knots_v, curve_tol, chord_tol,
+                       pair, uv_chords,
                        cross_knots, buf, counts, True)
     assert n == -1  # too small: asks for more
     buf = np.empty((200_000, 3))
     n = trim_polylines(CP, W, K, deg, co, ko, DENSE, u0, v0, u1, v1, s.homogeneous,
-                       s.degree_u, s.degree_v, s.knots_u, s.knots_v, chord_tol, uv_chords,
+                       s.degree_u, s.degree_v, s.knots_u, s.knots_v, curve_tol, chord_tol,
+                       pair, uv_chords,
                        cross_knots, buf, counts, True)
     assert n == counts.sum()
     return np.split(buf[:n], np.cumsum(counts)[:-1])
@@ -59,7 +62,11 @@ def _chord_gaps(s, A, B, X):
     return np.linalg.norm(e - w[..., None] * d[:, None], axis=2).max(axis=1)
 
 
-def _check_piece(s, c, rows, chord_tol, uv_chords=True):
+def _check_piece(s, c, rows, chord_tol, uv_chords=True, pair_tol=None):
+    """Each segment's curve within ``chord_tol`` of its chord and (``uv_chords``) its UV
+    chord's image too, or, with ``pair_tol``, the image within ``chord_tol`` and the
+    curve within it too or the two distances adding up to at most ``pair_tol`` (48
+    samples a segment)."""
     (u0, u1), (v0, v1) = s.domain
     t, uv = rows[:, 0], rows[:, 1:]
     k = c.knots[c.degree: len(c.knots) - c.degree]
@@ -73,11 +80,18 @@ def _check_piece(s, c, rows, chord_tol, uv_chords=True):
     Cuv = np.array([_curve_at(c.homogeneous, c.degree, c.knots, x, u0, v0, u1, v1, N, lft, rgt)
                     for x in T])
     A, B = evaluate(s, uv[:-1]), evaluate(s, uv[1:])
-    worst = _chord_gaps(s, A, B, evaluate(s, Cuv).reshape(len(A), M - 1, 3)).max()
+    g_curve = _chord_gaps(s, A, B, evaluate(s, Cuv).reshape(len(A), M - 1, 3))
+    g_chord = np.zeros_like(g_curve)
     if uv_chords:
         L = (uv[:-1, None] * (1 - f)[:, None] + uv[1:, None] * f[:, None]).reshape(-1, 2)
-        worst = max(worst, _chord_gaps(s, A, B, evaluate(s, L).reshape(len(A), M - 1, 3)).max())
-    assert worst <= chord_tol, (worst / chord_tol, c.degree, len(k))
+        g_chord = _chord_gaps(s, A, B, evaluate(s, L).reshape(len(A), M - 1, 3))
+    if pair_tol is None:
+        worst = max(g_curve.max(), g_chord.max())
+        assert worst <= chord_tol, (worst / chord_tol, c.degree, len(k))
+    else:
+        assert g_chord.max() <= chord_tol, (g_chord.max() / chord_tol, c.degree, len(k))
+        worst = np.where(g_curve <= chord_tol, 0.0, g_curve + g_chord).max()
+        assert worst <= pair_tol, (worst / pair_tol, c.degree, len(k))
     return len(rows)
 
 
@@ -85,7 +99,11 @@ def _check_piece(s, c, rows, chord_tol, uv_chords=True):
 @pytest.mark.parametrize("part", ["nx9_face_recognition_ap214.stp", "nist_ftc_07_ap242.stp",
                                   "catia_v5_ventilator_swept_faces.stp",
                                   "inventor2015_cylinder_block_face6.stp"])
-def test_trim_polylines_within_chord_tol_on_real_parts(part, cross_knots):
+@pytest.mark.parametrize("pair", [None, 1.8])
+def test_trim_polylines_within_chord_tol_on_real_parts(part, cross_knots, pair):
+    """Both rules: each distance within chord_tol, and (tessellate's, ``pair``) the UV
+    chord's image within chord_tol and the curve within it or the sum of the two within
+    ``pair * chord_tol``."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         S = read_step(DATA / "parts" / part).surfaces
@@ -97,8 +115,10 @@ def test_trim_polylines_within_chord_tol_on_real_parts(part, cross_knots):
             continue
         affine = affine_map(s, s.size) is not None
         pieces = [c for loop in s.trim for c in loop.pieces]
-        for c, rows in zip(pieces, _kernel(s, pieces, chord_tol, not affine, cross_knots)):
-            checked += _check_piece(s, c, rows, chord_tol, not affine)
+        pair_tol = None if pair is None else pair * chord_tol
+        for c, rows in zip(pieces, _kernel(s, pieces, chord_tol, not affine, cross_knots,
+                                           pair_tol)):
+            checked += _check_piece(s, c, rows, chord_tol, not affine, pair_tol)
     assert checked > 100
 
 

@@ -32,7 +32,8 @@ def _numpy_route(s, chord_tol, affine):
     while True:
         n = trim_polylines(CP, W, K, deg, cp_off, k_off, SEED_SPANS, u0, v0, u1, v1,
                            s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v,
-                           chord_tol, not affine, True, buf, counts, True)
+                           chord_tol, chord_tol, 2 * chord_tol, not affine, True, buf,
+                           counts, True)
         if n >= 0:
             break
         buf = np.empty((4 * len(buf), 3))
