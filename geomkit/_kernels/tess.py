@@ -14,7 +14,8 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline, prun
 from .basis import basis_funs, find_span
-from .surface import surface_point, surface_point_d1_inline as surface_point_d1
+from .surface import (surface_point, surface_point_d1_inline as surface_point_d1,
+                      surface_point_inline)
 from .triangles import _dist3, point_triangle_distance
 
 CELL_CHUNK = 32
@@ -329,6 +330,33 @@ def _gap_pass(Pw, p, q, U, V, A, B, C, T, k, exact_above, Nu, Nv, left, right, t
             y = l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1]
             z = l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2]
             gap = _dist3(x, y, z, P[0], P[1], P[2])
+            if not gap <= exact_above:
+                over = True
+            worst = max(worst, gap)
+    return worst, over
+
+
+@jit
+def _gap_pass_uv(Pw, p, q, U, V, A, B, C, T, k, exact_above, Nu, Nv, left, right, tmp, P):
+    """:func:`_gap_pass` from 0 without a grid (the same samples, order and arithmetic):
+    every sample's surface point evaluated, by :func:`.surface.surface_point` compiled
+    into the loop (the grouped measure's; in :func:`_gap_pass`, whose uniform grids read
+    their points from the grid, the inlined code made them slower)."""
+    worst = 0.0
+    over = False
+    for i in range(k + 1):
+        for j in range(k + 1 - i):
+            if (i == 0 and j == 0) or i == k or j == k:
+                continue  # the corners are exact
+            l1 = i / k
+            l2 = j / k
+            l0 = 1.0 - l1 - l2
+            u = l0 * A[0] + l1 * B[0] + l2 * C[0]
+            v = l0 * A[1] + l1 * B[1] + l2 * C[1]
+            surface_point_inline(Pw, p, q, U, V, u, v, Nu, Nv, left, right, tmp, P)
+            gap = _dist3(l0 * T[0, 0] + l1 * T[1, 0] + l2 * T[2, 0],
+                         l0 * T[0, 1] + l1 * T[1, 1] + l2 * T[2, 1],
+                         l0 * T[0, 2] + l1 * T[1, 2] + l2 * T[2, 2], P[0], P[1], P[2])
             if not gap <= exact_above:
                 over = True
             worst = max(worst, gap)

@@ -13,11 +13,10 @@ from .numba_ext.policy import jit, jit_inline
 from .surface import surface_point, surface_point_d1_inline as surface_point_d1
 from .tess_clip import _clip_t
 from .tess_rings import _ring_holds
-from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch, _gap_pass,
-                   _run, foot_step)
+from .tess import (FOOT_HALVINGS, FOOT_STEPS, TRI_CHUNK, TRI_SERIAL, _dev_scratch,
+                   _gap_pass_uv, _run, foot_step)
 from .triangles import _dist3, point_triangle_distance
 
-_NO_GRID = np.full(6, -1, dtype=np.int64)  # _gap_pass evaluates every sample
 _FAN = np.int64(1)  # triangle kind of a fan piece (non-literal: one compile of _put)
 
 
@@ -389,10 +388,10 @@ def _group_tri_dev(Pw, p, q, U, V, TUV, TX, t, j0, j1, k, exact_above, Nu, Nv, l
     parametric gap, or where it exceeds ``exact_above`` the larger of the surface
     point's distance to the nearest triangle of the group and the triangle point's
     distance to the surface over the group's UV triangles (:func:`_foot_in_group`).
-    The gaps are taken first on their own (:func:`.tess._gap_pass`, ``gc[0] < 0``:
-    evaluated); the exact distances only when one exceeds ``exact_above``."""
-    worst, over = _gap_pass(Pw, p, q, U, V, TUV[t, 0], TUV[t, 1], TUV[t, 2], TX[t], k,
-                            exact_above, Nu, Nv, left, right, tmp, P, TX, _NO_GRID, 0.0)
+    The gaps are taken first on their own (:func:`.tess._gap_pass_uv`); the exact
+    distances only when one exceeds ``exact_above``."""
+    worst, over = _gap_pass_uv(Pw, p, q, U, V, TUV[t, 0], TUV[t, 1], TUV[t, 2], TX[t], k,
+                               exact_above, Nu, Nv, left, right, tmp, P)
     if not over:
         return worst
     worst = 0.0

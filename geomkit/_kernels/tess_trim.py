@@ -25,11 +25,7 @@ import numpy as np
 from .numba_ext.borrow import borrow_all
 from .numba_ext.policy import jit, jit_inline
 from .basis import basis_funs_inline, find_span_inline as find_span
-from .surface import surface_point as _surface_point
-
-surface_point = jit_inline(_surface_point.py_func)
-""":func:`.surface.surface_point` inlined into this module's loops (the same code: the
-same values; the calls' argument passing was ~15 % of the polylines' time)."""
+from .surface import surface_point_inline as surface_point
 
 TINY_STEP = 2.0 ** -50
 """A segment this short (a fraction of its knot span) is accepted as it is: the step
