@@ -45,7 +45,7 @@ Not below a 16th of the run, nor for a curve within ``1e-6 chord_tol`` of its ch
 (rounding, as at a pole, where the chord is as short)."""
 SPLIT_AIM = 0.8
 """Parts are sized for a predicted chord error of ``SPLIT_AIM`` times the allowed one
-(the tightest of the three tests, each error relative to its tolerance)."""
+(the segment's error in units of ``chord_tol``, :func:`_trim_loop`)."""
 
 
 @jit
