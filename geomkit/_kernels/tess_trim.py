@@ -9,9 +9,11 @@ is accepted when the points ``S(C(t))`` (the exact boundary curve) lie within
 also follows where it crosses cell edges) within ``chord_tol``, and the curve points
 within ``chord_tol`` too or the two largest distances adding up to at most ``pair_tol``
 (the mesh boundary, which lies within the second of the chord, then lies within their
-sum of the curve), at the quarter points of its part in each knot span and at
-the knots it crosses (and, on a curved piece of few spans, at every point of the knot
-span's 1/16 grid inside a part longer than a quarter span); each step is the rest of
+sum of the curve; a straight piece inside the domain, whose UV chords map onto the
+curve: the curve points within ``curve_tol``), at the quarter points of its part in
+each knot span and at the knots it crosses (and, on a curved piece of few spans, at
+every point of the knot span's 1/16 grid inside a part longer than a quarter span;
+a segment over many spans is first tried at its own quarter points alone); each step is the rest of
 the run in equal parts of at most the current step estimate, which a failing part
 shrinks by its measured error (chord errors fall with the square of the step) and a
 passing one lets grow.  Curve points are clipped to the domain box (trim curves may
@@ -43,6 +45,10 @@ whatever the tolerance: a loop small against the tolerance keeps at least three
 edges (a circle of radius ``tol`` became two chords of its diameter, a loop of no area).
 Not below a 16th of the run, nor for a curve within ``1e-6 chord_tol`` of its chord
 (rounding, as at a pole, where the chord is as short)."""
+QUICK_SPANS = 4
+"""A segment over at least this many knot spans is first tested at its own quarter
+points only (:func:`_quick_gap`): a long first try of a run fails on them at a few
+evaluations instead of four a span."""
 SPLIT_AIM = 0.8
 """Parts are sized for a predicted chord error of ``SPLIT_AIM`` times the allowed one
 (the segment's error in units of ``chord_tol``, :func:`_trim_loop`)."""
@@ -197,6 +203,42 @@ def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, l
 
 
 @jit_inline
+def _spans_over(Uc, pc, ta, tb, most):
+    """How many non-empty knot spans the segment ``[ta, tb]`` overlaps, counted up to
+    ``most``."""
+    span = find_span(Uc.shape[0] - pc - 2, pc, ta, Uc)
+    k = 1
+    while k < most and Uc[span + 1] < tb:
+        span += 1
+        if Uc[span + 1] > Uc[span]:
+            k += 1
+    return k
+
+
+@jit
+def _quick_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, uv_chords, lo0, lo1, hi0, hi1,
+               Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X):
+    """:func:`_segment_gap` at the segment's own quarter points only: ``(curve,
+    chord)``, each at most the full test's would be with these points added."""
+    d0 = Pb[0] - Pa[0]
+    d1 = Pb[1] - Pa[1]
+    d2 = Pb[2] - Pa[2]
+    ll = d0 * d0 + d1 * d1 + d2 * d2
+    worst = 0.0
+    worst_chord = 0.0
+    for e in range(1, 4):
+        f = 0.25 * e
+        su, sv = _curve_at(Pc, pc, Uc, ta + (tb - ta) * f, lo0, lo1, hi0, hi1, Nc, lc, rc)
+        surface_point(Pw, p, q, U, V, su, sv, Nu, Nv, left, right, tmp, X)
+        worst = max(worst, _chord_gap(X, Pa, d0, d1, d2, ll))
+        if uv_chords:
+            surface_point(Pw, p, q, U, V, ua + (ub - ua) * f, va + (vb - va) * f, Nu, Nv,
+                          left, right, tmp, X)
+            worst_chord = max(worst_chord, _chord_gap(X, Pa, d0, d1, d2, ll))
+    return worst, worst_chord
+
+
+@jit_inline
 def _bent(gc, Pa, Pb):
     """Whether a segment whose curve lies up to ``gc`` from its 3-D chord ``Pa``--``Pb``
     turns too far to stand for it: ``gc > MAX_BEND |Pb - Pa|`` (a chord of length 0
@@ -237,8 +279,8 @@ def trim_polylines(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1
     an affine map of its parameters, where they lie on the 3-D chord) within
     ``chord_tol``, and the curve points within ``chord_tol`` too or the two largest
     distances adding up to at most ``pair_tol`` (``curve_tol = chord_tol``: each within
-    ``chord_tol``; a straight piece inside the domain is its own UV chord: its points
-    count as both), at its quarter points and, for a curved piece of at most
+    ``chord_tol``; a straight piece inside the domain is its own UV chord's image: its
+    curve points within ``curve_tol``), at its quarter points and, for a curved piece of at most
     ``dense_spans``
     spans, when the segment is longer than a quarter of its knot span, at every point
     of the span's 1/16 grid inside it: sample spacing at most 1/16 of the span on every
@@ -377,19 +419,33 @@ def _trim_loop(CP, W, K, deg, cp_off, k_off, dense_spans, lo0, lo1, hi0, hi1, Pw
                 else:
                     ub, vb = _curve_at(Pc, pc, Uc, tb, lo0, lo1, hi0, hi1, Nc, lc, rc)
                     surface_point(Pw, p, q, U, V, ub, vb, Nu, Nv, left, right, tmp, Pb)
-                gc, gu = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense,
-                                      chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
-                                      Nc, lc, rc, Nu, Nv, left, right, tmp, X, grid_pts,
-                                      grid_stamp, stamp)
-                # the error in units of chord_tol: the image within it, the curve within
-                # curve_tol and within it or the pair within pair_tol (a piece that is
-                # its own UV chord: its curve points are the chord's image)
-                if own_chord:
-                    gu = gc
-                worst = max(max(gc * to_curve, gu), min(gc, (gc + gu) * to_pair))
-                bend = (gc > 1e-6 * chord_tol and 16.0 * (tb - ta) > B - A
-                        and _bent(gc, Pa, Pb))
-                if (worst > chord_tol or bend) and tb - ta > tiny:
+                # a segment over many spans is tried at its quarter points first
+                quick = _spans_over(Uc, pc, ta, tb, QUICK_SPANS) >= QUICK_SPANS
+                while True:
+                    if quick:
+                        gc, gu = _quick_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb,
+                                            chords, lo0, lo1, hi0, hi1, Pw, p, q, U, V,
+                                            Nc, lc, rc, Nu, Nv, left, right, tmp, X)
+                    else:
+                        gc, gu = _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb,
+                                              dense, chords, lo0, lo1, hi0, hi1, Pw, p, q,
+                                              U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X,
+                                              grid_pts, grid_stamp, stamp)
+                    # the error in units of chord_tol: the image within it, the curve
+                    # within curve_tol and within it or the pair within pair_tol; a piece
+                    # that is its own UV chord (the mesh boundary's points all on the
+                    # curve): the curve within curve_tol
+                    if own_chord:
+                        worst = gc * to_curve
+                    else:
+                        worst = max(max(gc * to_curve, gu), min(gc, (gc + gu) * to_pair))
+                    bend = (gc > 1e-6 * chord_tol and 16.0 * (tb - ta) > B - A
+                            and _bent(gc, Pa, Pb))
+                    fail = (worst > chord_tol or bend) and tb - ta > tiny
+                    if fail or not quick:
+                        break
+                    quick = False
+                if fail:
                     r = np.sqrt(SPLIT_AIM * chord_tol / worst) if worst > chord_tol else 1.0
                     if bend:
                         r = min(r, 0.5)

@@ -65,8 +65,9 @@ def _chord_gaps(s, A, B, X):
 def _check_piece(s, c, rows, chord_tol, uv_chords=True, pair_tol=None):
     """Each segment's curve within ``chord_tol`` of its chord and (``uv_chords``) its UV
     chord's image too, or, with ``pair_tol``, the image within ``chord_tol`` and the
-    curve within it too or the two distances adding up to at most ``pair_tol`` (48
-    samples a segment)."""
+    curve within it too or the two distances adding up to at most ``pair_tol`` (a
+    straight piece inside the domain, whose UV chords map onto the curve: the curve
+    within ``pair_tol``) (48 samples a segment)."""
     (u0, u1), (v0, v1) = s.domain
     t, uv = rows[:, 0], rows[:, 1:]
     k = c.knots[c.degree: len(c.knots) - c.degree]
@@ -85,9 +86,13 @@ def _check_piece(s, c, rows, chord_tol, uv_chords=True, pair_tol=None):
     if uv_chords:
         L = (uv[:-1, None] * (1 - f)[:, None] + uv[1:, None] * f[:, None]).reshape(-1, 2)
         g_chord = _chord_gaps(s, A, B, evaluate(s, L).reshape(len(A), M - 1, 3))
+    own = (uv_chords and c.is_polyline
+           and np.all((c.control_points >= [u0, v0]) & (c.control_points <= [u1, v1])))
     if pair_tol is None:
         worst = max(g_curve.max(), g_chord.max())
         assert worst <= chord_tol, (worst / chord_tol, c.degree, len(k))
+    elif own:  # a straight piece inside the domain is its own UV chord's image
+        assert g_curve.max() <= pair_tol, (g_curve.max() / pair_tol, c.degree, len(k))
     else:
         assert g_chord.max() <= chord_tol, (g_chord.max() / chord_tol, c.degree, len(k))
         worst = np.where(g_curve <= chord_tol, 0.0, g_curve + g_chord).max()
