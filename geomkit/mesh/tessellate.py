@@ -76,7 +76,7 @@ from geomkit.mesh.cells import (CELL_TARGET, EDGE_T, EXACT_ABOVE, adaptive_cells
                                 clip_grid_cells, closed_directions, deviation)
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
-from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_grid
+from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_corners, weld_grid
 from geomkit._kernels.tess_grid import GRID_OK, whole_grid
 from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
@@ -173,13 +173,14 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
         cells, diag = plan
         tri_uv, _ = qt._grid_triangles(cells, np.zeros(len(cells)), diag)
         cut, tri_uv, _, cuv, cown = _clip_grid(trim, cells, tri_uv, None)
-        tri_uv, dev, worst = _grouped(s, tri_uv, cuv, cown, k, tol)
+        tri_uv, dev, worst, corners = _grouped(s, tri_uv, cuv, cown, k, tol, bool(len(cut)))
         if tri_uv is not None:
             break
         # errors fall with the square of the cell size: aim the next grid below target
         target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
     else:
         grouped = False
+        corners = None
         grid = qt.uniform_grid(s, ub, vb, m, k, tol, CELL_TARGET * tol, EXACT_ABOVE * tol,
                                GRID_CELLS, closed=closed)
         if grid is None:
@@ -194,7 +195,7 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
             dev = np.concatenate([dev, cdev])
     if not len(tri_uv):
         return None
-    V, F, UV, good = weld(s, tri_uv, size, near_uv=bool(len(cut)))
+    V, F, UV, good = weld(s, tri_uv, size, near_uv=bool(len(cut)), corners=corners)
     stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
              "collapsed_dropped": int(np.count_nonzero(~good)),
              "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
@@ -221,11 +222,13 @@ def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):
     return cut, tri_uv, dev, cuv, cown
 
 
-def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
+def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float, near_uv: bool):
     """The inside cells' triangle pairs ``tri_uv`` and the cut cells' clipped triangles
     ``cuv`` (of piece ``cown``) together, measured by :func:`_grouped_deviation`:
-    ``(tri_uv, dev, worst)``, or ``(None, None, worst)`` when a triangle is above
-    ``tol`` (``worst``: the largest deviation, NaN if one is)."""
+    ``(tri_uv, dev, worst, corners)``, or ``(None, None, worst, None)`` when a triangle
+    is above ``tol`` (``worst``: the largest deviation, NaN if one is); ``corners``:
+    their :func:`geomkit.mesh.weld.weld_corners` (``near_uv``), whose points the
+    measure takes and the weld then reuses."""
     n = len(tri_uv) // 2
     group = np.arange(n).repeat(2)
     if cuv is not None and len(cuv):
@@ -236,21 +239,25 @@ def _grouped(s: Surface, tri_uv, cuv, cown, k: int, tol: float):
         np.add.accumulate(cown[1:] != cown[:-1], dtype=np.int64, out=cg[1:])
         tri_uv = np.concatenate([tri_uv, cuv])
         group = np.concatenate([group, n + cg])
-    dev = _grouped_deviation(s, tri_uv, group, k, tol)
+    corners = weld_corners(s, tri_uv, near_uv) if len(tri_uv) else None
+    dev = _grouped_deviation(s, tri_uv, group, k, tol,
+                             None if corners is None else corners[3][corners[1]])
     if not (dev <= tol).all():
-        return None, None, float(np.max(dev)) if len(dev) else np.nan
-    return tri_uv, dev, float(np.max(dev)) if len(dev) else 0.0
+        return None, None, float(np.max(dev)) if len(dev) else np.nan, None
+    return tri_uv, dev, float(np.max(dev)) if len(dev) else 0.0, corners
 
 
-def _grouped_deviation(s: Surface, tri_uv, group, k: int, tol: float):
+def _grouped_deviation(s: Surface, tri_uv, group, k: int, tol: float, xyz=None):
     """(n,) measured deviation of UV triangles in consecutive groups ``group`` (n,),
     each group one cell's part of the face
-    (:func:`geomkit._kernels.tess_lattice.group_deviation`)."""
+    (:func:`geomkit._kernels.tess_lattice.group_deviation`); ``xyz`` (3n, 3): the
+    corners' surface points, if made."""
     out = np.empty(len(tri_uv))
     if not len(tri_uv):
         return out
     sub = np.ascontiguousarray(tri_uv)
-    xyz = points(s, sub.reshape(-1, 2)).reshape(-1, 3, 3)
+    xyz = points(s, sub.reshape(-1, 2)) if xyz is None else xyz
+    xyz = xyz.reshape(-1, 3, 3)
     starts = np.searchsorted(group, np.arange(int(group[-1]) + 2)).astype(np.int64)
     group_deviation(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, sub, xyz,
                     np.ascontiguousarray(group, dtype=np.int64), starts, k,

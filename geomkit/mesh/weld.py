@@ -39,20 +39,32 @@ def points(s: Surface, uv: np.ndarray) -> np.ndarray:
 
 
 
-def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True):
+def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True, corners=None):
     """Vertices, faces and per-vertex UV; merges equal UVs (and, with ``near_uv``,
     UVs within rounding of each other: trim crossings computed in two cells), then
     coincident boundary vertices in 3-D (poles, seams); drops the triangles that
     collapse.  The sort, the pairs and the merge are compiled
     (:func:`geomkit._kernels.tess_weld.unique_uv`, :func:`~geomkit._kernels.tess_weld.weld_merge`);
-    the surface points come between them."""
+    the surface points come between them.  ``corners``: :func:`weld_corners` of ``tri_uv``
+    (``near_uv``), if made."""
+    (u0, u1), (v0, v1) = s.domain
+    uniq, inv, pairs, P = corners if corners is not None else weld_corners(s, tri_uv, near_uv)
+    dom = max(u1 - u0, v1 - v0)
+    return weld_merge(P, uniq, inv, pairs, u0, u1, v0, v1, 1e-12 * dom, WELD_REL * size,
+                      _WELD_DIRECTION)
+
+
+def weld_corners(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
+    """``(uniq, inv, pairs, P)``: the distinct UV corners of the triangles ``tri_uv``
+    (n, 3, 2) sorted by u then v, each corner's index among them, (``near_uv``) the
+    pairs of distinct corners within rounding of each other, and their surface points
+    (``P[inv]`` is ``S`` at every corner, bit for bit)."""
     (u0, u1), (v0, v1) = s.domain
     # crossing points computed in two neighbouring cells may differ by rounding
     dom = max(u1 - u0, v1 - v0)
     uniq, inv, pairs = unique_uv(np.ascontiguousarray(tri_uv.reshape(-1, 2), dtype=np.float64),
                                  near_uv, 1e-13 * dom, _NEAR_DIRECTION)
-    return weld_merge(points(s, uniq), uniq, inv, pairs, u0, u1, v0, v1, 1e-12 * dom,
-                      WELD_REL * size, _WELD_DIRECTION)
+    return uniq, inv, pairs, points(s, uniq)
 
 
 _NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes: UV pairs
