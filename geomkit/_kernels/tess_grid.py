@@ -247,7 +247,7 @@ def grid_vertices(Pw, p, q, U, V, u, v, diag, u0, u1, v0, v1, eps, r):
             x = P[bnd[a], 0]
             y = P[bnd[a], 1]
             z = P[bnd[a], 2]
-            proj[a] = x * 0.35 + y * 0.48 + z * 0.8  # weld._WELD_DIRECTION
+            proj[a] = x * 0.35 + y * 0.48 + z * 0.8  # weld.WELD_DIRECTION
             big = max(big, abs(x), abs(y), abs(z))
         proj.sort()
         lim = 2.0 * r + 1e-14 * big

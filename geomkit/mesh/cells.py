@@ -171,6 +171,21 @@ LOOP_AREA_REL = 1e-12
 before the compiled clip (where trim pieces overlap at their joins)."""
 
 
+def region_rings(trim) -> tuple:
+    """``(P, starts, tiny)``: the trimmed region's rings (:meth:`TrimPolylines.rings
+    <geomkit.mesh.trim_polylines.TrimPolylines.rings>`) packed, ring ``i``
+    ``P[starts[i]:starts[i+1]]``, and the area below which a loop of theirs is cut off
+    (:data:`LOOP_AREA_REL` of the domain's): the arguments of
+    :func:`geomkit._kernels.tess_rings.prepared_rings`."""
+    rings = trim.rings()
+    starts = np.zeros(len(rings) + 1, dtype=np.int64)
+    np.add.accumulate(np.array([len(r) for r in rings], dtype=np.int64), out=starts[1:])
+    (u0, u1), (v0, v1) = trim.surface.domain
+    return (np.ascontiguousarray(np.concatenate(rings) if len(rings) > 1 else rings[0],
+                                 dtype=np.float64), starts,
+            LOOP_AREA_REL * (u1 - u0) * (v1 - v0))
+
+
 def clip_grid_cells(c: np.ndarray, trim, inside_area: float):
     """The trimmed region in the axis-aligned cells ``c`` (n, 4) ``u0, u1, v0, v1``
     triangulated by the constrained Delaunay rule: UV triangles (t, 3, 2)
@@ -181,13 +196,7 @@ def clip_grid_cells(c: np.ndarray, trim, inside_area: float):
     (:func:`~geomkit._kernels.tess_rings.prepared_rings`).  Kept when the pieces, with
     the cells wholly inside (``inside_area``), add up to the even-odd area of the
     rings; else every cell goes through GEOS."""
-    rings = trim.rings()
-    starts = np.zeros(len(rings) + 1, dtype=np.int64)
-    np.add.accumulate(np.array([len(r) for r in rings], dtype=np.int64), out=starts[1:])
-    (u0, u1), (v0, v1) = trim.surface.domain
-    P, starts, dirs, region_area = prepared_rings(np.ascontiguousarray(
-        np.concatenate(rings) if len(rings) > 1 else rings[0], dtype=np.float64), starts,
-        LOOP_AREA_REL * (u1 - u0) * (v1 - v0))
+    P, starts, dirs, region_area = prepared_rings(*region_rings(trim))
     tri, own, status, area = clip_cells(np.ascontiguousarray(c, dtype=np.float64), P,
                                         starts, dirs)
     cut_area = float(np.add.reduce((c[:, 1] - c[:, 0]) * (c[:, 3] - c[:, 2])))

@@ -46,7 +46,10 @@ Method (Paper 1 step 1, then beyond it):
    estimates (:func:`geomkit.mesh.quadtree.planned_grid`): cells inside the region keep
    two triangles, cells the trim crosses are clipped as in step 3, and only the kept
    triangles are measured (feet inside the face); a failing grid is made again for a
-   target scaled by the excess.  A grid that is refused or has
+   target scaled by the excess.  The first such grid of a face of at most
+   :data:`FIRST_CELLS` cells is planned, clipped, measured and welded in one compiled
+   call (:func:`geomkit._kernels.tess_face.trimmed_first`, the same mesh as the steps
+   make).  A grid that is refused or has
    a triangle above ``tol`` leaves the surface to the adaptive cells of steps 1-4.
 7. **Clean-up.**  Vertices on the domain boundary that coincide in 3-D (poles,
    closed seams) are merged and the triangles they collapse dropped, so a sphere is
@@ -73,10 +76,12 @@ import numpy as np
 
 from geomkit.mesh import quadtree as qt
 from geomkit.mesh.cells import (CELL_TARGET, EDGE_T, EXACT_ABOVE, adaptive_cells, breakpoints,
-                                clip_grid_cells, closed_directions, deviation)
+                                clip_grid_cells, closed_directions, deviation, region_rings)
 from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
-from geomkit.mesh.weld import boundary_pairs, merge, points, weld, weld_corners, weld_grid
+from geomkit.mesh.weld import (NEAR_DIRECTION, WELD_DIRECTION, boundary_pairs, merge, points,
+                               weld, weld_corners, weld_grid)
+from geomkit._kernels.tess_face import FACE_EMPTY, FACE_FAILED, FACE_OK, FACE_REFUSED, trimmed_first
 from geomkit._kernels.tess_grid import GRID_OK, whole_grid
 from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
@@ -104,6 +109,10 @@ its chords)."""
 PLANNED_TRIES = 3
 """Grids of the estimates tried for a trimmed surface before the measured grid
 (:func:`_trimmed_grid`)."""
+FIRST_CELLS = 256
+"""A trimmed face's first grid of the estimates is clipped, measured and welded in one
+call (:func:`geomkit._kernels.tess_face.trimmed_first`, in this thread) up to this many
+cells; a larger one by the steps of :func:`_trimmed_grid` (its measure threaded)."""
 GRID_CELLS = 4096
 """Untrimmed surfaces whose first estimate asks for at most this many cells are tried
 as one uniform grid first (:func:`geomkit.mesh.quadtree.uniform_grid`): small meshes then
@@ -166,7 +175,23 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     target = CELL_TARGET * tol
     grouped = True
     closed = closed_directions(s, size)
-    for _ in range(PLANNED_TRIES):
+    # the first grid in one call (the same mesh as the steps below make of it)
+    first = _trimmed_first(s, trim, ub, vb, m, target, k, tol, size, closed)
+    status, worst = first[0], first[-1]
+    if status == FACE_OK:
+        _, V, F, UV, good, dev, tri_uv, n_cells, n_cut, _ = first
+        stats = {"cells": int(n_cells), "cut_cells": int(n_cut), "rounds": 1,
+                 "collapsed_dropped": int(np.count_nonzero(~good)),
+                 "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
+                 "grouped": True, "seconds": time.perf_counter() - t0}
+        return V, F[good], UV, dev[good], tri_uv[good], stats
+    if status in (FACE_REFUSED, FACE_EMPTY):
+        return None
+    tries = PLANNED_TRIES
+    if status == FACE_FAILED:  # the steps below go on from the second grid
+        target *= max(0.25, target / worst) if np.isfinite(worst) else 0.25
+        tries -= 1
+    for _ in range(tries):
         plan = qt.planned_grid(s, ub, vb, m, target, GRID_CELLS, closed)
         if plan is None:
             return None
@@ -201,6 +226,22 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
              "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
              "grouped": grouped, "seconds": time.perf_counter() - t0}
     return V, F[good], UV, dev[good], tri_uv[good], stats
+
+
+def _trimmed_first(s: Surface, trim: TrimPolylines, ub, vb, m: int, target: float, k: int,
+                   tol: float, size: float, closed):
+    """:func:`geomkit._kernels.tess_face.trimmed_first` of the face: its first grid of
+    the estimates clipped, measured and welded in one call, as the steps of
+    :func:`_trimmed_grid` make it."""
+    (u0, u1), (v0, v1) = s.domain
+    dom = max(u1 - u0, v1 - v0)
+    CP, cstarts, n_cut = trim.classify_rings()
+    return trimmed_first(s.homogeneous, s.degree_u, s.degree_v, s.knots_u, s.knots_v, ub,
+                         vb, m, float(target), GRID_CELLS, FIRST_CELLS,
+                         qt.fold_lines(s, None, closed), CP, cstarts, n_cut,
+                         *region_rings(trim), k, float(tol), EXACT_ABOVE * tol,
+                         1e-13 * dom, NEAR_DIRECTION, u0, u1, v0, v1, 1e-12 * dom,
+                         WELD_REL * size, WELD_DIRECTION)
 
 
 def _clip_grid(trim: TrimPolylines, cells, tri_uv, dev):

@@ -150,11 +150,10 @@ class TrimPolylines:
         by the trim."""
         return self.classify_uv(lat.cells_uv(cells))
 
-    def classify_uv(self, uv: np.ndarray) -> np.ndarray:
-        """:meth:`classify` for cells given by their parameters (N, 4) ``u0, u1, v0,
-        v1``: cut when a segment of a loop meets the closed cell, else in or out by
-        its centre and the even-odd rule over the region's rings, in one compiled call
-        (:func:`geomkit._kernels.tess_lattice.classify_cells`)."""
+    def classify_rings(self) -> tuple:
+        """``(P, starts, n_cut)``: the rings :meth:`classify_uv` tests, packed (ring
+        ``i``: ``P[starts[i]:starts[i+1]]``; the loops first, ``n_cut`` of them, then
+        the domain rectangle when :meth:`rings` has it)."""
         if self._packed_rings is None:
             rings = self.rings()
             # the loops' segments first (the cut test), then the domain rectangle's
@@ -165,7 +164,14 @@ class TrimPolylines:
             np.add.accumulate(np.array([len(r) for r in rings], dtype=np.int64),
                               out=starts[1:])
             self._packed_rings = (np.ascontiguousarray(np.concatenate(rings)), starts, n_cut)
-        P, starts, n_cut = self._packed_rings
+        return self._packed_rings
+
+    def classify_uv(self, uv: np.ndarray) -> np.ndarray:
+        """:meth:`classify` for cells given by their parameters (N, 4) ``u0, u1, v0,
+        v1``: cut when a segment of a loop meets the closed cell, else in or out by
+        its centre and the even-odd rule over the region's rings, in one compiled call
+        (:func:`geomkit._kernels.tess_lattice.classify_cells`)."""
+        P, starts, n_cut = self.classify_rings()
         state = np.empty(uv.shape[0], dtype=np.int8)
         if uv.shape[0]:
             classify_cells(P, starts, n_cut, np.ascontiguousarray(uv, dtype=np.float64),

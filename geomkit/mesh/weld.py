@@ -51,7 +51,7 @@ def weld(s: Surface, tri_uv: np.ndarray, size: float, near_uv: bool = True, corn
     uniq, inv, pairs, P = corners if corners is not None else weld_corners(s, tri_uv, near_uv)
     dom = max(u1 - u0, v1 - v0)
     return weld_merge(P, uniq, inv, pairs, u0, u1, v0, v1, 1e-12 * dom, WELD_REL * size,
-                      _WELD_DIRECTION)
+                      WELD_DIRECTION)
 
 
 def weld_corners(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
@@ -63,11 +63,11 @@ def weld_corners(s: Surface, tri_uv: np.ndarray, near_uv: bool = True):
     # crossing points computed in two neighbouring cells may differ by rounding
     dom = max(u1 - u0, v1 - v0)
     uniq, inv, pairs = unique_uv(np.ascontiguousarray(tri_uv.reshape(-1, 2), dtype=np.float64),
-                                 near_uv, 1e-13 * dom, _NEAR_DIRECTION)
+                                 near_uv, 1e-13 * dom, NEAR_DIRECTION)
     return uniq, inv, pairs, points(s, uniq)
 
 
-_NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes: UV pairs
+NEAR_DIRECTION = np.array([0.6, 0.8])  # |w| = 1, oblique to the UV axes: UV pairs
 
 
 def merge(P, uniq, inv, pairs):
@@ -108,7 +108,7 @@ def components(n: int, pairs: np.ndarray) -> np.ndarray:
             root = nxt
 
 
-_WELD_DIRECTION = np.array([0.35, 0.48, 0.8])  # |w| < 1, oblique to the axes and planes
+WELD_DIRECTION = np.array([0.35, 0.48, 0.8])  # |w| < 1, oblique to the axes and planes
 
 
 def boundary_pairs(P, bnd, size):
@@ -122,7 +122,7 @@ def boundary_pairs(P, bnd, size):
     # within r projects within r plus the projections' rounding (a dot product of 3
     # terms errs by at most ~5 ulp of max |Q| each, so 1e-14 max |Q| and a factor 2 on
     # r are ample) (:func:`geomkit._kernels.tess_weld.close_pairs`)
-    return bnd[close_pairs(Q, _WELD_DIRECTION, r,
+    return bnd[close_pairs(Q, WELD_DIRECTION, r,
                            2.0 * r + 1e-14 * np.maximum.reduce(np.abs(Q), axis=None))]
 
 

@@ -131,7 +131,7 @@ def test_near_uv_pairs_match_brute_force():
             i = rng.choice(n, size=k, replace=False)
             j = rng.choice(n, size=k, replace=False)
             Q[j] = Q[i] + rng.normal(size=(k, 2)) * r * rng.choice([0.0, 0.3, 3.0], size=(k, 1))
-        uniq, inv, pairs = unique_uv(Q, True, r, W._NEAR_DIRECTION)
+        uniq, inv, pairs = unique_uv(Q, True, r, W.NEAR_DIRECTION)
         assert np.array_equal(uniq[inv], Q)
         # numpy's unique of u + iv: the same rows in the same order
         assert np.array_equal(uniq.copy().view(np.complex128).ravel(),

@@ -257,3 +257,44 @@ def test_whole_grid_kernel_matches_the_grid_weld_and_closed_steps():
             kept += 1
             closed += bool(got[10] or got[11])
     assert kept > 30 and closed > 3 and went_on > 3
+
+
+def test_trimmed_first_kernel_makes_the_mesh_of_the_steps(monkeypatch):
+    """A trimmed face's first grid in one call
+    (:func:`geomkit._kernels.tess_face.trimmed_first`) against the steps of
+    ``tessellate._trimmed_grid`` (``FIRST_CELLS = 0``): the same mesh, bit for bit
+    (vertices, faces, UVs, deviations, stats), on real parts whose faces take each
+    way out of the kernel: a mesh, a failed measure (the steps go on from the second
+    grid: NIST CTC-01) and a cut cell left to GEOS (CTC-05)."""
+    from geomkit import tessellate
+    from geomkit._kernels.tess_face import FACE_FAILED, FACE_LEFT, FACE_OK
+
+    T = importlib.import_module("geomkit.mesh.tessellate")
+    first = T._trimmed_first
+    seen = set()
+
+    def counted(*args):
+        out = first(*args)
+        seen.add(int(out[0]))
+        return out
+
+    monkeypatch.setattr(T, "_trimmed_first", counted)
+    most = T.FIRST_CELLS
+    for part in ("inventor2015_cylinder_block_face6.stp", "nist_ctc_01_ap203.stp",
+                 "nist_ctc_05_ap203.stp"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            S = read_step(DATA / "parts" / part).surfaces
+        B = np.array([s.bounds for s in S])
+        tol = 1e-3 * float(np.linalg.norm(B[:, 1].max(axis=0) - B[:, 0].min(axis=0)))
+        a = tessellate(S, tol)
+        monkeypatch.setattr(T, "FIRST_CELLS", 0)  # every first grid by the steps
+        b = tessellate(S, tol)
+        monkeypatch.setattr(T, "FIRST_CELLS", most)
+        for x, y in ((a.vertices, b.vertices), (a.faces, b.faces), (a.uv, b.uv),
+                     (a.face_deviation, b.face_deviation), (a.face_surface, b.face_surface)):
+            assert np.array_equal(x, y)
+        for sa, sb in zip(a.stats["surfaces"], b.stats["surfaces"]):
+            assert {k: v for k, v in sa.items() if k != "seconds"} == \
+                {k: v for k, v in sb.items() if k != "seconds"}
+    assert {FACE_OK, FACE_FAILED, FACE_LEFT} <= seen
