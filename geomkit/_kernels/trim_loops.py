@@ -47,12 +47,20 @@ def _rational_point(Q, W, r0, n, p, U, u0, nu, t, N, left, right, out, k):
 
 
 @jit
+def _per_span(per, spans):
+    """Parameters a span of a curved piece of ``spans`` spans gets: ``per``, fewer on a
+    piece of more than two spans (at least ``2 per`` over the piece and 2 a span, at
+    most ``per``): a quintic of a hundred spans is sampled at 2 a span, not 24."""
+    return min(per, max(2, (2 * per + spans - 1) // max(spans, 1)))
+
+
+@jit
 def loop_points(Q, W, off, deg, U, uoff, per):
     """Points along a trim loop's pieces in one call (2-D control points ``Q`` and
     weights ``W`` of piece i in rows ``off[i]:off[i+1]``, its knots
     ``U[uoff[i]:uoff[i+1]]``, its degree ``deg[i]``): a polyline piece's own points
     (degree 1, weights 1), a curved piece at ``per`` evenly spaced parameters a
-    non-empty span and at its end (what :func:`geomkit.nurbs.trims.loop_samples`
+    non-empty span (:func:`_per_span`: fewer on a piece of many spans) and at its end (what :func:`geomkit.nurbs.trims.loop_samples`
     returns)."""
     m = deg.shape[0]
     total = 0
@@ -67,7 +75,7 @@ def loop_points(Q, W, off, deg, U, uoff, per):
         for j in range(uoff[i] + p, uoff[i + 1] - p - 1):
             if U[j + 1] > U[j]:
                 spans += 1
-        total += spans * per + 1
+        total += spans * _per_span(per, spans) + 1
     out = np.empty((total, 2))
     N = np.empty(pmax + 1)
     left = np.empty(pmax + 1)
@@ -93,12 +101,17 @@ def _fill_points(Q, W, off, deg, U, uoff, per, out, N, left, right):
                 out[k, 1] = Q[r, 1]
                 k += 1
             continue
+        spans = 0
+        for j in range(u0 + p, u0 + nu - p - 1):
+            if U[j + 1] > U[j]:
+                spans += 1
+        pp = _per_span(per, spans)
         for j in range(u0 + p, u0 + nu - p - 1):
             a, b = U[j], U[j + 1]
             if not b > a:
                 continue
-            for q in range(per):
-                _rational_point(Q, W, r0, n, p, U, u0, nu, a + (b - a) * (q / per), N,
+            for q in range(pp):
+                _rational_point(Q, W, r0, n, p, U, u0, nu, a + (b - a) * (q / pp), N,
                                 left, right, out, k)
                 k += 1
         _rational_point(Q, W, r0, n, p, U, u0, nu, U[u0 + nu - 1], N, left, right, out, k)

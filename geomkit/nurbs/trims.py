@@ -323,8 +323,9 @@ def starts(counts: np.ndarray) -> np.ndarray:
 
 def loop_samples(loop: TrimLoop, per_segment: int = 24) -> np.ndarray:
     """Points along a loop (for validation only: area, domain containment): a
-    polyline piece's points, a curved piece at ``per_segment`` parameters a span and
-    its end; every piece in one compiled call."""
+    polyline piece's points, a curved piece at ``per_segment`` parameters a span
+    (fewer on a piece of many spans: at least ``2 per_segment`` over it and 2 a span)
+    and its end; every piece in one compiled call."""
     return loop_points(*loop_pack(loop), int(per_segment))
 
 

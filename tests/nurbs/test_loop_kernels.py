@@ -26,7 +26,8 @@ def _reference(loop, per):
             continue
         a, b = c.knots[c.degree:-c.degree - 1], c.knots[c.degree + 1:-c.degree]
         a, b = a[b > a], b[b > a]
-        r = np.arange(per) / per
+        k = min(per, max(2, -(-2 * per // len(a))))  # fewer a span on many spans
+        r = np.arange(k) / k
         t = np.concatenate([(a[:, None] + (b - a)[:, None] * r).ravel(), c.knots[-1:]])
         res = np.empty((t.shape[0], 1, 2))
         curve_points(c.homogeneous, c.degree, c.knots, t, 0, res)
