@@ -17,7 +17,7 @@ import numpy as np
 from .numba_ext.policy import jit
 from .surface import surface_points_range
 from .tess_clip import CLIP_DONE, clip_cells
-from .tess_grid import grid_plan, grid_triangles
+from .tess_grid import GRID_OK, _smaller, diagonals, grid_triangles, plan_cells
 from .tess_lattice import _group_deviation_range, classify_cells
 from .tess_rings import prepared_rings
 from .tess_weld import unique_uv, weld_merge
@@ -41,8 +41,9 @@ def trimmed_first(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold,
                   u0, u1, v0, v1, weld_eps, weld_r, weld_w):
     """The first try of :func:`geomkit.mesh.tessellate._trimmed_grid` for the surface
     ``Pw, p, q, U, V`` (domain ``u0, u1, v0, v1``): the grid of
-    :func:`.tess_grid.grid_plan` (``ub, vb, m, target, max_cells, fold``), its
-    triangles, the cells classified (:func:`.tess_lattice.classify_cells` on the rings
+    :func:`.tess_grid.grid_plan` (``ub, vb, m, target, max_cells, fold``; the
+    diagonals' estimates taken for the cells inside the region only: the others are
+    clipped or dropped), its triangles, the cells classified (:func:`.tess_lattice.classify_cells` on the rings
     ``CP[cstarts[i]:cstarts[i+1]]``, the first ``n_cut`` the trim loops), the cut ones
     clipped (:func:`.tess_clip.clip_cells` on the region's rings ``RP``, ``rstarts``
     made ready by :func:`.tess_rings.prepared_rings` with ``tiny``), the inside cells'
@@ -62,15 +63,38 @@ def trimmed_first(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold,
     eb = np.empty(0, dtype=np.bool_)
     e1 = np.empty(0)
     et = np.empty((0, 3, 2))
-    ok, _, _, cells, diag = grid_plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, fold)
+    status, _, _, cells, E, _, _ = plan_cells(Pw, p, q, U, V, ub, vb, m, target, max_cells,
+                                              max_cells, fold)
     nc = cells.shape[0]
-    if not ok:
+    if status != GRID_OK:
         return FACE_REFUSED, e3, eF, e2, eb, e1, et, 0, 0, np.nan
     if nc > max_small:
         return FACE_LEFT, e3, eF, e2, eb, e1, et, nc, 0, np.nan
-    tri, _ = grid_triangles(cells, np.zeros(nc), diag)
     state = np.empty(nc, dtype=np.int8)
     classify_cells(CP, cstarts, n_cut, cells, state)
+    # the diagonals of the smaller estimate (grid_plan's) of the inside cells only: a
+    # cut cell is clipped, an outside one dropped
+    diag = np.zeros(nc, dtype=np.int64)
+    if nc == E.shape[0]:  # the root spans themselves: their estimates
+        diag = _smaller(E)
+    else:
+        n_in = 0
+        for c in range(nc):
+            if state[c] == 1:
+                n_in += 1
+        inside = np.empty((n_in, 4))
+        r = 0
+        for c in range(nc):
+            if state[c] == 1:
+                inside[r] = cells[c]
+                r += 1
+        d_in = diagonals(Pw, p, q, U, V, inside, m, fold)
+        r = 0
+        for c in range(nc):
+            if state[c] == 1:
+                diag[c] = d_in[r]
+                r += 1
+    tri, _ = grid_triangles(cells, np.zeros(nc), diag)
     n_in = 0
     n_cut_cells = 0
     inside_area = 0.0

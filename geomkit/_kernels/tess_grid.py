@@ -72,6 +72,38 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold):
     (:data:`GRID_OK`), or :data:`GRID_BIG` / :data:`GRID_REFUSED` with empty ones; the
     root spans' estimates ``E`` and children counts ``cu``, ``cv`` (but for a refusal
     before them)."""
+    status, u, v, cells, E, cu, cv = plan_cells(Pw, p, q, U, V, ub, vb, m, target,
+                                                max_cells, max_small, fold)
+    if status != GRID_OK:
+        return status, u, v, cells, np.empty(0, dtype=np.int64), E, cu, cv
+    if cells.shape[0] == E.shape[0]:  # the root spans themselves: their estimates
+        return status, u, v, cells, _smaller(E), E, cu, cv
+    return status, u, v, cells, diagonals(Pw, p, q, U, V, cells, m, fold), E, cu, cv
+
+
+@jit
+def _smaller(Ec):
+    """1 where a cell's second diagonal's estimate ``Ec[:, 1]`` is below its first's."""
+    first = np.empty(Ec.shape[0], dtype=np.int64)
+    for i in range(Ec.shape[0]):
+        first[i] = 1 if Ec[i, 1] < Ec[i, 0] else 0
+    return first
+
+
+@jit
+def diagonals(Pw, p, q, U, V, cells, m, fold):
+    """Each cell's diagonal of the smaller estimate (:func:`.tess._cell_errors_box_range`,
+    ``fold`` its edge lines): 1 when the second's is smaller, else 0."""
+    Ec = np.empty((cells.shape[0], 5))
+    _cell_errors_box_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, fold[0], fold[1],
+                           fold[2], fold[3], Ec)
+    return _smaller(Ec)
+
+
+@jit
+def plan_cells(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold):
+    """The cells of :func:`_plan`'s grid without their diagonals: ``(status, u, v,
+    cells, E, cu, cv)``."""
     nsu = ub.shape[0] - 1
     nsv = vb.shape[0] - 1
     empty1 = np.empty(0)
@@ -79,7 +111,7 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold):
     empty5 = np.empty((0, 5))
     noint = np.empty(0, dtype=np.int64)
     if nsu * nsv > max_cells:
-        return GRID_REFUSED, empty1, empty1, empty2, noint, empty5, noint, noint
+        return GRID_REFUSED, empty1, empty1, empty2, empty5, noint, noint
     roots = _tensor(ub, vb)
     nr = roots.shape[0]
     E = np.empty((nr, 5))
@@ -106,26 +138,14 @@ def _plan(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold):
     for c in cv:
         sv += c
     if su * sv > max_cells:
-        return GRID_REFUSED, empty1, empty1, empty2, noint, E, cu, cv
+        return GRID_REFUSED, empty1, empty1, empty2, E, cu, cv
     if su * sv > max_small:
-        return GRID_BIG, empty1, empty1, empty2, noint, E, cu, cv
+        return GRID_BIG, empty1, empty1, empty2, E, cu, cv
     if su == nsu and sv == nsv:  # every count 1: the root spans themselves
-        u = ub
-        v = vb
-        cells = roots
-        Ec = E
-    else:
-        u = _lines(ub, cu)
-        v = _lines(vb, cv)
-        cells = _tensor(u, v)
-        Ec = np.empty((cells.shape[0], 5))
-        _cell_errors_box_range(0, cells.shape[0], Pw, p, q, U, V, cells, m, fold[0], fold[1],
-                               fold[2], fold[3], Ec)
-    n = cells.shape[0]
-    first = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        first[i] = 1 if Ec[i, 1] < Ec[i, 0] else 0
-    return GRID_OK, u, v, cells, first, E, cu, cv
+        return GRID_OK, ub, vb, roots, E, cu, cv
+    u = _lines(ub, cu)
+    v = _lines(vb, cv)
+    return GRID_OK, u, v, _tensor(u, v), E, cu, cv
 
 
 @jit
