@@ -89,6 +89,15 @@ def _curve_in_span(Pc, pc, Uc, span, t, lo0, lo1, hi0, hi1, N, left, right):
 
 
 @jit_inline
+def _chord_of(Pa, Pb):
+    """``(d0, d1, d2, ll)``: the 3-D chord ``Pb - Pa`` and its squared length."""
+    d0 = Pb[0] - Pa[0]
+    d1 = Pb[1] - Pa[1]
+    d2 = Pb[2] - Pa[2]
+    return d0, d1, d2, d0 * d0 + d1 * d1 + d2 * d2
+
+
+@jit_inline
 def _chord_gap(X, Pa, d0, d1, d2, ll):
     """Distance of the point ``X`` from the 3-D chord from ``Pa`` along ``d``
     (``ll = |d|^2``)."""
@@ -145,10 +154,7 @@ def _segment_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, dense, uv_chords, l
     stamp`` (the piece's number; 0: no cache): a grid point is the same ``t`` in
     every segment (and retry) that holds it, so its point is evaluated once per piece
     (the same bits)."""
-    d0 = Pb[0] - Pa[0]
-    d1 = Pb[1] - Pa[1]
-    d2 = Pb[2] - Pa[2]
-    ll = d0 * d0 + d1 * d1 + d2 * d2
+    d0, d1, d2, ll = _chord_of(Pa, Pb)
     worst = 0.0
     worst_chord = 0.0
     span = find_span(Pc.shape[0] - 1, pc, ta, Uc)
@@ -220,10 +226,7 @@ def _quick_gap(Pc, pc, Uc, ta, tb, ua, va, ub, vb, Pa, Pb, uv_chords, lo0, lo1, 
                Pw, p, q, U, V, Nc, lc, rc, Nu, Nv, left, right, tmp, X):
     """:func:`_segment_gap` at the segment's own quarter points only: ``(curve,
     chord)``, each at most the full test's would be with these points added."""
-    d0 = Pb[0] - Pa[0]
-    d1 = Pb[1] - Pa[1]
-    d2 = Pb[2] - Pa[2]
-    ll = d0 * d0 + d1 * d1 + d2 * d2
+    d0, d1, d2, ll = _chord_of(Pa, Pb)
     worst = 0.0
     worst_chord = 0.0
     for e in range(1, 4):
@@ -243,10 +246,7 @@ def _bent(gc, Pa, Pb):
     """Whether a segment whose curve lies up to ``gc`` from its 3-D chord ``Pa``--``Pb``
     turns too far to stand for it: ``gc > MAX_BEND |Pb - Pa|`` (a chord of length 0
     with the curve off it: a closed piece's first try)."""
-    d0 = Pb[0] - Pa[0]
-    d1 = Pb[1] - Pa[1]
-    d2 = Pb[2] - Pa[2]
-    return gc * gc > MAX_BEND * MAX_BEND * (d0 * d0 + d1 * d1 + d2 * d2)
+    return gc * gc > MAX_BEND * MAX_BEND * _chord_of(Pa, Pb)[3]
 
 
 @jit_inline
