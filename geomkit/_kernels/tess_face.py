@@ -43,8 +43,9 @@ def trimmed_first(Pw, p, q, U, V, ub, vb, m, target, max_cells, max_small, fold,
     ``Pw, p, q, U, V`` (domain ``u0, u1, v0, v1``): the grid of
     :func:`.tess_grid.grid_plan` (``ub, vb, m, target, max_cells, fold``; the
     diagonals' estimates taken for the cells inside the region only: the others are
-    clipped or dropped), its triangles, the cells classified (:func:`.tess_lattice.classify_cells` on the rings
-    ``CP[cstarts[i]:cstarts[i+1]]``, the first ``n_cut`` the trim loops), the cut ones
+    clipped or dropped), its triangles, the cells classified
+    (:func:`.tess_lattice.classify_cells` on the rings ``CP[cstarts[i]:cstarts[i+1]]``,
+    the first ``n_cut`` the trim loops), the cut ones
     clipped (:func:`.tess_clip.clip_cells` on the region's rings ``RP``, ``rstarts``
     made ready by :func:`.tess_rings.prepared_rings` with ``tiny``), the inside cells'
     triangle pairs and the pieces measured in their cells' groups

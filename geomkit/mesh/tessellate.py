@@ -81,7 +81,8 @@ from geomkit.mesh.fallback import fallback_face
 from geomkit.mesh.planes import planar_batch
 from geomkit.mesh.weld import (NEAR_DIRECTION, WELD_DIRECTION, boundary_pairs, merge, points,
                                weld, weld_corners, weld_grid)
-from geomkit._kernels.tess_face import FACE_EMPTY, FACE_FAILED, FACE_OK, FACE_REFUSED, trimmed_first
+from geomkit._kernels.tess_face import (FACE_EMPTY, FACE_FAILED, FACE_OK, FACE_REFUSED,
+                                       trimmed_first)
 from geomkit._kernels.tess_grid import GRID_OK, whole_grid
 from geomkit._kernels.tess_lattice import group_deviation
 from geomkit.mesh.trim_polylines import (TrimPolylines, affine_map, domain_rectangle_only,
@@ -180,11 +181,8 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     status, worst = first[0], first[-1]
     if status == FACE_OK:
         _, V, F, UV, good, dev, tri_uv, n_cells, n_cut, _ = first
-        stats = {"cells": int(n_cells), "cut_cells": int(n_cut), "rounds": 1,
-                 "collapsed_dropped": int(np.count_nonzero(~good)),
-                 "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
-                 "grouped": True, "seconds": time.perf_counter() - t0}
-        return V, F[good], UV, dev[good], tri_uv[good], stats
+        return V, F[good], UV, dev[good], tri_uv[good], _trimmed_stats(
+            n_cells, n_cut, good, closed, True, t0)
     if status in (FACE_REFUSED, FACE_EMPTY):
         return None
     tries = PLANNED_TRIES
@@ -221,11 +219,18 @@ def _trimmed_grid(s: Surface, trim: TrimPolylines, ub, vb, m: int, k: int, tol: 
     if not len(tri_uv):
         return None
     V, F, UV, good = weld(s, tri_uv, size, near_uv=bool(len(cut)), corners=corners)
-    stats = {"cells": int(len(cells)), "cut_cells": int(len(cut)), "rounds": 1,
-             "collapsed_dropped": int(np.count_nonzero(~good)),
-             "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
-             "grouped": grouped, "seconds": time.perf_counter() - t0}
-    return V, F[good], UV, dev[good], tri_uv[good], stats
+    return V, F[good], UV, dev[good], tri_uv[good], _trimmed_stats(
+        len(cells), len(cut), good, closed, grouped, t0)
+
+
+def _trimmed_stats(n_cells, n_cut, good, closed, grouped: bool, t0: float) -> dict:
+    """A trimmed grid face's ``stats``: its cells, cut cells, the faces the weld
+    dropped (not ``good``), whether it is closed in u and v and was measured in
+    groups, and its time since ``t0``."""
+    return {"cells": int(n_cells), "cut_cells": int(n_cut), "rounds": 1,
+            "collapsed_dropped": int(np.count_nonzero(~good)),
+            "closed_u": closed[0], "closed_v": closed[1], "trimmed_grid": True,
+            "grouped": grouped, "seconds": time.perf_counter() - t0}
 
 
 def _trimmed_first(s: Surface, trim: TrimPolylines, ub, vb, m: int, target: float, k: int,
